@@ -1,0 +1,59 @@
+// metariver field: the metaballs' scalar field on a regular 3D grid.
+//
+// Paper: "Real-time river simulation using metaballs", section 2.1, eq. 2: every grid
+// value is the sum over the active balls of a falloff, divided by (active balls + 1).
+#pragma once
+
+#include <metariver/core.h>
+
+#include <span>
+#include <string_view>
+#include <vector>
+
+namespace mr {
+
+/// Samples of a scalar field on a regular grid: sample (i, j, k) sits at
+/// origin + spacing * (i, j, k); values are x fastest: index = i + nx*(j + ny*k).
+struct ScalarGrid {
+    int nx = 0, ny = 0, nz = 0;  ///< samples per axis
+    Vec3 origin{0.0f};           ///< position of sample (0, 0, 0), metres
+    float spacing = 1.0f;        ///< metres between neighbouring samples
+    std::vector<float> values;
+
+    size_t index(int i, int j, int k) const {
+        return static_cast<size_t>(i) + static_cast<size_t>(nx) * (static_cast<size_t>(j) + static_cast<size_t>(ny) * k);
+    }
+    float at(int i, int j, int k) const { return values[index(i, j, k)]; }
+    Vec3 position(int i, int j, int k) const { return origin + spacing * Vec3(float(i), float(j), float(k)); }
+    size_t size() const { return static_cast<size_t>(nx) * ny * nz; }
+    /// Resizes (reusing capacity) and sets every value to `fill`.
+    void reset(int nx_, int ny_, int nz_, Vec3 origin_, float spacing_, float fill = 0.0f);
+};
+
+enum class FieldKernel {
+    InverseSquare,  ///< the paper's eq. 2: 1 / r^2 (r in metres)
+    RadiusOverR,    ///< the paper's code: radius / r
+};
+
+std::string_view to_string(FieldKernel k);
+
+struct FieldDef {
+    FieldKernel kernel = FieldKernel::InverseSquare;
+    float radius = 2.0f;         ///< metaball radius, metres (used by RadiusOverR)
+    float resolution = 2.0f;     ///< grid cells per metre, in (0, 64]
+    float bounds_offset = 4.0f;  ///< metres the particles' bounding box grows by on every side
+    float threshold = 0.54f;     ///< iso value: a sample is inside when value > threshold
+};
+
+/// Largest grid the field accepts (samples): 2^27, 512 MiB of floats.
+inline constexpr size_t kMaxFieldSamples = size_t{1} << 27;
+
+/// The paper's field: a grid spanning the balls' bounding box grown by bounds_offset,
+/// resolution cells per metre (samples per axis = ceil(extent * resolution) + 1), each
+/// value the sum of the kernel over all balls divided by (balls + 1). Dense,
+/// O(balls x samples). With no balls the grid is left empty (0 samples).
+/// r^2 is clamped below at 1e-6 m^2 so a sample on a ball centre stays finite.
+/// Returns false (grid left empty) when the grid would exceed kMaxFieldSamples.
+bool compute_field_paper(std::span<const Vec3> balls, const FieldDef& def, ScalarGrid& out);
+
+}  // namespace mr

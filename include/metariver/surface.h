@@ -1,0 +1,52 @@
+// metariver surface: marching cubes over a ScalarGrid into an indexed triangle mesh.
+//
+// Paul Bourke, "Polygonising a scalar field" (1994): corner and edge numbering and the
+// 256-case edge and triangle tables. Vertices are welded by grid edge (one vertex per
+// crossed edge, so uniqueness is exact, unlike the paper's position hash); normals come
+// from the field's gradient; triangles wind counter-clockwise seen from outside.
+#pragma once
+
+#include <metariver/core.h>
+#include <metariver/field.h>
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace mr {
+
+/// Indexed triangle mesh: 3 indices per triangle, counter-clockwise seen from outside
+/// (the side where the field is below the threshold), unit normals pointing outward.
+struct SurfaceMesh {
+    std::vector<Vec3> positions;
+    std::vector<Vec3> normals;
+    std::vector<uint32_t> indices;
+
+    size_t vertex_count() const { return positions.size(); }
+    size_t triangle_count() const { return indices.size() / 3; }
+    void clear() {
+        positions.clear();
+        normals.clear();
+        indices.clear();
+    }
+};
+
+namespace mc {
+/// Bourke's corner numbering: corner c sits at cell offset kCornerOffset[c] (x, y, z).
+/// 0 (0,0,0) 1 (1,0,0) 2 (1,0,1) 3 (0,0,1) 4 (0,1,0) 5 (1,1,0) 6 (1,1,1) 7 (0,1,1)
+extern const std::array<std::array<int, 3>, 8> kCornerOffset;
+/// Bourke's edge numbering: edge e joins corners kEdgeCorners[e][0] and [1].
+extern const std::array<std::array<int, 2>, 12> kEdgeCorners;
+/// Bourke's edgeTable: bit e set when edge e is crossed, for cube index
+/// sum(1 << c for corners c that are INSIDE).
+extern const std::array<uint16_t, 256> kEdgeTable;
+/// Bourke's triTable: up to 5 triangles as edge triples, terminated by -1.
+extern const std::array<std::array<int8_t, 16>, 256> kTriTable;
+}  // namespace mc
+
+/// Extracts the surface value == threshold. A sample is INSIDE when its value is above
+/// the threshold. Vertices are placed by linear interpolation along crossed grid
+/// edges, one per edge (welded). `out` is cleared and refilled; its capacity is reused.
+void extract_surface(const ScalarGrid& grid, float threshold, SurfaceMesh& out);
+
+}  // namespace mr

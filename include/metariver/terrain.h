@@ -1,0 +1,177 @@
+// metariver terrain: heightmaps (PNG or procedural), the terrain triangle mesh of
+// the paper's figure 2, height/normal queries, and the AABB tree (BVH) with the
+// paper's point query and a robust swept-segment query.
+//
+// Paper: "Real-time river simulation using metaballs", section 2.2 (terrain) and
+// 2.3.3 (collision). Ray/triangle tests: Moller-Trumbore (the paper's eq. 4) and the
+// watertight test of Woop, Benthin and Wald, JCGT 2013.
+#pragma once
+
+#include <metariver/core.h>
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace mr {
+
+/// Heights sampled on a regular grid, normalised to [0, 1], in IMAGE order:
+/// samples[r * width + c] is image row r (r = 0 is the top row), column c.
+struct Heightmap {
+    int width = 0;   ///< samples per row (>= 2)
+    int height = 0;  ///< rows (>= 2)
+    std::vector<float> samples;
+    int bit_depth = 8;  ///< 8 or 16 for images; 32 for procedural (float) maps
+
+    float at(int row, int col) const { return samples[static_cast<size_t>(row) * width + col]; }
+};
+
+/// Largest accepted heightmap side, in samples (keeps the mesh under ~33 M triangles).
+inline constexpr int kMaxHeightmapSide = 4097;
+
+/// Loads a PNG heightmap. 8- or 16-bit; gray, gray+alpha, RGB or RGBA. Height is the
+/// RED channel (gray for gray images) divided by 255 (8-bit) or 65535 (16-bit); 16-bit
+/// images keep their full precision. Errors (missing, empty, truncated, not a PNG,
+/// smaller than 2 x 2, larger than kMaxHeightmapSide) name the file.
+Result<Heightmap> load_heightmap_png(const std::string& path);
+/// The same from bytes in memory; `name` is used in error messages.
+Result<Heightmap> load_heightmap_png_memory(std::span<const uint8_t> bytes, const std::string& name);
+
+/// Procedural terrains, deterministic for a seed.
+/// A valley with a winding river channel running downhill from the far end (high z
+/// in terrain space, low image row) to the near end.
+Heightmap procedural_valley(int width, int height, uint32_t seed);
+/// The paper's 'strict' shape: a gradient from black to white along the rows with a
+/// darker strip along the middle.
+Heightmap procedural_strict(int width, int height);
+/// The paper's 'bowl': radial, lowest at the centre.
+Heightmap procedural_bowl(int width, int height);
+
+struct TerrainDef {
+    float area_scale = 1.0f;    ///< metres between neighbouring samples (x and z)
+    float height_scale = 7.0f;  ///< metres for a normalised height of 1
+    /// The paper's (Unity's) row orientation: image row r maps to z = (H-1-r)*area_scale.
+    /// false: image row r maps to z = r*area_scale.
+    bool paper_row_orientation = true;
+};
+
+/// The terrain mesh exactly as the paper's figure 2: one vertex per sample, vertex
+/// index c = i*W + j for grid row i (z) and column j (x) at (j*s, h*height_scale, i*s);
+/// two triangles per cell, (c, c+W, c+1) and (c+1, c+W, c+W+1), both wound so their
+/// geometric normal points up (+y). 2(W-1)(H-1) triangles; triangle 2*(i*(W-1)+j) and
+/// 2*(i*(W-1)+j)+1 belong to cell (i, j).
+class Terrain {
+public:
+    /// Builds the mesh; fails on a bad heightmap or def (non-finite or <= 0 scales).
+    static Result<Terrain> build(const Heightmap& map, const TerrainDef& def);
+
+    int columns() const { return columns_; }  ///< samples along x (W)
+    int rows() const { return rows_; }        ///< samples along z (H)
+    float area_scale() const { return area_scale_; }
+    /// Height (metres) of grid sample (row i along z, column j along x).
+    float sample(int i, int j) const { return vertices_[static_cast<size_t>(i) * columns_ + j].y; }
+
+    std::span<const Vec3> vertices() const { return vertices_; }
+    /// 3 vertex indices per triangle.
+    std::span<const uint32_t> indices() const { return indices_; }
+    size_t triangle_count() const { return indices_.size() / 3; }
+    /// Geometric (face) normal of a triangle, unit length, pointing up.
+    Vec3 triangle_normal(uint32_t tri) const;
+
+    /// Mesh bounds grown by 1 m up and down (the paper's terrain bounding box).
+    const Aabb& bounds() const { return bounds_; }
+    /// True when (x, z) lies inside the terrain's rectangle [0, (W-1)s] x [0, (H-1)s].
+    bool contains_xz(float x, float z) const;
+
+    /// Bilinear interpolation of the samples at (x, z), clamped to the rectangle.
+    float height_bilinear(float x, float z) const;
+    /// Normal of the bilinear surface at (x, z) (from its analytic gradient), unit, up.
+    Vec3 normal_bilinear(float x, float z) const;
+    /// Height of the triangle MESH at (x, z) (the surface collisions use), clamped.
+    float height_mesh(float x, float z) const;
+    /// Normal of the mesh triangle under (x, z).
+    Vec3 normal_mesh(float x, float z) const;
+    /// Index of the mesh triangle under (x, z) (clamped into the rectangle).
+    uint32_t triangle_at(float x, float z) const;
+
+private:
+    int columns_ = 0, rows_ = 0;
+    float area_scale_ = 1.0f;
+    std::vector<Vec3> vertices_;
+    std::vector<uint32_t> indices_;
+    Aabb bounds_;
+};
+
+/// A ray/segment hit on a triangle.
+struct RayHit {
+    float t = 0.0f;         ///< parameter along the segment: hit = origin + t * dir, t in [0, 1]
+    uint32_t triangle = 0;  ///< triangle index
+    Vec3 point{0.0f};
+    Vec3 normal{0.0f, 1.0f, 0.0f};  ///< the triangle's unit geometric normal
+};
+
+/// The paper's eq. 4 (Moller-Trumbore): intersects origin + t*dir, t in [0, 1], with
+/// triangle (a, b, c), both faces. Returns t on a hit. Not watertight: rays through
+/// shared edges and vertices can miss both neighbours.
+std::optional<float> ray_triangle_paper(const Vec3& origin, const Vec3& dir, const Vec3& a,
+                                        const Vec3& b, const Vec3& c);
+/// Watertight ray/triangle test (Woop, Benthin, Wald 2013), both faces, t in [0, 1]: a
+/// ray through a shared edge or vertex hits at least one of the triangles sharing it.
+std::optional<float> ray_triangle_watertight(const Vec3& origin, const Vec3& dir, const Vec3& a,
+                                             const Vec3& b, const Vec3& c);
+
+struct BvhDef {
+    int leaf_triangles = 8;  ///< max triangles per leaf, in [2, 4096]
+};
+
+/// Index-based node (box2d's b2DynamicTree style). Leaves have count > 0 and own
+/// triangle ids [first, first + count) of Bvh::leaf_triangle_ids(); inner nodes have
+/// count == 0 and children left/right.
+struct BvhNode {
+    Aabb box;
+    uint32_t first = 0;
+    uint32_t count = 0;
+    uint32_t left = 0;
+    uint32_t right = 0;
+};
+
+struct BvhStats {
+    size_t nodes = 0;
+    size_t leaves = 0;
+    int depth = 0;              ///< levels from the root (a single leaf has depth 1)
+    size_t max_leaf_triangles = 0;
+};
+
+/// The paper's AABB tree: the triangle list is split in halves recursively (cells
+/// halved by rows while a range spans more than one row, then by columns: exactly
+/// the paper's list halving for 2^k+1 sides, and non-overlapping boxes for any size)
+/// down to leaves of at most leaf_triangles. Every box spans the terrain's full height.
+class Bvh {
+public:
+    static Result<Bvh> build(const Terrain& terrain, const BvhDef& def);
+
+    std::span<const BvhNode> nodes() const { return nodes_; }
+    std::span<const uint32_t> leaf_triangle_ids() const { return tri_ids_; }
+    BvhStats stats() const;
+
+    /// The paper's point query: descends to the leaf whose box contains p. Returns the
+    /// node index of that leaf, or -1 when p is outside the root box.
+    int leaf_containing(const Vec3& p) const;
+    /// Triangles of a leaf node.
+    std::span<const uint32_t> leaf_triangles(int leaf) const;
+
+    /// The paper's collision query: triangles of the leaf holding `to`, tested with
+    /// ray_triangle_paper against the segment from -> to. Nearest hit.
+    std::optional<RayHit> intersect_paper(const Terrain& terrain, const Vec3& from, const Vec3& to) const;
+    /// Robust query: every leaf whose box the segment from -> to crosses, watertight
+    /// test, nearest hit.
+    std::optional<RayHit> intersect_segment(const Terrain& terrain, const Vec3& from, const Vec3& to) const;
+
+private:
+    std::vector<BvhNode> nodes_;
+    std::vector<uint32_t> tri_ids_;
+};
+
+}  // namespace mr
