@@ -1,0 +1,170 @@
+// The terrain mesh of the paper's figure 2 ("Real-time river simulation using
+// metaballs", section 2.2): one vertex per heightmap sample, vertex c = i*W + j at
+// (j*s, h*height_scale, i*s), and per grid cell the triangles (c, c+W, c+1) and
+// (c+1, c+W, c+W+1). With x = j*s and z = i*s, (b-a) x (c-a) of both triangles has a
+// positive y component (s^2), so the paper's order already winds them up (+y).
+// Each cell's diagonal runs from vertex (i+1, j) to vertex (i, j+1).
+#include <metariver/terrain.h>
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace mr {
+namespace {
+
+/// Clamps v into [lo, hi]; NaN goes to lo.
+float clamp_nan(float v, float lo, float hi) {
+    if (!(v >= lo)) return lo;
+    return v > hi ? hi : v;
+}
+
+/// Cell index and fraction along one axis for coordinate x (clamped), n samples.
+struct AxisCell {
+    int index;
+    float frac;
+};
+
+AxisCell axis_cell(float x, float s, int n) {
+    const float extent = static_cast<float>(n - 1) * s;
+    const float u = clamp_nan(x, 0.0f, extent) / s;
+    int k = static_cast<int>(std::floor(u));
+    k = std::clamp(k, 0, n - 2);
+    const float f = std::clamp(u - static_cast<float>(k), 0.0f, 1.0f);
+    return {k, f};
+}
+
+}  // namespace
+
+Result<Terrain> Terrain::build(const Heightmap& map, const TerrainDef& def) {
+    if (map.width < 2 || map.height < 2) {
+        return Error{fmt::format("heightmap: must be at least 2 x 2 samples (got {} x {})", map.width, map.height)};
+    }
+    if (map.width > kMaxHeightmapSide || map.height > kMaxHeightmapSide) {
+        return Error{fmt::format("heightmap: must be at most {} x {} samples (got {} x {})", kMaxHeightmapSide,
+                                 kMaxHeightmapSide, map.width, map.height)};
+    }
+    const size_t n = static_cast<size_t>(map.width) * static_cast<size_t>(map.height);
+    if (map.samples.size() != n) {
+        return Error{fmt::format("heightmap: has {} samples, expected width x height = {} x {} = {}",
+                                 map.samples.size(), map.width, map.height, n)};
+    }
+    if (!std::isfinite(def.area_scale) || !(def.area_scale > 0.0f)) {
+        return Error{fmt::format("terrain.area_scale: must be finite and > 0 (got {})", def.area_scale)};
+    }
+    if (!std::isfinite(def.height_scale) || !(def.height_scale > 0.0f)) {
+        return Error{fmt::format("terrain.height_scale: must be finite and > 0 (got {})", def.height_scale)};
+    }
+    const float extent_x = static_cast<float>(map.width - 1) * def.area_scale;
+    const float extent_z = static_cast<float>(map.height - 1) * def.area_scale;
+    if (!std::isfinite(extent_x) || !std::isfinite(extent_z)) {
+        return Error{fmt::format("terrain.area_scale: too large, the terrain extent overflows (got {})",
+                                 def.area_scale)};
+    }
+    for (size_t k = 0; k < n; ++k) {
+        const float y = map.samples[k] * def.height_scale;
+        if (!std::isfinite(map.samples[k]) || !std::isfinite(y)) {
+            return Error{fmt::format("heightmap: sample at row {}, column {} is not finite after scaling (value {})",
+                                     k / map.width, k % map.width, map.samples[k])};
+        }
+    }
+
+    Terrain t;
+    t.columns_ = map.width;
+    t.rows_ = map.height;
+    t.area_scale_ = def.area_scale;
+    const int W = map.width, H = map.height;
+    t.vertices_.resize(n);
+    for (int i = 0; i < H; ++i) {
+        const int r = def.paper_row_orientation ? H - 1 - i : i;
+        for (int j = 0; j < W; ++j) {
+            const Vec3 p(static_cast<float>(j) * def.area_scale, map.at(r, j) * def.height_scale,
+                         static_cast<float>(i) * def.area_scale);
+            t.vertices_[static_cast<size_t>(i) * W + j] = p;
+            t.bounds_.grow(p);
+        }
+    }
+    t.indices_.reserve(static_cast<size_t>(W - 1) * (H - 1) * 6);
+    for (int i = 0; i + 1 < H; ++i) {
+        for (int j = 0; j + 1 < W; ++j) {
+            const uint32_t c = static_cast<uint32_t>(i) * static_cast<uint32_t>(W) + static_cast<uint32_t>(j);
+            const uint32_t w = static_cast<uint32_t>(W);
+            t.indices_.insert(t.indices_.end(), {c, c + w, c + 1, c + 1, c + w, c + w + 1});
+        }
+    }
+    // The paper's terrain box: the mesh bounds grown by 1 m up and down.
+    t.bounds_.min.y -= 1.0f;
+    t.bounds_.max.y += 1.0f;
+    return t;
+}
+
+Vec3 Terrain::triangle_normal(uint32_t tri) const {
+    const glm::dvec3 a(vertices_[indices_[3 * size_t{tri}]]);
+    const glm::dvec3 b(vertices_[indices_[3 * size_t{tri} + 1]]);
+    const glm::dvec3 c(vertices_[indices_[3 * size_t{tri} + 2]]);
+    glm::dvec3 nrm = glm::cross(b - a, c - a);
+    if (nrm.y < 0.0) nrm = -nrm;  // never for a mesh built here; kept so the contract holds
+    const double len = glm::length(nrm);
+    if (!(len > 0.0)) return Vec3(0.0f, 1.0f, 0.0f);
+    return Vec3(nrm / len);
+}
+
+bool Terrain::contains_xz(float x, float z) const {
+    const float ex = static_cast<float>(columns_ - 1) * area_scale_;
+    const float ez = static_cast<float>(rows_ - 1) * area_scale_;
+    return x >= 0.0f && x <= ex && z >= 0.0f && z <= ez;
+}
+
+float Terrain::height_bilinear(float x, float z) const {
+    if (vertices_.empty()) return 0.0f;
+    const AxisCell cx = axis_cell(x, area_scale_, columns_);
+    const AxisCell cz = axis_cell(z, area_scale_, rows_);
+    const float h00 = sample(cz.index, cx.index), h01 = sample(cz.index, cx.index + 1);
+    const float h10 = sample(cz.index + 1, cx.index), h11 = sample(cz.index + 1, cx.index + 1);
+    const float u = cx.frac, v = cz.frac;
+    return (h00 * (1.0f - u) + h01 * u) * (1.0f - v) + (h10 * (1.0f - u) + h11 * u) * v;
+}
+
+Vec3 Terrain::normal_bilinear(float x, float z) const {
+    if (vertices_.empty()) return Vec3(0.0f, 1.0f, 0.0f);
+    const AxisCell cx = axis_cell(x, area_scale_, columns_);
+    const AxisCell cz = axis_cell(z, area_scale_, rows_);
+    const float h00 = sample(cz.index, cx.index), h01 = sample(cz.index, cx.index + 1);
+    const float h10 = sample(cz.index + 1, cx.index), h11 = sample(cz.index + 1, cx.index + 1);
+    const float u = cx.frac, v = cz.frac;
+    const float dhdx = ((h01 - h00) * (1.0f - v) + (h11 - h10) * v) / area_scale_;
+    const float dhdz = ((h10 - h00) * (1.0f - u) + (h11 - h01) * u) / area_scale_;
+    return glm::normalize(Vec3(-dhdx, 1.0f, -dhdz));
+}
+
+uint32_t Terrain::triangle_at(float x, float z) const {
+    if (vertices_.empty()) return 0;
+    const AxisCell cx = axis_cell(x, area_scale_, columns_);
+    const AxisCell cz = axis_cell(z, area_scale_, rows_);
+    const uint32_t cell = static_cast<uint32_t>(cz.index) * static_cast<uint32_t>(columns_ - 1) +
+                          static_cast<uint32_t>(cx.index);
+    return 2u * cell + (cx.frac + cz.frac > 1.0f ? 1u : 0u);
+}
+
+float Terrain::height_mesh(float x, float z) const {
+    if (vertices_.empty()) return 0.0f;
+    const AxisCell cx = axis_cell(x, area_scale_, columns_);
+    const AxisCell cz = axis_cell(z, area_scale_, rows_);
+    const float h00 = sample(cz.index, cx.index), h01 = sample(cz.index, cx.index + 1);
+    const float h10 = sample(cz.index + 1, cx.index), h11 = sample(cz.index + 1, cx.index + 1);
+    const float u = cx.frac, v = cz.frac;
+    if (u + v <= 1.0f) {
+        // Triangle (c, c+W, c+1): vertices (i, j), (i+1, j), (i, j+1).
+        return h00 + u * (h01 - h00) + v * (h10 - h00);
+    }
+    // Triangle (c+1, c+W, c+W+1): vertices (i, j+1), (i+1, j), (i+1, j+1).
+    return h11 + (1.0f - u) * (h10 - h11) + (1.0f - v) * (h01 - h11);
+}
+
+Vec3 Terrain::normal_mesh(float x, float z) const {
+    if (indices_.empty()) return Vec3(0.0f, 1.0f, 0.0f);
+    return triangle_normal(triangle_at(x, z));
+}
+
+}  // namespace mr

@@ -1,0 +1,260 @@
+// The terrain mesh (the paper's figure 2) and its height/normal queries.
+#include <metariver/terrain.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+
+namespace mr {
+namespace {
+
+Heightmap random_map(int w, int h, uint32_t seed) {
+    Heightmap m;
+    m.width = w;
+    m.height = h;
+    m.bit_depth = 32;
+    Lcg rng(seed);
+    m.samples.resize(static_cast<size_t>(w) * h);
+    for (float& v : m.samples) v = static_cast<float>(rng.next());
+    return m;
+}
+
+Terrain build_ok(const Heightmap& m, const TerrainDef& def = {}) {
+    auto t = Terrain::build(m, def);
+    EXPECT_TRUE(t.ok()) << (t.ok() ? "" : t.error().message);
+    return std::move(t).value();
+}
+
+TEST(Terrain, VertexLayoutPaperOrientation) {
+    const Heightmap m = random_map(5, 3, 1);
+    const TerrainDef def{0.5f, 7.0f, true};
+    const Terrain t = build_ok(m, def);
+    EXPECT_EQ(t.columns(), 5);
+    EXPECT_EQ(t.rows(), 3);
+    ASSERT_EQ(t.vertices().size(), 15u);
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 5; ++j) {
+            const Vec3 v = t.vertices()[static_cast<size_t>(i * 5 + j)];
+            EXPECT_EQ(v.x, j * 0.5f);
+            EXPECT_EQ(v.z, i * 0.5f);
+            // Grid row i counts from the bottom of the image: image row 2 - i.
+            EXPECT_EQ(v.y, m.at(2 - i, j) * 7.0f);
+            EXPECT_EQ(t.sample(i, j), v.y);
+        }
+    }
+}
+
+TEST(Terrain, VertexLayoutImageOrientation) {
+    const Heightmap m = random_map(4, 6, 2);
+    const Terrain t = build_ok(m, TerrainDef{1.0f, 2.0f, false});
+    for (int i = 0; i < 6; ++i) {
+        for (int j = 0; j < 4; ++j) EXPECT_EQ(t.vertices()[static_cast<size_t>(i * 4 + j)].y, m.at(i, j) * 2.0f);
+    }
+}
+
+TEST(Terrain, ImageRowZeroIsHighestZ) {
+    // strict: image row 0 is white; under the paper orientation it lies at the largest z.
+    const Terrain t = build_ok(procedural_strict(17, 17));
+    const float zmax = 16.0f;
+    for (int j = 0; j < 17; ++j) {
+        EXPECT_EQ(t.vertices()[static_cast<size_t>(16 * 17 + j)].z, zmax);
+        EXPECT_GT(t.sample(16, j), t.sample(0, j));
+    }
+    EXPECT_GT(t.height_mesh(0.0f, zmax), t.height_mesh(0.0f, 0.0f));
+}
+
+TEST(Terrain, PaperNileSpawnLiesOnTheChannel) {
+    // README: with the paper orientation the Nile spawn volume (27, 4.6, 31) lands on
+    // the river channel at the top right of the image.
+    const std::string path = METARIVER_SHARED_DIR "/heightmaps/metawater/nile.png";
+    if (!std::filesystem::exists(path)) GTEST_SKIP() << "no " << path;
+    auto map = load_heightmap_png(path);
+    ASSERT_TRUE(map.ok());
+    const Terrain t = build_ok(*map, TerrainDef{1.0f, 7.0f, true});
+    // The channel (about 0.54 * 7 = 3.8 m) is below the spawn height, its banks above it.
+    EXPECT_LT(t.height_mesh(27.0f, 31.0f), 4.6f);
+    EXPECT_GT(t.height_mesh(31.0f, 31.0f), 4.6f);
+}
+
+TEST(Terrain, IndicesFollowThePaper) {
+    const int W = 4, H = 3;
+    const Terrain t = build_ok(random_map(W, H, 3));
+    ASSERT_EQ(t.triangle_count(), static_cast<size_t>(2 * (W - 1) * (H - 1)));
+    const auto idx = t.indices();
+    for (int i = 0; i + 1 < H; ++i) {
+        for (int j = 0; j + 1 < W; ++j) {
+            const uint32_t c = static_cast<uint32_t>(i * W + j);
+            const size_t tri = 2 * static_cast<size_t>(i * (W - 1) + j);
+            EXPECT_EQ(idx[3 * tri + 0], c);
+            EXPECT_EQ(idx[3 * tri + 1], c + W);
+            EXPECT_EQ(idx[3 * tri + 2], c + 1);
+            EXPECT_EQ(idx[3 * tri + 3], c + 1);
+            EXPECT_EQ(idx[3 * tri + 4], c + W);
+            EXPECT_EQ(idx[3 * tri + 5], c + W + 1);
+        }
+    }
+}
+
+TEST(Terrain, TriangleCountsAndUpNormals) {
+    for (auto [w, h] : {std::pair{2, 2}, std::pair{3, 7}, std::pair{17, 17}, std::pair{50, 31}}) {
+        const Terrain t = build_ok(random_map(w, h, 4), TerrainDef{0.3f, 5.0f, true});
+        ASSERT_EQ(t.triangle_count(), static_cast<size_t>(2 * (w - 1) * (h - 1)));
+        const auto v = t.vertices();
+        const auto idx = t.indices();
+        for (uint32_t tri = 0; tri < t.triangle_count(); ++tri) {
+            const Vec3 a = v[idx[3 * tri]], b = v[idx[3 * tri + 1]], c = v[idx[3 * tri + 2]];
+            // Winding as stored: (b - a) x (c - a) points up.
+            EXPECT_GT(glm::cross(b - a, c - a).y, 0.0f);
+            const Vec3 n = t.triangle_normal(tri);
+            EXPECT_NEAR(glm::length(n), 1.0f, 1e-6f);  // float normalisation rounding
+            EXPECT_GT(n.y, 0.0f);
+            EXPECT_NEAR(glm::dot(n, b - a), 0.0f, 1e-5f);  // float rounding, edges ~1 m
+            EXPECT_NEAR(glm::dot(n, c - a), 0.0f, 1e-5f);  // float rounding, edges ~1 m
+        }
+    }
+}
+
+TEST(Terrain, Bounds) {
+    const Heightmap m = random_map(9, 5, 5);
+    const Terrain t = build_ok(m, TerrainDef{2.0f, 3.0f, true});
+    float lo = 1e9f, hi = -1e9f;
+    for (float s : m.samples) {
+        lo = std::min(lo, s * 3.0f);
+        hi = std::max(hi, s * 3.0f);
+    }
+    EXPECT_EQ(t.bounds().min, Vec3(0.0f, lo - 1.0f, 0.0f));
+    EXPECT_EQ(t.bounds().max, Vec3(16.0f, hi + 1.0f, 8.0f));
+    EXPECT_TRUE(t.contains_xz(0.0f, 0.0f));
+    EXPECT_TRUE(t.contains_xz(16.0f, 8.0f));
+    EXPECT_FALSE(t.contains_xz(16.01f, 4.0f));
+    EXPECT_FALSE(t.contains_xz(4.0f, -0.01f));
+    EXPECT_FALSE(t.contains_xz(NAN, 1.0f));
+}
+
+TEST(Terrain, HeightsAtGridPointsAndMidpoints) {
+    const float s = 0.75f;
+    const Terrain t = build_ok(random_map(7, 6, 6), TerrainDef{s, 4.0f, true});
+    for (int i = 0; i < t.rows(); ++i) {
+        for (int j = 0; j < t.columns(); ++j) {
+            const float x = j * s, z = i * s;
+            EXPECT_EQ(t.height_bilinear(x, z), t.sample(i, j));
+            // (j*s)/s need not round back to j: the point may land a hair inside the
+            // neighbouring triangle, whose plane passes through the same vertex.
+            EXPECT_NEAR(t.height_mesh(x, z), t.sample(i, j), 1e-5f);
+        }
+    }
+    for (int i = 0; i + 1 < t.rows(); ++i) {
+        for (int j = 0; j + 1 < t.columns(); ++j) {
+            const float avg = 0.25f * (t.sample(i, j) + t.sample(i, j + 1) + t.sample(i + 1, j) + t.sample(i + 1, j + 1));
+            // float rounding of the bilinear weights
+            EXPECT_NEAR(t.height_bilinear((j + 0.5f) * s, (i + 0.5f) * s), avg, 1e-5f);
+            // The cell centre lies on the diagonal (i+1, j)-(i, j+1): the mesh is their mean there.
+            EXPECT_NEAR(t.height_mesh((j + 0.5f) * s, (i + 0.5f) * s), 0.5f * (t.sample(i + 1, j) + t.sample(i, j + 1)),
+                        1e-5f);  // float rounding
+        }
+    }
+}
+
+TEST(Terrain, MeshHeightIsTheTrianglePlane) {
+    const Terrain t = build_ok(random_map(11, 8, 7), TerrainDef{1.3f, 6.0f, true});
+    const auto v = t.vertices();
+    const auto idx = t.indices();
+    Lcg rng(8);
+    for (int k = 0; k < 5000; ++k) {
+        const float x = rng.uniform(0.0f, 13.0f), z = rng.uniform(0.0f, 9.1f);
+        const uint32_t tri = t.triangle_at(x, z);
+        ASSERT_LT(tri, t.triangle_count());
+        const Vec3 a = v[idx[3 * tri]], b = v[idx[3 * tri + 1]], c = v[idx[3 * tri + 2]];
+        // (x, z) is inside the triangle's xz projection (barycentrics in double).
+        const double det = double(b.x - a.x) * (c.z - a.z) - double(c.x - a.x) * (b.z - a.z);
+        const double l1 = (double(x - a.x) * (c.z - a.z) - double(c.x - a.x) * (z - a.z)) / det;
+        const double l2 = (double(b.x - a.x) * (z - a.z) - double(x - a.x) * (b.z - a.z)) / det;
+        EXPECT_GE(l1, -1e-6);  // float rounding of x, z
+        EXPECT_GE(l2, -1e-6);  // float rounding of x, z
+        EXPECT_LE(l1 + l2, 1.0 + 1e-6);  // float rounding of x, z
+        const double plane = a.y + l1 * (b.y - a.y) + l2 * (c.y - a.y);
+        EXPECT_NEAR(t.height_mesh(x, z), plane, 2e-5);  // float arithmetic, heights <= 6 m
+        EXPECT_EQ(t.normal_mesh(x, z), t.triangle_normal(tri));
+        // The bilinear normal is unit length and up.
+        const Vec3 nb = t.normal_bilinear(x, z);
+        EXPECT_NEAR(glm::length(nb), 1.0f, 1e-6f);  // float normalisation rounding
+        EXPECT_GT(nb.y, 0.0f);
+    }
+}
+
+TEST(Terrain, TriangleAtPicksTheCellHalves) {
+    const Terrain t = build_ok(random_map(4, 4, 9));
+    // Cell (i=1, j=2) is triangles 2*(1*3+2) = 10 (below the diagonal) and 11.
+    EXPECT_EQ(t.triangle_at(2.2f, 1.2f), 10u);
+    EXPECT_EQ(t.triangle_at(2.8f, 1.8f), 11u);
+    // Clamped into the rectangle.
+    EXPECT_EQ(t.triangle_at(-5.0f, -5.0f), 0u);
+    EXPECT_EQ(t.triangle_at(50.0f, 50.0f), t.triangle_count() - 1);
+}
+
+TEST(Terrain, BilinearNormalMatchesGradient) {
+    const Terrain t = build_ok(random_map(6, 6, 10), TerrainDef{1.0f, 2.0f, true});
+    Lcg rng(11);
+    for (int k = 0; k < 200; ++k) {
+        const float x = rng.uniform(0.1f, 4.9f), z = rng.uniform(0.1f, 4.9f);
+        const float e = 1e-2f;
+        // Stay within one cell so the central difference sees one bilinear patch.
+        if (std::floor(x - e) != std::floor(x + e) || std::floor(z - e) != std::floor(z + e)) continue;
+        const float gx = (t.height_bilinear(x + e, z) - t.height_bilinear(x - e, z)) / (2 * e);
+        const float gz = (t.height_bilinear(x, z + e) - t.height_bilinear(x, z - e)) / (2 * e);
+        const Vec3 expect = glm::normalize(Vec3(-gx, 1.0f, -gz));
+        const Vec3 n = t.normal_bilinear(x, z);
+        // Bilinear is linear along x and z: central differences are exact up to float
+        // cancellation (~1e-7 / 1e-2).
+        EXPECT_NEAR(n.x, expect.x, 1e-3f);
+        EXPECT_NEAR(n.y, expect.y, 1e-3f);  // same reason
+        EXPECT_NEAR(n.z, expect.z, 1e-3f);  // same reason
+    }
+}
+
+TEST(Terrain, QueriesClampOutside) {
+    const Terrain t = build_ok(random_map(5, 5, 12));
+    EXPECT_EQ(t.height_bilinear(-3.0f, 2.0f), t.height_bilinear(0.0f, 2.0f));
+    EXPECT_EQ(t.height_mesh(9.0f, 9.0f), t.sample(4, 4));
+    EXPECT_EQ(t.height_mesh(-1.0f, -1.0f), t.sample(0, 0));
+    EXPECT_TRUE(std::isfinite(t.height_mesh(NAN, INFINITY)));
+    EXPECT_TRUE(std::isfinite(t.height_bilinear(-INFINITY, NAN)));
+}
+
+TEST(Terrain, BuildErrorsNameTheField) {
+    const Heightmap good = random_map(3, 3, 13);
+    auto expect_error = [](const Result<Terrain>& r, const std::string& text) {
+        ASSERT_FALSE(r.ok());
+        EXPECT_NE(r.error().message.find(text), std::string::npos) << r.error().message;
+    };
+    expect_error(Terrain::build(good, TerrainDef{-1.0f, 7.0f, true}), "terrain.area_scale: must be finite and > 0 (got -1)");
+    expect_error(Terrain::build(good, TerrainDef{0.0f, 7.0f, true}), "terrain.area_scale");
+    expect_error(Terrain::build(good, TerrainDef{NAN, 7.0f, true}), "terrain.area_scale");
+    expect_error(Terrain::build(good, TerrainDef{1.0f, INFINITY, true}), "terrain.height_scale: must be finite and > 0");
+    expect_error(Terrain::build(good, TerrainDef{1.0f, -2.0f, true}), "terrain.height_scale");
+
+    Heightmap thin = random_map(1, 5, 14);
+    expect_error(Terrain::build(thin, {}), "at least 2 x 2");
+    Heightmap wrong = good;
+    wrong.samples.pop_back();
+    expect_error(Terrain::build(wrong, {}), "samples");
+    Heightmap nan = good;
+    nan.samples[4] = NAN;
+    expect_error(Terrain::build(nan, {}), "row 1, column 1");
+    Heightmap inf = good;
+    inf.samples[0] = INFINITY;
+    expect_error(Terrain::build(inf, {}), "not finite");
+}
+
+TEST(Terrain, ProceduralMapsBuild) {
+    for (const Heightmap& m : {procedural_valley(129, 129, 5), procedural_strict(17, 17), procedural_bowl(33, 33)}) {
+        const Terrain t = build_ok(m);
+        EXPECT_EQ(t.triangle_count(), static_cast<size_t>(2 * (m.width - 1) * (m.height - 1)));
+        EXPECT_LE(t.bounds().max.y, 7.0f + 1.0f);
+        EXPECT_GE(t.bounds().min.y, -1.0f);
+    }
+}
+
+}  // namespace
+}  // namespace mr
