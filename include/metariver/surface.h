@@ -40,7 +40,11 @@ extern const std::array<std::array<int, 2>, 12> kEdgeCorners;
 /// Bourke's edgeTable: bit e set when edge e is crossed, for cube index
 /// sum(1 << c for corners c that are INSIDE).
 extern const std::array<uint16_t, 256> kEdgeTable;
-/// Bourke's triTable: up to 5 triangles as edge triples, terminated by -1.
+/// Triangle table in Bourke's numbering: up to 5 triangles as edge triples, terminated
+/// by -1, indexed like kEdgeTable (bit c = corner c inside) and wound counter-clockwise
+/// seen from outside. Generated from the cube's faces rather than copied from Bourke:
+/// on a face with two diagonal corners inside, the inside corners are kept apart, so
+/// neighbouring cells agree and the mesh is watertight (see mc_tables.cpp).
 extern const std::array<std::array<int8_t, 16>, 256> kTriTable;
 }  // namespace mc
 
