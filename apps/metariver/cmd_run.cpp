@@ -1,0 +1,179 @@
+// `metariver run`: headless simulation of a scene for N frames; optional per-frame
+// OBJ export and a JSON stats file. Deterministic for a seed. All inputs are checked
+// before anything is written; a failure part-way removes what this run wrote.
+#include "commands.h"
+
+#include <metariver/io.h>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <memory>
+#include <vector>
+
+namespace mr::app {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct RunOptions {
+    SceneOptions scene;
+    long long frames = 300;
+    double dt = 1.0 / 60.0;
+    std::string stats;
+    std::string obj_dir;
+};
+
+constexpr long long kMaxFrames = 100'000'000;
+
+int fail(int code, const std::string& message) {
+    fmt::print(stderr, "metariver run: {}\n", message);
+    return code;
+}
+
+/// Checks that `path`'s folder exists, so a long run does not fail only at the end.
+Status check_output_file(const std::string& option, const std::string& path) {
+    const fs::path p(path);
+    const fs::path dir = p.parent_path().empty() ? fs::path(".") : p.parent_path();
+    std::error_code ec;
+    if (!fs::is_directory(dir, ec))
+        return Error{fmt::format("{} {}: folder '{}' does not exist", option, path, dir.string())};
+    if (fs::is_directory(p, ec)) return Error{fmt::format("{} {}: is a folder, expected a file path", option, path)};
+    return Ok{};
+}
+
+nlohmann::json stage_json(const std::vector<double>& ms) {
+    const Percentiles p = percentiles(ms);
+    return {{"median", p.median}, {"p95", p.p95}, {"mean", p.mean}, {"max", p.max}};
+}
+
+int run(const RunOptions& o) {
+    if (o.frames < 1 || o.frames > kMaxFrames)
+        return fail(kExitBadInput, fmt::format("--frames: must be in [1, {}] (got {})", kMaxFrames, o.frames));
+    if (!std::isfinite(o.dt) || o.dt <= 0.0 || o.dt > 1.0)
+        return fail(kExitBadInput, fmt::format("--dt: must be in (0, 1] seconds (got {})", o.dt));
+    auto def = o.scene.resolve();
+    if (!def) return fail(kExitBadInput, def.error().message);
+
+    auto sim_result = Simulation::create(def.value());
+    if (!sim_result) return fail(kExitBadInput, sim_result.error().message);
+    Simulation& sim = *sim_result.value();
+
+    // The OBJ folder: created if missing; everything this run writes there is recorded
+    // so a failure can take it back.
+    bool created_dir = false;
+    std::vector<std::string> written;
+    auto cleanup = [&] {
+        std::error_code ec;
+        for (const auto& f : written) fs::remove(f, ec);
+        if (created_dir) fs::remove(o.obj_dir, ec);
+    };
+    if (!o.obj_dir.empty()) {
+        std::error_code ec;
+        if (fs::exists(o.obj_dir, ec) && !fs::is_directory(o.obj_dir, ec))
+            return fail(kExitBadInput, fmt::format("--obj-dir {}: exists and is not a folder", o.obj_dir));
+        if (!fs::exists(o.obj_dir, ec)) {
+            if (!fs::create_directories(o.obj_dir, ec) || ec)
+                return fail(kExitBadInput, fmt::format("--obj-dir {}: cannot create folder: {}", o.obj_dir, ec.message()));
+            created_dir = true;
+        }
+        const std::string terrain_path = (fs::path(o.obj_dir) / "terrain.obj").string();
+        if (auto s = write_terrain_obj(terrain_path, sim.terrain()); !s) {
+            cleanup();
+            return fail(kExitBadInput, "--obj-dir: " + s.error().message);
+        }
+        written.push_back(terrain_path);
+    }
+    if (!o.stats.empty()) {  // checked after the OBJ folder, which may hold it
+        if (auto s = check_output_file("--stats", o.stats); !s) {
+            cleanup();
+            return fail(kExitBadInput, s.error().message);
+        }
+    }
+
+    std::vector<double> sim_ms, field_ms, surface_ms, total_ms;
+    sim_ms.reserve(static_cast<size_t>(o.frames));
+    field_ms.reserve(static_cast<size_t>(o.frames));
+    surface_ms.reserve(static_cast<size_t>(o.frames));
+    total_ms.reserve(static_cast<size_t>(o.frames));
+    const int digits = std::max(5, static_cast<int>(std::to_string(o.frames - 1).size()));
+    for (long long f = 0; f < o.frames; ++f) {
+        sim.step(static_cast<float>(o.dt));
+        const FrameTimings& t = sim.last_timings();
+        sim_ms.push_back(t.simulate_ms);
+        field_ms.push_back(t.field_ms);
+        surface_ms.push_back(t.surface_ms);
+        total_ms.push_back(t.simulate_ms + t.field_ms + t.surface_ms);
+        if (!o.obj_dir.empty()) {
+            const std::string path = (fs::path(o.obj_dir) / fmt::format("surface_{:0{}}.obj", f, digits)).string();
+            if (auto s = write_surface_obj(path, sim.surface(), fmt::format("metariver water surface, frame {}", f)); !s) {
+                cleanup();
+                return fail(kExitFailure, s.error().message);
+            }
+            written.push_back(path);
+        }
+    }
+
+    const SolverCounters& c = sim.counters();
+    const ScalarGrid& g = sim.field();
+    const SceneDef& d = sim.def();
+    if (!o.stats.empty()) {
+        nlohmann::json j;
+        j["scene"] = d.name;
+        j["seed"] = d.seed;
+        j["frames"] = o.frames;
+        j["dt"] = o.dt;
+        j["collision"] = std::string(to_string(d.collision.mode));
+        j["field_kernel"] = std::string(to_string(d.field.kernel));
+        j["terrain"] = {{"columns", sim.terrain().columns()},
+                        {"rows", sim.terrain().rows()},
+                        {"triangles", sim.terrain().triangle_count()}};
+        j["particles_total"] = sim.particles().size();
+        j["particles_active"] = sim.particles().active_count();
+        j["triangles"] = sim.surface().triangle_count();
+        j["vertices"] = sim.surface().vertex_count();
+        j["field_grid"] = {g.nx, g.ny, g.nz};
+        j["field_overflows"] = sim.field_overflows();
+        j["particle_steps"] = c.particle_steps;
+        j["collisions"] = c.collisions;
+        j["tunneled"] = c.tunneled;
+        j["respawned"] = c.respawned;
+        j["guarded"] = c.guarded;
+        j["state_hash"] = fmt::format("{:016x}", sim.state_hash());
+        j["stage_ms"] = {{"simulate", stage_json(sim_ms)},
+                         {"field", stage_json(field_ms)},
+                         {"surface", stage_json(surface_ms)},
+                         {"total", stage_json(total_ms)}};
+        if (auto s = write_file_atomic(o.stats, j.dump(2) + "\n"); !s) {
+            cleanup();
+            return fail(kExitFailure, s.error().message);
+        }
+    }
+    const Percentiles tot = percentiles(total_ms);
+    fmt::print("{}: {} frames, {}/{} particles active, surface {} triangles / {} vertices, "
+               "tunneled {}, respawned {}, frame median {:.3f} ms (p95 {:.3f})\n",
+               d.name, o.frames, sim.particles().active_count(), sim.particles().size(),
+               sim.surface().triangle_count(), sim.surface().vertex_count(), c.tunneled, c.respawned,
+               tot.median, tot.p95);
+    if (!o.obj_dir.empty()) fmt::print("wrote {} OBJ files to {}\n", written.size(), o.obj_dir);
+    if (!o.stats.empty()) fmt::print("wrote stats to {}\n", o.stats);
+    return kExitOk;
+}
+
+}  // namespace
+
+void register_run(CLI::App& app, std::function<int()>& action) {
+    auto opts = std::make_shared<RunOptions>();
+    CLI::App* cmd = app.add_subcommand("run", "simulate a scene headless; deterministic for a seed");
+    opts->scene.add_to(*cmd);
+    cmd->add_option("--frames", opts->frames, "frames to simulate (default 300)");
+    cmd->add_option("--dt", opts->dt, "frame time in seconds (default 1/60)");
+    cmd->add_option("--stats", opts->stats, "write run statistics as JSON to this file");
+    cmd->add_option("--obj-dir", opts->obj_dir, "write the water surface of every frame (and the terrain) as OBJ");
+    cmd->callback([opts, &action] { action = [opts] { return run(*opts); }; });
+}
+
+}  // namespace mr::app

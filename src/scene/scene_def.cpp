@@ -1,0 +1,181 @@
+// Scene defaults, the built-in presets and validation of every field.
+//
+// The paper's scenes come from its repository's Unity scene files (see docs/scenes.md):
+// FullVersion (own physics) on strict17.png, Nile on nile.png.
+#include <metariver/scene.h>
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace mr {
+
+std::string_view to_string(TerrainSource s) {
+    switch (s) {
+        case TerrainSource::Valley: return "valley";
+        case TerrainSource::Strict: return "strict";
+        case TerrainSource::Bowl: return "bowl";
+        case TerrainSource::Flat: return "flat";
+        case TerrainSource::File: return "file";
+    }
+    return "?";
+}
+
+SceneDef default_scene() {
+    SceneDef d;
+    d.name = "default";
+    d.seed = 1;
+    d.source = {.kind = TerrainSource::Valley, .heightmap = {}, .width = 65, .height = 97, .seed = 7};
+    d.terrain = {.area_scale = 1.0f, .height_scale = 24.0f, .paper_row_orientation = true};
+    d.spawn = {.count = 300,
+               .center = Vec3(0.0f),
+               .half_extent = Vec3(1.5f, 0.5f, 1.5f),
+               .interval = 1,
+               .initial_velocity = Vec3(0.0f, 0.0f, -2.0f),
+               .auto_center = true,
+               .auto_height = 1.5f};
+    d.springs = {.stiffness = 30.0f, .min_distance = 0.8f, .max_distance = 0.6f, .mode = SpringMode::Pairs};
+    d.collision = {.mode = CollisionMode::Robust, .damping = 0.3f, .offset = 0.02f, .leaf_triangles = 8};
+    d.integrator = {.gravity = 9.82f, .fixed_dt = 0.0f, .substeps = 2};
+    d.field = {.kernel = FieldKernel::InverseSquare,
+               .radius = 1.0f,
+               .resolution = 2.0f,
+               .bounds_offset = 2.0f,
+               .threshold = 0.01f};
+    return d;
+}
+
+namespace {
+
+/// The paper's FullVersion scene (own physics): strict17.png, 20 balls, springs off.
+SceneDef paper_full() {
+    SceneDef d;
+    d.name = "paper-full";
+    d.seed = 1;
+    d.source = {.kind = TerrainSource::File, .heightmap = {}, .width = 17, .height = 17, .seed = 1};
+    d.terrain = {.area_scale = 1.0f, .height_scale = 7.0f, .paper_row_orientation = true};
+    d.spawn = {.count = 20,
+               .center = Vec3(8.0f, 7.0f, 15.0f),
+               .half_extent = Vec3(2.0f, 1.0f, 0.2f),
+               .interval = 80,
+               .initial_velocity = Vec3(0.0f)};
+    d.springs = {.stiffness = 0.0f, .min_distance = 3.0f, .max_distance = 5.0f, .mode = SpringMode::Pairs};
+    d.collision = {.mode = CollisionMode::Paper, .damping = 0.7f, .offset = 0.07f, .leaf_triangles = 8};
+    d.integrator = {.gravity = 9.82f, .fixed_dt = 0.0f, .substeps = 1};
+    d.field = {.kernel = FieldKernel::InverseSquare,
+               .radius = 2.0f,
+               .resolution = 2.0f,
+               .bounds_offset = 4.0f,
+               .threshold = 0.54f};
+    return d;
+}
+
+/// The paper's Nile scene (engine physics in the paper) run with the paper's own
+/// physics: nile.png, 50 balls every 15 frames, resolution 1, threshold 0.32, offset 5.
+SceneDef paper_nile() {
+    SceneDef d = paper_full();
+    d.name = "paper-nile";
+    d.source = {.kind = TerrainSource::File, .heightmap = {}, .width = 33, .height = 33, .seed = 1};
+    d.spawn.count = 50;
+    d.spawn.center = Vec3(27.0f, 4.6f, 31.0f);
+    d.spawn.half_extent = Vec3(2.5f, 1.0f, 1.0f);
+    d.spawn.interval = 15;
+    d.field.resolution = 1.0f;
+    d.field.threshold = 0.32f;
+    d.field.bounds_offset = 5.0f;
+    return d;
+}
+
+/// Figure 6: the bowl with springs on, keeping the balls apart. The paper gives no
+/// scene file for it; FullVersion's parameters with k = 2 and the spawn volume over
+/// the bowl's centre.
+SceneDef paper_bowl() {
+    SceneDef d = paper_full();
+    d.name = "paper-bowl";
+    d.source = {.kind = TerrainSource::Bowl, .heightmap = {}, .width = 33, .height = 33, .seed = 1};
+    d.spawn.center = Vec3(16.0f, 8.0f, 16.0f);
+    d.spawn.half_extent = Vec3(2.0f, 1.0f, 2.0f);
+    d.spawn.interval = 20;
+    d.springs.stiffness = 2.0f;
+    return d;
+}
+
+}  // namespace
+
+std::vector<std::string> preset_names() {
+    return {"default", "paper-full", "paper-nile", "paper-bowl"};
+}
+
+Result<SceneDef> preset(std::string_view name) {
+    if (name == "default") return default_scene();
+    if (name == "paper-full") return paper_full();
+    if (name == "paper-nile") return paper_nile();
+    if (name == "paper-bowl") return paper_bowl();
+    std::string known;
+    for (const auto& n : preset_names()) known += (known.empty() ? "" : ", ") + n;
+    return Error{fmt::format("unknown preset '{}' (known: {})", name, known)};
+}
+
+namespace {
+
+struct Checker {
+    std::string error;
+
+    void range(const char* key, double v, double lo, double hi) {
+        if (!error.empty()) return;
+        if (!std::isfinite(v) || v < lo || v > hi)
+            error = fmt::format("{}: must be in [{}, {}] (got {})", key, lo, hi, v);
+    }
+    void positive(const char* key, double v, double hi) {
+        if (!error.empty()) return;
+        if (!std::isfinite(v) || v <= 0.0 || v > hi)
+            error = fmt::format("{}: must be in (0, {}] (got {})", key, hi, v);
+    }
+    void vec(const char* key, const Vec3& v, double lo, double hi) {
+        if (!error.empty()) return;
+        for (int c = 0; c < 3; ++c) {
+            if (!std::isfinite(v[c]) || v[c] < lo || v[c] > hi) {
+                error = fmt::format("{}: every component must be in [{}, {}] (got [{}, {}, {}])", key, lo,
+                                    hi, v.x, v.y, v.z);
+                return;
+            }
+        }
+    }
+};
+
+}  // namespace
+
+Status validate(const SceneDef& d) {
+    Checker c;
+    constexpr double kBig = 1e6;  // metres: anything beyond is a typo, not a terrain
+    if (d.source.kind != TerrainSource::File) {
+        c.range("terrain.width", d.source.width, 2, kMaxHeightmapSide);
+        c.range("terrain.height", d.source.height, 2, kMaxHeightmapSide);
+    }
+    c.positive("terrain.area_scale", d.terrain.area_scale, 1e4);
+    c.positive("terrain.height_scale", d.terrain.height_scale, 1e5);
+    c.range("particles.count", d.spawn.count, 1, kMaxParticles);
+    c.vec("particles.spawn_center", d.spawn.center, -kBig, kBig);
+    c.vec("particles.spawn_half_extent", d.spawn.half_extent, 0.0, kBig);
+    c.range("particles.spawn_interval", d.spawn.interval, 0, 1e6);
+    c.vec("particles.initial_velocity", d.spawn.initial_velocity, -1e4, 1e4);
+    c.range("particles.auto_height", d.spawn.auto_height, 0.0, 1e4);
+    c.range("springs.stiffness", d.springs.stiffness, 0.0, 1e6);
+    c.range("springs.min_distance", d.springs.min_distance, 0.0, 1e4);
+    c.range("springs.max_distance", d.springs.max_distance, 0.0, 1e4);
+    c.range("collision.damping", d.collision.damping, 0.0, 1.0);
+    c.range("collision.offset", d.collision.offset, 0.0, 10.0);
+    c.range("collision.bvh_leaf_triangles", d.collision.leaf_triangles, 2, 4096);
+    c.range("forces.gravity", d.integrator.gravity, -1000.0, 1000.0);
+    if (d.integrator.fixed_dt != 0.0f) c.positive("integrator.dt", d.integrator.fixed_dt, 1.0);
+    c.range("integrator.substeps", d.integrator.substeps, 1, 1000);
+    c.positive("field.resolution", d.field.resolution, 64.0);
+    c.positive("field.radius", d.field.radius, 1e4);
+    c.range("field.bounds_offset", d.field.bounds_offset, 0.0, 1e4);
+    c.positive("field.threshold", d.field.threshold, 1e9);
+    if (!c.error.empty()) return Error{c.error};
+    return Ok{};
+}
+
+}  // namespace mr

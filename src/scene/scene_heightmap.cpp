@@ -1,0 +1,30 @@
+// Heightmaps for scenes: procedural terrains or a PNG file.
+#include <metariver/scene.h>
+
+#include <fmt/format.h>
+
+namespace mr {
+
+Result<Heightmap> load_scene_heightmap(const SceneDef& def) {
+    const auto& s = def.source;
+    switch (s.kind) {
+        case TerrainSource::Valley: return procedural_valley(s.width, s.height, s.seed);
+        case TerrainSource::Strict: return procedural_strict(s.width, s.height);
+        case TerrainSource::Bowl: return procedural_bowl(s.width, s.height);
+        case TerrainSource::Flat: {
+            Heightmap m;
+            m.width = s.width;
+            m.height = s.height;
+            m.bit_depth = 32;
+            m.samples.assign(static_cast<size_t>(s.width) * s.height, 0.0f);
+            return m;
+        }
+        case TerrainSource::File:
+            if (s.heightmap.empty())
+                return Error{fmt::format("scene '{}' needs a heightmap file (give --heightmap FILE)", def.name)};
+            return load_heightmap_png(s.heightmap);
+    }
+    return Error{"unknown terrain source"};
+}
+
+}  // namespace mr

@@ -1,0 +1,274 @@
+// Scene files in TOML (toml++). Every key is checked: unknown keys, wrong types and
+// out-of-range values are one-line errors naming the file and the key. The full
+// reference is docs/scene-format.md.
+#include <metariver/scene.h>
+
+#include <fmt/format.h>
+#include <toml++/toml.h>
+
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <sstream>
+
+namespace mr {
+
+namespace {
+
+class Reader {
+public:
+    explicit Reader(std::string origin) : origin_(std::move(origin)) {}
+
+    bool failed() const { return !error_.empty(); }
+    const std::string& error() const { return error_; }
+
+    void fail(const std::string& key, const std::string& what) {
+        if (error_.empty()) error_ = fmt::format("{}: {}: {}", origin_, key, what);
+    }
+
+    /// Rejects keys of `t` not in `allowed`.
+    void allow(const toml::table& t, const std::string& prefix, std::initializer_list<std::string_view> allowed) {
+        for (const auto& [k, v] : t) {
+            bool known = false;
+            for (auto a : allowed) known |= (k.str() == a);
+            if (!known) {
+                std::string list;
+                for (auto a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+                fail(prefix + std::string(k.str()), fmt::format("unknown key (allowed here: {})", list));
+                return;
+            }
+        }
+    }
+
+    const toml::table* table(const toml::table& root, std::string_view key) {
+        const toml::node* n = root.get(key);
+        if (!n) return nullptr;
+        if (!n->is_table()) {
+            fail(std::string(key), "must be a table ([" + std::string(key) + "])");
+            return nullptr;
+        }
+        return n->as_table();
+    }
+
+    void number(const toml::table& t, const std::string& prefix, std::string_view key, float& out) {
+        const toml::node* n = t.get(key);
+        if (!n) return;
+        if (auto f = n->value<double>()) {  // accepts integers too
+            out = static_cast<float>(*f);
+            if (!std::isfinite(out) && std::isfinite(*f)) fail(prefix + std::string(key), fmt::format("out of float range (got {})", *f));
+            return;
+        }
+        fail(prefix + std::string(key), "must be a number");
+    }
+
+    void integer(const toml::table& t, const std::string& prefix, std::string_view key, int& out,
+                 long long lo, long long hi) {
+        const toml::node* n = t.get(key);
+        if (!n) return;
+        if (!n->is_integer()) {
+            fail(prefix + std::string(key), fmt::format("must be an integer in [{}, {}]", lo, hi));
+            return;
+        }
+        const long long v = n->as_integer()->get();
+        if (v < lo || v > hi) {
+            fail(prefix + std::string(key), fmt::format("must be in [{}, {}] (got {})", lo, hi, v));
+            return;
+        }
+        out = static_cast<int>(v);
+    }
+
+    void seed(const toml::table& t, const std::string& prefix, std::string_view key, uint32_t& out) {
+        int v = 0;
+        const toml::node* n = t.get(key);
+        if (!n) return;
+        if (n->is_integer()) {
+            const long long x = n->as_integer()->get();
+            if (x < 0 || x > 4294967295LL) {
+                fail(prefix + std::string(key), fmt::format("must be in [0, 4294967295] (got {})", x));
+                return;
+            }
+            out = static_cast<uint32_t>(x);
+            return;
+        }
+        integer(t, prefix, key, v, 0, 0);  // reports the type error
+    }
+
+    void boolean(const toml::table& t, const std::string& prefix, std::string_view key, bool& out) {
+        const toml::node* n = t.get(key);
+        if (!n) return;
+        if (n->is_boolean()) {
+            out = n->as_boolean()->get();
+            return;
+        }
+        fail(prefix + std::string(key), "must be true or false");
+    }
+
+    bool string(const toml::table& t, const std::string& prefix, std::string_view key, std::string& out) {
+        const toml::node* n = t.get(key);
+        if (!n) return false;
+        if (auto s = n->value<std::string>()) {
+            out = *s;
+            return true;
+        }
+        fail(prefix + std::string(key), "must be a string");
+        return false;
+    }
+
+    void vec3(const toml::table& t, const std::string& prefix, std::string_view key, Vec3& out) {
+        const toml::node* n = t.get(key);
+        if (!n) return;
+        const toml::array* a = n->as_array();
+        if (!a || a->size() != 3) {
+            fail(prefix + std::string(key), "must be an array of 3 numbers [x, y, z]");
+            return;
+        }
+        for (size_t c = 0; c < 3; ++c) {
+            auto f = (*a)[c].value<double>();
+            if (!f) {
+                fail(prefix + std::string(key), "must be an array of 3 numbers [x, y, z]");
+                return;
+            }
+            out[static_cast<int>(c)] = static_cast<float>(*f);
+        }
+    }
+
+    template <class E>
+    void choice(const toml::table& t, const std::string& prefix, std::string_view key, E& out,
+                std::initializer_list<std::pair<std::string_view, E>> options) {
+        std::string s;
+        if (!string(t, prefix, key, s)) return;
+        std::string list;
+        for (const auto& [name, value] : options) {
+            if (s == name) {
+                out = value;
+                return;
+            }
+            list += (list.empty() ? "" : ", ") + std::string(name);
+        }
+        fail(prefix + std::string(key), fmt::format("must be one of {} (got '{}')", list, s));
+    }
+
+private:
+    std::string origin_;
+    std::string error_;
+};
+
+}  // namespace
+
+Result<SceneDef> parse_scene_toml(std::string_view text, const std::string& origin, const SceneDef& base) {
+    toml::table root;
+    try {
+        root = toml::parse(text, origin);
+    } catch (const toml::parse_error& e) {
+        return Error{fmt::format("{}:{}:{}: TOML syntax error: {}", origin, e.source().begin.line,
+                                 e.source().begin.column, e.description())};
+    }
+
+    SceneDef d = base;
+    Reader r(origin);
+    r.allow(root, "", {"name", "seed", "surface", "terrain", "particles", "forces", "springs", "collision",
+                       "integrator", "field"});
+    r.string(root, "", "name", d.name);
+    r.seed(root, "", "seed", d.seed);
+    r.boolean(root, "", "surface", d.surface);
+
+    if (const toml::table* t = r.table(root, "terrain")) {
+        const std::string p = "terrain.";
+        r.allow(*t, p, {"source", "heightmap", "width", "height", "seed", "area_scale", "height_scale",
+                        "paper_row_orientation"});
+        r.choice(*t, p, "source", d.source.kind,
+                 {{"valley", TerrainSource::Valley},
+                  {"strict", TerrainSource::Strict},
+                  {"bowl", TerrainSource::Bowl},
+                  {"flat", TerrainSource::Flat},
+                  {"file", TerrainSource::File}});
+        if (r.string(*t, p, "heightmap", d.source.heightmap)) {
+            if (!t->get("source")) d.source.kind = TerrainSource::File;
+            std::filesystem::path hp(d.source.heightmap);
+            if (hp.is_relative() && !hp.empty()) {
+                const auto dir = std::filesystem::path(origin).parent_path();
+                d.source.heightmap = (dir / hp).lexically_normal().string();
+            }
+        }
+        r.integer(*t, p, "width", d.source.width, 2, kMaxHeightmapSide);
+        r.integer(*t, p, "height", d.source.height, 2, kMaxHeightmapSide);
+        r.seed(*t, p, "seed", d.source.seed);
+        r.number(*t, p, "area_scale", d.terrain.area_scale);
+        r.number(*t, p, "height_scale", d.terrain.height_scale);
+        r.boolean(*t, p, "paper_row_orientation", d.terrain.paper_row_orientation);
+    }
+    if (const toml::table* t = r.table(root, "particles")) {
+        const std::string p = "particles.";
+        r.allow(*t, p, {"count", "spawn_center", "spawn_half_extent", "spawn_interval", "initial_velocity",
+                        "auto_height"});
+        r.integer(*t, p, "count", d.spawn.count, 1, kMaxParticles);
+        if (const toml::node* n = t->get("spawn_center"); n && n->is_string()) {
+            if (n->value<std::string>() == "auto")
+                d.spawn.auto_center = true;
+            else
+                r.fail(p + "spawn_center", "must be \"auto\" or an array of 3 numbers [x, y, z]");
+        } else if (n) {
+            r.vec3(*t, p, "spawn_center", d.spawn.center);
+            d.spawn.auto_center = false;
+        }
+        r.vec3(*t, p, "spawn_half_extent", d.spawn.half_extent);
+        r.integer(*t, p, "spawn_interval", d.spawn.interval, 0, 1000000);
+        r.vec3(*t, p, "initial_velocity", d.spawn.initial_velocity);
+        r.number(*t, p, "auto_height", d.spawn.auto_height);
+    }
+    if (const toml::table* t = r.table(root, "forces")) {
+        r.allow(*t, "forces.", {"gravity"});
+        r.number(*t, "forces.", "gravity", d.integrator.gravity);
+    }
+    if (const toml::table* t = r.table(root, "springs")) {
+        const std::string p = "springs.";
+        r.allow(*t, p, {"stiffness", "min_distance", "max_distance", "mode"});
+        r.number(*t, p, "stiffness", d.springs.stiffness);
+        r.number(*t, p, "min_distance", d.springs.min_distance);
+        r.number(*t, p, "max_distance", d.springs.max_distance);
+        r.choice(*t, p, "mode", d.springs.mode, {{"pairs", SpringMode::Pairs}});
+    }
+    if (const toml::table* t = r.table(root, "collision")) {
+        const std::string p = "collision.";
+        r.allow(*t, p, {"mode", "damping", "offset", "bvh_leaf_triangles"});
+        r.choice(*t, p, "mode", d.collision.mode,
+                 {{"paper", CollisionMode::Paper}, {"robust", CollisionMode::Robust}, {"none", CollisionMode::None}});
+        r.number(*t, p, "damping", d.collision.damping);
+        r.number(*t, p, "offset", d.collision.offset);
+        r.integer(*t, p, "bvh_leaf_triangles", d.collision.leaf_triangles, 2, 4096);
+    }
+    if (const toml::table* t = r.table(root, "integrator")) {
+        const std::string p = "integrator.";
+        r.allow(*t, p, {"dt", "substeps"});
+        r.number(*t, p, "dt", d.integrator.fixed_dt);
+        r.integer(*t, p, "substeps", d.integrator.substeps, 1, 1000);
+    }
+    if (const toml::table* t = r.table(root, "field")) {
+        const std::string p = "field.";
+        r.allow(*t, p, {"kernel", "radius", "resolution", "bounds_offset", "threshold"});
+        r.choice(*t, p, "kernel", d.field.kernel,
+                 {{"inverse_square", FieldKernel::InverseSquare}, {"radius_over_r", FieldKernel::RadiusOverR}});
+        r.number(*t, p, "radius", d.field.radius);
+        r.number(*t, p, "resolution", d.field.resolution);
+        r.number(*t, p, "bounds_offset", d.field.bounds_offset);
+        r.number(*t, p, "threshold", d.field.threshold);
+    }
+    if (r.failed()) return Error{r.error()};
+    if (d.source.kind == TerrainSource::File && d.source.heightmap.empty())
+        return Error{fmt::format("{}: terrain.heightmap: required when terrain.source = \"file\"", origin)};
+    if (auto v = validate(d); !v) return Error{fmt::format("{}: {}", origin, v.error().message)};
+    return d;
+}
+
+Result<SceneDef> load_scene_file(const std::string& path) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec))
+        return Error{fmt::format("{}: scene file not found", path)};
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return Error{fmt::format("{}: cannot open scene file", path)};
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    return parse_scene_toml(ss.str(), path, default_scene());
+}
+
+}  // namespace mr

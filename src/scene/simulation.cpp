@@ -1,0 +1,106 @@
+// The orchestrator of one frame: solver step -> field -> marching cubes.
+#include <metariver/scene.h>
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+
+namespace mr {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+/// Places the spawn volume over the lowest sample of the upstream band (the 10 % of
+/// grid rows with the highest z), auto_height above the ground.
+Vec3 auto_spawn_center(const Terrain& t, float auto_height) {
+    const int band = std::max(1, t.rows() / 10);
+    int best_i = t.rows() - 1, best_j = t.columns() / 2;
+    float best = t.sample(best_i, best_j);
+    for (int i = t.rows() - band; i < t.rows(); ++i) {
+        for (int j = 0; j < t.columns(); ++j) {
+            if (t.sample(i, j) < best) {
+                best = t.sample(i, j);
+                best_i = i;
+                best_j = j;
+            }
+        }
+    }
+    // Step one sample inward from the terrain's edge so the volume sits over ground.
+    best_i = std::min(best_i, t.rows() - 2);
+    const float s = t.area_scale();
+    const float x = static_cast<float>(best_j) * s, z = static_cast<float>(best_i) * s;
+    return Vec3(x, t.height_mesh(x, z) + auto_height, z);
+}
+
+}  // namespace
+
+Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh)
+    : def_(def), terrain_(std::move(terrain)), bvh_(std::move(bvh)) {
+    SpawnDef spawn = def_.spawn;
+    if (spawn.auto_center) {
+        spawn.center = auto_spawn_center(terrain_, spawn.auto_height);
+        spawn.auto_center = false;
+        def_.spawn = spawn;
+    }
+    solver_ = std::make_unique<ParticleSolver>(terrain_, bvh_, spawn, def_.springs, def_.collision,
+                                               def_.integrator, def_.seed);
+}
+
+Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def) {
+    if (auto v = validate(def); !v) return v.error();
+    auto map = load_scene_heightmap(def);
+    if (!map) return map.error();
+    return create(def, map.value());
+}
+
+Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, const Heightmap& map) {
+    if (auto v = validate(def); !v) return v.error();
+    auto terrain = Terrain::build(map, def.terrain);
+    if (!terrain) return terrain.error();
+    auto bvh = Bvh::build(terrain.value(), BvhDef{.leaf_triangles = def.collision.leaf_triangles});
+    if (!bvh) return bvh.error();
+    return std::unique_ptr<Simulation>(new Simulation(def, std::move(terrain.value()), std::move(bvh.value())));
+}
+
+void Simulation::step(float frame_dt) {
+    auto t0 = Clock::now();
+    solver_->step_frame(frame_dt);
+    timings_.simulate_ms = ms_since(t0);
+
+    if (!def_.surface) {
+        timings_.field_ms = timings_.surface_ms = 0.0;
+        return;
+    }
+    t0 = Clock::now();
+    solver_->particles().gather_active_positions(balls_);
+    if (!compute_field_paper(balls_, def_.field, field_)) ++field_overflows_;
+    timings_.field_ms = ms_since(t0);
+
+    t0 = Clock::now();
+    extract_surface(field_, def_.field.threshold, surface_);
+    timings_.surface_ms = ms_since(t0);
+}
+
+uint64_t Simulation::state_hash() const {
+    uint64_t h = 1469598103934665603ull;
+    auto mix = [&h](const void* data, size_t n) {
+        const auto* b = static_cast<const unsigned char*>(data);
+        for (size_t i = 0; i < n; ++i) {
+            h ^= b[i];
+            h *= 1099511628211ull;
+        }
+    };
+    const Particles& p = particles();
+    mix(p.position.data(), p.position.size() * sizeof(Vec3));
+    mix(p.velocity.data(), p.velocity.size() * sizeof(Vec3));
+    mix(p.active.data(), p.active.size());
+    return h;
+}
+
+}  // namespace mr

@@ -1,0 +1,189 @@
+// End-to-end tests of the metariver binary: good runs and every kind of bad input
+// (exit code 2, one line naming the file/option/key, nothing written).
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <sys/wait.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CliResult {
+    int code = -1;
+    std::string out;
+    std::string err;
+};
+
+std::string slurp(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+class Cli : public ::testing::Test {
+protected:
+    void SetUp() override {
+        dir_ = fs::temp_directory_path() /
+               ("metariver_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+        fs::remove_all(dir_);
+        fs::create_directories(dir_);
+    }
+    void TearDown() override { fs::remove_all(dir_); }
+
+    CliResult run(const std::string& args) {
+        const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
+        const std::string cmd = std::string(METARIVER_EXE) + " " + args + " >" + out.string() + " 2>" + err.string();
+        const int status = std::system(cmd.c_str());
+        CliResult r;
+        r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+        r.out = slurp(out);
+        r.err = slurp(err);
+        fs::remove(out);
+        fs::remove(err);
+        return r;
+    }
+
+    fs::path write(const std::string& name, const std::string& bytes) {
+        const fs::path p = dir_ / name;
+        std::ofstream(p, std::ios::binary) << bytes;
+        return p;
+    }
+
+    /// Files left in the test folder (the command must not leave partial output).
+    size_t files_left() const {
+        size_t n = 0;
+        for (const auto& e : fs::recursive_directory_iterator(dir_)) n += e.is_regular_file() || e.is_directory();
+        return n;
+    }
+
+    /// Runs a bad command: exit 2, one line on stderr naming `must_contain`, and
+    /// neither the stats file nor the OBJ folder appear.
+    void expect_bad(const std::string& args, const std::string& must_contain) {
+        const size_t before = files_left();
+        const std::string outputs = " --stats " + (dir_ / "s.json").string() + " --obj-dir " + (dir_ / "objs").string();
+        CliResult r = run(args + outputs);
+        EXPECT_EQ(r.code, 2) << args << "\n" << r.err;
+        EXPECT_NE(r.err.find(must_contain), std::string::npos) << args << ": '" << r.err << "'";
+        EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "one line: " << r.err;
+        EXPECT_FALSE(fs::exists(dir_ / "s.json")) << args;
+        EXPECT_FALSE(fs::exists(dir_ / "objs")) << args;
+        EXPECT_EQ(files_left(), before) << args;
+    }
+
+    fs::path dir_;
+};
+
+std::string shared_map(const char* name) {
+    return std::string(METARIVER_SHARED_DIR) + "/heightmaps/metawater/" + name;
+}
+
+TEST_F(Cli, RunWritesStatsAndObjs) {
+    const fs::path stats = dir_ / "s.json", objs = dir_ / "objs";
+    CliResult r = run("run --preset paper-bowl --frames 40 --seed 3 --stats " + stats.string() + " --obj-dir " +
+                      objs.string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    auto j = nlohmann::json::parse(slurp(stats));
+    EXPECT_EQ(j["frames"], 40);
+    EXPECT_EQ(j["particles_active"], 2);  // interval 20: frames 0 and 20
+    for (const char* key : {"triangles", "vertices", "tunneled", "respawned", "particles_active"})
+        EXPECT_TRUE(j.contains(key)) << key;
+    for (const char* stage : {"simulate", "field", "surface"}) {
+        EXPECT_TRUE(j["stage_ms"][stage].contains("median")) << stage;
+        EXPECT_TRUE(j["stage_ms"][stage].contains("p95")) << stage;
+        EXPECT_GE(j["stage_ms"][stage]["p95"].get<double>(), j["stage_ms"][stage]["median"].get<double>());
+    }
+    EXPECT_GT(j["triangles"].get<int>(), 0);
+    size_t obj_files = 0;
+    for (const auto& e : fs::directory_iterator(objs)) obj_files += e.path().extension() == ".obj";
+    EXPECT_EQ(obj_files, 41u);  // terrain + 40 frames
+    EXPECT_NE(slurp(objs / "terrain.obj").find("f 1//1"), std::string::npos);
+    // Last frame's OBJ has the triangle count the stats report.
+    const std::string last = slurp(objs / "surface_00039.obj");
+    size_t faces = 0;
+    std::istringstream lines(last);
+    for (std::string line; std::getline(lines, line);) faces += line.rfind("f ", 0) == 0;
+    EXPECT_EQ(faces, j["triangles"].get<size_t>());
+}
+
+TEST_F(Cli, RunIsDeterministicForASeed) {
+    auto hash = [&](const std::string& seed) {
+        const fs::path stats = dir_ / ("h" + seed + ".json");
+        CliResult r = run("run --preset paper-bowl --frames 60 --seed " + seed + " --stats " + stats.string());
+        EXPECT_EQ(r.code, 0) << r.err;
+        return nlohmann::json::parse(slurp(stats))["state_hash"].get<std::string>();
+    };
+    EXPECT_EQ(hash("5"), hash("5"));
+    EXPECT_NE(hash("5"), hash("6"));
+}
+
+TEST_F(Cli, PaperNileWithTheRealHeightmap) {
+    if (!fs::exists(shared_map("nile.png"))) GTEST_SKIP() << "shared heightmaps not present";
+    const fs::path stats = dir_ / "s.json";
+    CliResult r = run("run --preset paper-nile --heightmap " + shared_map("nile.png") + " --frames 800 --stats " +
+                      stats.string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    auto j = nlohmann::json::parse(slurp(stats));
+    EXPECT_EQ(j["particles_active"], 50);  // 15-frame interval: all 50 by frame 735
+    EXPECT_GT(j["triangles"].get<int>(), 0);
+    EXPECT_GT(j["vertices"].get<int>(), 0);
+}
+
+TEST_F(Cli, BadHeightmaps) {
+    expect_bad("run --heightmap " + (dir_ / "missing.png").string(), "missing.png");
+    expect_bad("run --heightmap " + write("empty.png", "").string(), "empty.png");
+    expect_bad("run --heightmap " + write("text.png", "this is not an image\n").string(), "text.png");
+    // A truncated PNG: the signature and a cut-off header chunk.
+    expect_bad("run --heightmap " + write("trunc.png", std::string("\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR\0\0", 20)).string(),
+               "trunc.png");
+    if (fs::exists(shared_map("nile.png"))) {
+        const std::string full = slurp(shared_map("nile.png"));
+        expect_bad("run --heightmap " + write("half.png", full.substr(0, full.size() / 2)).string(), "half.png");
+    }
+    // A valid 1x1 gray PNG (generated with Python zlib/struct).
+    const std::string one_by_one(
+        "\x89\x50\x4e\x47\x0d\x0a\x1a\x0a\x00\x00\x00\x0d\x49\x48\x44\x52"
+        "\x00\x00\x00\x01\x00\x00\x00\x01\x08\x00\x00\x00\x00\x3a\x7e\x9b"
+        "\x55\x00\x00\x00\x0a\x49\x44\x41\x54\x78\x9c\x63\x68\x00\x00\x00"
+        "\x82\x00\x81\x77\xcd\x72\xb6\x00\x00\x00\x00\x49\x45\x4e\x44\xae"
+        "\x42\x60\x82",
+        67);
+    expect_bad("run --heightmap " + write("one.png", one_by_one).string(), "one.png");
+}
+
+TEST_F(Cli, BadPresetsScenesAndOptions) {
+    expect_bad("run --preset paper-moon", "unknown preset 'paper-moon'");
+    expect_bad("run --preset paper-nile", "--heightmap");
+    expect_bad("run --scene " + (dir_ / "nope.toml").string(), "nope.toml");
+    expect_bad("run --scene " + write("syntax.toml", "[field\nresolution = 2\n").string(), "syntax.toml:1");
+    expect_bad("run --scene " + write("unknown.toml", "[field]\nresolutoin = 2\n").string(), "field.resolutoin: unknown key");
+    expect_bad("run --scene " + write("neg.toml", "[field]\nresolution = -2\n").string(), "field.resolution: must be in (0, 64]");
+    expect_bad("run --scene " + write("nan.toml", "[forces]\ngravity = nan\n").string(), "forces.gravity");
+    expect_bad("run --scene " + write("dt.toml", "[integrator]\ndt = 0.0\nsubsteps = 0\n").string(), "integrator.substeps");
+    expect_bad("run --scene " + write("count.toml", "[particles]\ncount = 99999999999\n").string(), "particles.count: must be in [1, 10000000]");
+    expect_bad("run --dt 0", "--dt: must be in (0, 1]");
+    expect_bad("run --dt -0.5", "--dt: must be in (0, 1]");
+    expect_bad("run --dt nan", "--dt");
+    expect_bad("run --frames 0", "--frames: must be in [1,");
+    expect_bad("run --frames -3", "--frames");
+    expect_bad("run --collision magic", "--collision: must be one of paper, robust, none");
+    expect_bad("run --frames many", "--frames");
+    expect_bad("run --preset default --scene x.toml", "--preset");
+    expect_bad("fly", "fly");
+}
+
+TEST_F(Cli, UnwritableStatsPathIsRefusedBeforeRunning) {
+    CliResult r = run("run --frames 2 --stats " + (dir_ / "no/such/dir/s.json").string());
+    EXPECT_EQ(r.code, 2);
+    EXPECT_NE(r.err.find("does not exist"), std::string::npos) << r.err;
+}
+
+}  // namespace

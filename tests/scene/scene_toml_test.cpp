@@ -1,0 +1,214 @@
+#include <metariver/scene.h>
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+namespace mr {
+namespace {
+
+Result<SceneDef> parse(const std::string& text) { return parse_scene_toml(text, "dir/s.toml", default_scene()); }
+
+void expect_error(const std::string& text, const std::string& must_contain) {
+    auto r = parse(text);
+    ASSERT_FALSE(r.ok()) << "accepted: " << text;
+    EXPECT_NE(r.error().message.find(must_contain), std::string::npos)
+        << "message '" << r.error().message << "' lacks '" << must_contain << "'";
+    EXPECT_EQ(r.error().message.find('\n'), std::string::npos) << "one line";
+    EXPECT_EQ(r.error().message.rfind("dir/s.toml", 0), 0u) << "names the file first";
+}
+
+TEST(SceneToml, EmptyFileIsTheDefaultScene) {
+    auto r = parse("");
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    EXPECT_EQ(r->spawn.count, default_scene().spawn.count);
+    EXPECT_EQ(r->source.kind, TerrainSource::Valley);
+}
+
+TEST(SceneToml, EveryKeyIsRead) {
+    auto r = parse(R"(
+name = "mine"
+seed = 42
+surface = false
+[terrain]
+source = "file"
+heightmap = "maps/h.png"
+width = 10
+height = 12
+seed = 3
+area_scale = 2.5
+height_scale = 9
+paper_row_orientation = false
+[particles]
+count = 77
+spawn_center = [1, 2, 3]
+spawn_half_extent = [0.5, 0.25, 1]
+spawn_interval = 4
+initial_velocity = [0, -1, 2]
+auto_height = 3
+[forces]
+gravity = 3.5
+[springs]
+stiffness = 12
+min_distance = 1.5
+max_distance = 2
+mode = "pairs"
+[collision]
+mode = "robust"
+damping = 0.25
+offset = 0.1
+bvh_leaf_triangles = 16
+[integrator]
+dt = 0.01
+substeps = 3
+[field]
+kernel = "radius_over_r"
+radius = 1.25
+resolution = 3
+bounds_offset = 2.5
+threshold = 0.4
+)");
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    const SceneDef& d = r.value();
+    EXPECT_EQ(d.name, "mine");
+    EXPECT_EQ(d.seed, 42u);
+    EXPECT_FALSE(d.surface);
+    EXPECT_EQ(d.source.kind, TerrainSource::File);
+    EXPECT_EQ(d.source.heightmap, "dir/maps/h.png");  // relative to the scene file
+    EXPECT_EQ(d.source.width, 10);
+    EXPECT_EQ(d.source.height, 12);
+    EXPECT_EQ(d.source.seed, 3u);
+    EXPECT_FLOAT_EQ(d.terrain.area_scale, 2.5f);
+    EXPECT_FLOAT_EQ(d.terrain.height_scale, 9.0f);
+    EXPECT_FALSE(d.terrain.paper_row_orientation);
+    EXPECT_EQ(d.spawn.count, 77);
+    EXPECT_EQ(d.spawn.center, Vec3(1, 2, 3));
+    EXPECT_FALSE(d.spawn.auto_center);
+    EXPECT_EQ(d.spawn.half_extent, Vec3(0.5f, 0.25f, 1));
+    EXPECT_EQ(d.spawn.interval, 4);
+    EXPECT_EQ(d.spawn.initial_velocity, Vec3(0, -1, 2));
+    EXPECT_FLOAT_EQ(d.spawn.auto_height, 3.0f);
+    EXPECT_FLOAT_EQ(d.integrator.gravity, 3.5f);
+    EXPECT_FLOAT_EQ(d.springs.stiffness, 12.0f);
+    EXPECT_FLOAT_EQ(d.springs.min_distance, 1.5f);
+    EXPECT_FLOAT_EQ(d.springs.max_distance, 2.0f);
+    EXPECT_EQ(d.collision.mode, CollisionMode::Robust);
+    EXPECT_FLOAT_EQ(d.collision.damping, 0.25f);
+    EXPECT_FLOAT_EQ(d.collision.offset, 0.1f);
+    EXPECT_EQ(d.collision.leaf_triangles, 16);
+    EXPECT_FLOAT_EQ(d.integrator.fixed_dt, 0.01f);
+    EXPECT_EQ(d.integrator.substeps, 3);
+    EXPECT_EQ(d.field.kernel, FieldKernel::RadiusOverR);
+    EXPECT_FLOAT_EQ(d.field.radius, 1.25f);
+    EXPECT_FLOAT_EQ(d.field.resolution, 3.0f);
+    EXPECT_FLOAT_EQ(d.field.bounds_offset, 2.5f);
+    EXPECT_FLOAT_EQ(d.field.threshold, 0.4f);
+}
+
+TEST(SceneToml, SpawnCenterAuto) {
+    auto r = parse("[particles]\nspawn_center = \"auto\"\n");
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    EXPECT_TRUE(r->spawn.auto_center);
+    expect_error("[particles]\nspawn_center = \"top\"\n", "particles.spawn_center");
+}
+
+TEST(SceneToml, SyntaxErrorNamesFileAndLine) { expect_error("[field]\nresolution = = 2\n", "dir/s.toml:2:"); }
+
+TEST(SceneToml, UnknownKeysAreErrors) {
+    expect_error("particle_count = 3\n", "particle_count: unknown key");
+    expect_error("[particles]\ncont = 3\n", "particles.cont: unknown key");
+    expect_error("[fluid]\n", "fluid: unknown key");
+}
+
+TEST(SceneToml, WrongTypesAreErrors) {
+    expect_error("[particles]\ncount = \"many\"\n", "particles.count: must be an integer");
+    expect_error("[particles]\ncount = 2.5\n", "particles.count: must be an integer");
+    expect_error("[field]\nresolution = \"high\"\n", "field.resolution: must be a number");
+    expect_error("[particles]\nspawn_half_extent = [1, 2]\n", "particles.spawn_half_extent: must be an array of 3");
+    expect_error("terrain = 3\n", "terrain: must be a table");
+    expect_error("[terrain]\npaper_row_orientation = 1\n", "terrain.paper_row_orientation: must be true or false");
+}
+
+TEST(SceneToml, OutOfRangeValuesNameTheKeyAndTheRange) {
+    expect_error("[field]\nresolution = -2\n", "field.resolution: must be in (0, 64]");
+    expect_error("[field]\nresolution = 0\n", "field.resolution: must be in (0, 64]");
+    expect_error("[field]\nresolution = nan\n", "field.resolution");
+    expect_error("[field]\nthreshold = inf\n", "field.threshold");
+    expect_error("[integrator]\ndt = -0.01\n", "integrator.dt: must be in (0, 1]");
+    expect_error("[integrator]\ndt = nan\n", "integrator.dt");
+    expect_error("[particles]\ncount = 0\n", "particles.count: must be in [1, 10000000]");
+    expect_error("[particles]\ncount = 1000000000000\n", "particles.count: must be in [1, 10000000]");
+    expect_error("[particles]\nspawn_half_extent = [1, -1, 1]\n", "particles.spawn_half_extent");
+    expect_error("[collision]\ndamping = 1.5\n", "collision.damping: must be in [0, 1]");
+    expect_error("[collision]\nbvh_leaf_triangles = 1\n", "collision.bvh_leaf_triangles: must be in [2, 4096]");
+    expect_error("[terrain]\nwidth = 1\n", "terrain.width: must be in [2, 4097]");
+    expect_error("[terrain]\narea_scale = 0\n", "terrain.area_scale");
+    expect_error("seed = -1\n", "seed: must be in [0, 4294967295]");
+}
+
+TEST(SceneToml, UnknownEnumValuesListTheChoices) {
+    expect_error("[collision]\nmode = \"magic\"\n", "collision.mode: must be one of paper, robust, none");
+    expect_error("[field]\nkernel = \"gauss\"\n", "field.kernel: must be one of inverse_square, radius_over_r");
+    expect_error("[terrain]\nsource = \"moon\"\n", "terrain.source: must be one of");
+}
+
+TEST(SceneToml, FileSourceNeedsAHeightmap) { expect_error("[terrain]\nsource = \"file\"\n", "terrain.heightmap"); }
+
+TEST(SceneFile, MissingFileIsAnError) {
+    auto r = load_scene_file("/nonexistent/scene.toml");
+    ASSERT_FALSE(r.ok());
+    EXPECT_NE(r.error().message.find("/nonexistent/scene.toml"), std::string::npos);
+}
+
+TEST(Presets, PaperScenesCarryTheirExactParameters) {
+    auto full = preset("paper-full");
+    ASSERT_TRUE(full.ok());
+    EXPECT_EQ(full->spawn.count, 20);
+    EXPECT_EQ(full->spawn.center, Vec3(8, 7, 15));
+    EXPECT_EQ(full->spawn.half_extent, Vec3(2, 1, 0.2f));
+    EXPECT_EQ(full->spawn.interval, 80);
+    EXPECT_FLOAT_EQ(full->integrator.gravity, 9.82f);
+    EXPECT_FLOAT_EQ(full->springs.stiffness, 0.0f);
+    EXPECT_FLOAT_EQ(full->springs.min_distance, 3.0f);
+    EXPECT_FLOAT_EQ(full->springs.max_distance, 5.0f);
+    EXPECT_FLOAT_EQ(full->collision.damping, 0.7f);
+    EXPECT_FLOAT_EQ(full->collision.offset, 0.07f);
+    EXPECT_EQ(full->collision.leaf_triangles, 8);
+    EXPECT_EQ(full->collision.mode, CollisionMode::Paper);
+    EXPECT_FLOAT_EQ(full->field.radius, 2.0f);
+    EXPECT_FLOAT_EQ(full->field.resolution, 2.0f);
+    EXPECT_FLOAT_EQ(full->field.threshold, 0.54f);
+    EXPECT_FLOAT_EQ(full->field.bounds_offset, 4.0f);
+    EXPECT_FLOAT_EQ(full->terrain.area_scale, 1.0f);
+    EXPECT_FLOAT_EQ(full->terrain.height_scale, 7.0f);
+    EXPECT_EQ(full->source.kind, TerrainSource::File);
+
+    auto nile = preset("paper-nile");
+    ASSERT_TRUE(nile.ok());
+    EXPECT_EQ(nile->spawn.count, 50);
+    EXPECT_EQ(nile->spawn.center, Vec3(27, 4.6f, 31));
+    EXPECT_EQ(nile->spawn.half_extent, Vec3(2.5f, 1, 1));
+    EXPECT_EQ(nile->spawn.interval, 15);
+    EXPECT_FLOAT_EQ(nile->field.resolution, 1.0f);
+    EXPECT_FLOAT_EQ(nile->field.threshold, 0.32f);
+    EXPECT_FLOAT_EQ(nile->field.bounds_offset, 5.0f);
+
+    auto bowl = preset("paper-bowl");
+    ASSERT_TRUE(bowl.ok());
+    EXPECT_GT(bowl->springs.stiffness, 0.0f);  // figure 6: springs on
+    EXPECT_EQ(bowl->source.kind, TerrainSource::Bowl);
+
+    for (const auto& n : preset_names()) {
+        auto p = preset(n);
+        ASSERT_TRUE(p.ok()) << n;
+        SceneDef d = p.value();
+        if (d.source.kind == TerrainSource::File) d.source.heightmap = "x.png";
+        EXPECT_TRUE(validate(d).ok()) << n;
+    }
+    auto bad = preset("paper-moon");
+    ASSERT_FALSE(bad.ok());
+    EXPECT_NE(bad.error().message.find("paper-nile"), std::string::npos) << "lists the known presets";
+}
+
+}  // namespace
+}  // namespace mr

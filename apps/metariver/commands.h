@@ -1,0 +1,36 @@
+// The metariver command-line tool: each subcommand registers its options on the
+// CLI11 app and runs after parsing. Exit codes: 0 success, 2 bad input (one-line
+// message naming the file/option/key and the allowed range), 1 an unexpected failure.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <metariver/scene.h>
+
+#include <functional>
+#include <optional>
+#include <string>
+
+namespace mr::app {
+
+inline constexpr int kExitOk = 0;
+inline constexpr int kExitFailure = 1;
+inline constexpr int kExitBadInput = 2;
+
+/// The options every command that builds a scene shares.
+struct SceneOptions {
+    std::string preset;
+    std::string scene_file;
+    std::string heightmap;
+    std::optional<uint32_t> seed;
+    std::string collision;
+
+    void add_to(CLI::App& cmd);
+    /// The scene the options describe; errors are one line, naming the option or file.
+    Result<SceneDef> resolve() const;
+};
+
+/// Registers `run`; `action` is set to the function to call after parsing.
+void register_run(CLI::App& app, std::function<int()>& action);
+
+}  // namespace mr::app

@@ -1,0 +1,146 @@
+// metariver particles: the particle set (structure of arrays), the paper's spring
+// forces, semi-implicit Euler integration and terrain collision.
+//
+// Paper: "Real-time river simulation using metaballs", section 2.3: gravity, Hooke
+// springs between particles (eq. 3), semi-implicit Euler, and collisions with the
+// terrain through its AABB tree (2.3.3): reflect about the triangle normal, damp,
+// place at hit + offset up + v dt.
+#pragma once
+
+#include <metariver/core.h>
+#include <metariver/terrain.h>
+
+#include <cstdint>
+#include <span>
+#include <string_view>
+#include <vector>
+
+namespace mr {
+
+/// Particles as structure of arrays. Hot data (position, velocity) lives in arrays
+/// of its own so the force and integration loops stream through memory; `active`
+/// marks particles that have spawned (the paper activates one every spawn_interval
+/// frames). Index i is the particle's stable id.
+struct Particles {
+    std::vector<Vec3> position;       ///< metres
+    std::vector<Vec3> last_position;  ///< position before the latest integration, metres
+    std::vector<Vec3> velocity;       ///< metres per second
+    std::vector<Vec3> force;          ///< accumulated acceleration this step, m/s^2 (unit mass)
+    std::vector<uint8_t> active;      ///< 1 once spawned
+
+    size_t size() const { return position.size(); }
+    void resize(size_t n);
+    size_t active_count() const;
+    /// Positions of the active particles, in index order, into `out` (cleared first).
+    void gather_active_positions(std::vector<Vec3>& out) const;
+};
+
+/// Largest particle budget a scene may ask for.
+inline constexpr int kMaxParticles = 10'000'000;
+
+struct SpawnDef {
+    int count = 20;                          ///< particle budget, [1, kMaxParticles]
+    Vec3 center{8.0f, 7.0f, 15.0f};          ///< spawn volume centre, metres
+    Vec3 half_extent{2.0f, 1.0f, 0.2f};      ///< spawn volume half size, metres (>= 0)
+    int interval = 80;                       ///< frames between two activations, [0, 1e6]; 0 = all at once
+    Vec3 initial_velocity{0.0f};             ///< velocity given at (re)spawn, m/s
+    /// When true, `center` is ignored and the spawn volume is placed `auto_height`
+    /// metres above the lowest sample of the terrain's upstream band (the 10 % of rows
+    /// with the highest z): the head of the valley for the procedural river.
+    bool auto_center = false;
+    float auto_height = 2.0f;                ///< metres above the ground for auto_center, [0, 1e4]
+};
+
+enum class SpringMode {
+    Pairs,  ///< the paper's all-pairs loop, O(N^2)
+};
+
+/// The paper's eq. 3: for each pair (i, j) with v = p_i - p_j, if |v| - r < max_distance
+/// the acceleration a = 0.5 * k * (r * v/|v| - v) is added to i and subtracted from j.
+struct SpringDef {
+    float stiffness = 0.0f;      ///< k, 1/s^2, [0, 1e6]; 0 turns springs off
+    float min_distance = 3.0f;   ///< r, metres, rest length, [0, 1e4]
+    float max_distance = 5.0f;   ///< metres, cut-off beyond r, [0, 1e4]
+    SpringMode mode = SpringMode::Pairs;
+};
+
+enum class CollisionMode {
+    Paper,   ///< leaf holding the new position, eq. 4 ray test (particles slip through seams)
+    Robust,  ///< swept segment through the whole tree, watertight test, heightfield guard
+    None,    ///< no terrain collision
+};
+std::string_view to_string(CollisionMode m);
+
+struct CollisionDef {
+    CollisionMode mode = CollisionMode::Paper;
+    float damping = 0.7f;        ///< fraction of speed lost at a bounce, [0, 1]
+    float offset = 0.07f;        ///< metres the particle is placed above the hit point, [0, 10]
+    int leaf_triangles = 8;      ///< AABB tree leaf size, [2, 4096]
+};
+
+struct IntegratorDef {
+    float gravity = 9.82f;       ///< m/s^2, downwards (-y), [-1000, 1000]
+    float fixed_dt = 0.0f;       ///< seconds; 0 = use the frame time given to step(); else (0, 1]
+    int substeps = 1;            ///< integration steps per frame, [1, 1000]
+};
+
+/// Counters a solver accumulates; tests and --stats read them.
+struct SolverCounters {
+    uint64_t particle_steps = 0;  ///< active particle integrations
+    uint64_t collisions = 0;      ///< terrain hits handled
+    uint64_t tunneled = 0;        ///< particle-steps ending below the terrain mesh after collision handling
+    uint64_t respawned = 0;       ///< particles re-spawned after leaving the terrain bounds
+    uint64_t guarded = 0;         ///< robust mode: particles lifted by the heightfield guard
+};
+
+/// Depth below the mesh surface (metres) a particle must reach to count as tunneled:
+/// the paper's placement (hit + 0.07 up + v dt) may legally end a hair below the
+/// surface through float rounding; anything deeper went through the ground.
+inline constexpr float kTunnelEpsilon = 1e-3f;
+
+/// Spring accelerations (eq. 3) for the active particles, all pairs, added to p.force.
+void add_spring_forces_pairs(Particles& p, const SpringDef& def);
+
+/// Owns the stepping of one particle set over one terrain: spawning, forces,
+/// integration, collision and respawn. Deterministic for a seed.
+class ParticleSolver {
+public:
+    ParticleSolver(const Terrain& terrain, const Bvh& bvh, SpawnDef spawn, SpringDef springs,
+                   CollisionDef collision, IntegratorDef integrator, uint32_t seed);
+
+    /// Advances one rendered frame: activates a particle when due, then runs
+    /// `substeps` steps of dt/substeps (dt = fixed_dt when set, else frame_dt).
+    void step_frame(float frame_dt);
+    /// One integration step of dt seconds (forces, integrate, collide, respawn).
+    void step(float dt);
+
+    const Particles& particles() const { return particles_; }
+    Particles& particles_mut() { return particles_; }
+    const SolverCounters& counters() const { return counters_; }
+    uint64_t frame() const { return frame_; }
+
+    /// Places particle i at a random point of the spawn volume with the initial velocity.
+    void spawn(size_t i);
+    /// Depth of p below the terrain mesh (> 0 below), or 0 outside the rectangle.
+    float depth_below_surface(const Vec3& p) const;
+
+private:
+    void collide(size_t i, float dt);
+    void collide_paper(size_t i, float dt);
+    void collide_robust(size_t i, float dt);
+    bool out_of_bounds(const Vec3& p) const;
+
+    const Terrain& terrain_;
+    const Bvh& bvh_;
+    SpawnDef spawn_;
+    SpringDef springs_;
+    CollisionDef collision_;
+    IntegratorDef integrator_;
+    Lcg rng_;
+    Particles particles_;
+    SolverCounters counters_;
+    uint64_t frame_ = 0;
+    size_t next_to_activate_ = 0;
+};
+
+}  // namespace mr

@@ -1,0 +1,121 @@
+// metariver scene: the full description of a run (SceneDef), its TOML file format,
+// the built-in presets (the paper's scenes with their exact parameters), and the
+// Simulation that owns terrain, particles, solver, field and surface.
+#pragma once
+
+#include <metariver/core.h>
+#include <metariver/field.h>
+#include <metariver/particles.h>
+#include <metariver/surface.h>
+#include <metariver/terrain.h>
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace mr {
+
+enum class TerrainSource {
+    Valley,  ///< procedural valley with a winding river channel (the default scene)
+    Strict,  ///< procedural equivalent of the paper's strict17.png
+    Bowl,    ///< procedural equivalent of the paper's bowl.png
+    Flat,    ///< all zero
+    File,    ///< a PNG heightmap
+};
+std::string_view to_string(TerrainSource s);
+
+struct TerrainSourceDef {
+    TerrainSource kind = TerrainSource::Valley;
+    std::string heightmap;  ///< PNG path when kind == File (relative paths: to the scene file)
+    int width = 65;         ///< samples along x for procedural terrains, [2, kMaxHeightmapSide]
+    int height = 65;        ///< samples along z for procedural terrains, [2, kMaxHeightmapSide]
+    uint32_t seed = 1;      ///< procedural seed
+};
+
+struct SceneDef {
+    std::string name = "default";
+    uint32_t seed = 1;  ///< particle spawn seed
+    TerrainSourceDef source;
+    TerrainDef terrain;
+    SpawnDef spawn;
+    SpringDef springs;
+    CollisionDef collision;
+    IntegratorDef integrator;
+    FieldDef field;
+    bool surface = true;  ///< build the field and the surface every frame
+};
+
+/// The built-in default scene: a river on the procedural valley.
+SceneDef default_scene();
+/// Names of the built-in presets ("default", "paper-full", "paper-nile", "paper-bowl", ...).
+std::vector<std::string> preset_names();
+/// A preset by name; an unknown name is an error listing the known ones. Presets whose
+/// paper scene used a file keep source.kind == File with an empty path: the caller
+/// supplies it (--heightmap); see resolve_heightmap().
+Result<SceneDef> preset(std::string_view name);
+
+/// Checks every field against its documented range. The message names the field
+/// ("particles.count: must be in [1, 10000000] (got 0)").
+Status validate(const SceneDef& def);
+
+/// Parses a scene from TOML text. `origin` names the file in messages and is the base
+/// for relative heightmap paths. Unknown keys, wrong types and out-of-range values are
+/// errors naming the key. Keys left out keep the value of `base` (default_scene()).
+Result<SceneDef> parse_scene_toml(std::string_view text, const std::string& origin,
+                                  const SceneDef& base);
+/// Reads and parses a scene file.
+Result<SceneDef> load_scene_file(const std::string& path);
+
+/// Loads or generates the heightmap a scene describes.
+Result<Heightmap> load_scene_heightmap(const SceneDef& def);
+
+/// Per-frame times of the three stages, milliseconds.
+struct FrameTimings {
+    double simulate_ms = 0.0;
+    double field_ms = 0.0;
+    double surface_ms = 0.0;
+};
+
+/// Owns one scene's terrain, tree, particles, solver, field and surface.
+/// step(dt) advances one frame and rebuilds the surface; views are read-only.
+class Simulation {
+public:
+    /// Validates the scene, loads/generates the heightmap, builds terrain and tree.
+    static Result<std::unique_ptr<Simulation>> create(const SceneDef& def);
+    /// The same with a heightmap the caller already has.
+    static Result<std::unique_ptr<Simulation>> create(const SceneDef& def, const Heightmap& map);
+
+    /// One frame: spawning and `substeps` solver steps, then field and surface.
+    void step(float frame_dt);
+
+    const SceneDef& def() const { return def_; }
+    const Terrain& terrain() const { return terrain_; }
+    const Bvh& bvh() const { return bvh_; }
+    const Particles& particles() const { return solver_->particles(); }
+    const SolverCounters& counters() const { return solver_->counters(); }
+    const ScalarGrid& field() const { return field_; }
+    const SurfaceMesh& surface() const { return surface_; }
+    const FrameTimings& last_timings() const { return timings_; }
+    uint64_t frame() const { return solver_->frame(); }
+    /// Frames whose field grid would have exceeded kMaxFieldSamples (surface skipped).
+    uint64_t field_overflows() const { return field_overflows_; }
+    /// FNV-1a hash of the particles' positions and velocities (determinism checks).
+    uint64_t state_hash() const;
+
+private:
+    Simulation(const SceneDef& def, Terrain terrain, Bvh bvh);
+
+    SceneDef def_;
+    Terrain terrain_;
+    Bvh bvh_;
+    std::unique_ptr<ParticleSolver> solver_;
+    std::vector<Vec3> balls_;
+    ScalarGrid field_;
+    SurfaceMesh surface_;
+    FrameTimings timings_;
+    uint64_t field_overflows_ = 0;
+};
+
+}  // namespace mr
