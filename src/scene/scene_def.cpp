@@ -23,6 +23,9 @@ std::string_view to_string(TerrainSource s) {
 }
 
 SceneDef default_scene() {
+    // A stream down the procedural valley with the paper's own physics: low damping so
+    // particles slide along the channel instead of sticking, soft springs so they keep
+    // apart, and a field threshold that wraps small groups of balls.
     SceneDef d;
     d.name = "default";
     d.seed = 1;
@@ -31,18 +34,18 @@ SceneDef default_scene() {
     d.spawn = {.count = 300,
                .center = Vec3(0.0f),
                .half_extent = Vec3(1.5f, 0.5f, 1.5f),
-               .interval = 1,
+               .interval = 2,
                .initial_velocity = Vec3(0.0f, 0.0f, -2.0f),
                .auto_center = true,
                .auto_height = 1.5f};
-    d.springs = {.stiffness = 30.0f, .min_distance = 0.8f, .max_distance = 0.6f, .mode = SpringMode::Pairs};
-    d.collision = {.mode = CollisionMode::Robust, .damping = 0.3f, .offset = 0.02f, .leaf_triangles = 8};
-    d.integrator = {.gravity = 9.82f, .fixed_dt = 0.0f, .substeps = 2};
+    d.springs = {.stiffness = 4.0f, .min_distance = 1.0f, .max_distance = 0.5f, .mode = SpringMode::Pairs};
+    d.collision = {.mode = CollisionMode::Robust, .damping = 0.003f, .offset = 0.02f, .leaf_triangles = 8};
+    d.integrator = {.gravity = 9.82f, .fixed_dt = 0.0f, .substeps = 1};
     d.field = {.kernel = FieldKernel::InverseSquare,
                .radius = 1.0f,
-               .resolution = 2.0f,
+               .resolution = 1.5f,
                .bounds_offset = 2.0f,
-               .threshold = 0.01f};
+               .threshold = 0.08f};
     return d;
 }
 
