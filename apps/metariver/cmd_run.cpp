@@ -126,6 +126,7 @@ int run(const RunOptions& o) {
         j["seed"] = d.seed;
         j["frames"] = o.frames;
         j["dt"] = o.dt;
+        j["solver"] = std::string(to_string(d.solver));
         j["collision"] = std::string(to_string(d.collision.mode));
         j["field_kernel"] = std::string(to_string(d.field.kernel));
         j["terrain"] = {{"columns", sim.terrain().columns()},

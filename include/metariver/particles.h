@@ -101,23 +101,36 @@ inline constexpr float kTunnelEpsilon = 1e-3f;
 /// Spring accelerations (eq. 3) for the active particles, all pairs, added to p.force.
 void add_spring_forces_pairs(Particles& p, const SpringDef& def);
 
+/// What the Simulation drives: one implementation per `solver` scene value (the
+/// paper's springs here; Bullet and PBF elsewhere). All share spawning rules, counters
+/// and read-only particle views so stats compare like with like.
+class Solver {
+public:
+    virtual ~Solver() = default;
+    /// Advances one rendered frame (spawning, substeps, collision, respawn).
+    virtual void step_frame(float frame_dt) = 0;
+    virtual const Particles& particles() const = 0;
+    virtual const SolverCounters& counters() const = 0;
+    virtual uint64_t frame() const = 0;
+};
+
 /// Owns the stepping of one particle set over one terrain: spawning, forces,
 /// integration, collision and respawn. Deterministic for a seed.
-class ParticleSolver {
+class ParticleSolver final : public Solver {
 public:
     ParticleSolver(const Terrain& terrain, const Bvh& bvh, SpawnDef spawn, SpringDef springs,
                    CollisionDef collision, IntegratorDef integrator, uint32_t seed);
 
     /// Advances one rendered frame: activates a particle when due, then runs
     /// `substeps` steps of dt/substeps (dt = fixed_dt when set, else frame_dt).
-    void step_frame(float frame_dt);
+    void step_frame(float frame_dt) override;
     /// One integration step of dt seconds (forces, integrate, collide, respawn).
     void step(float dt);
 
-    const Particles& particles() const { return particles_; }
+    const Particles& particles() const override { return particles_; }
     Particles& particles_mut() { return particles_; }
-    const SolverCounters& counters() const { return counters_; }
-    uint64_t frame() const { return frame_; }
+    const SolverCounters& counters() const override { return counters_; }
+    uint64_t frame() const override { return frame_; }
 
     /// Places particle i at a random point of the spawn volume with the initial velocity.
     void spawn(size_t i);

@@ -34,9 +34,15 @@ struct TerrainSourceDef {
     uint32_t seed = 1;      ///< procedural seed
 };
 
+enum class SolverKind {
+    Springs,  ///< the paper's own physics: gravity, springs, terrain collision
+};
+std::string_view to_string(SolverKind s);
+
 struct SceneDef {
     std::string name = "default";
     uint32_t seed = 1;  ///< particle spawn seed
+    SolverKind solver = SolverKind::Springs;
     TerrainSourceDef source;
     TerrainDef terrain;
     SpawnDef spawn;
@@ -110,7 +116,7 @@ private:
     SceneDef def_;
     Terrain terrain_;
     Bvh bvh_;
-    std::unique_ptr<ParticleSolver> solver_;
+    std::unique_ptr<Solver> solver_;
     std::vector<Vec3> balls_;
     ScalarGrid field_;
     SurfaceMesh surface_;

@@ -22,6 +22,13 @@ std::string_view to_string(TerrainSource s) {
     return "?";
 }
 
+std::string_view to_string(SolverKind s) {
+    switch (s) {
+        case SolverKind::Springs: return "springs";
+    }
+    return "?";
+}
+
 SceneDef default_scene() {
     // A stream down the procedural valley with the paper's own physics: low damping so
     // particles slide along the channel instead of sticking, soft springs so they keep

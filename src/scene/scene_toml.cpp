@@ -166,11 +166,12 @@ Result<SceneDef> parse_scene_toml(std::string_view text, const std::string& orig
 
     SceneDef d = base;
     Reader r(origin);
-    r.allow(root, "", {"name", "seed", "surface", "terrain", "particles", "forces", "springs", "collision",
+    r.allow(root, "", {"name", "seed", "solver", "surface", "terrain", "particles", "forces", "springs", "collision",
                        "integrator", "field"});
     r.string(root, "", "name", d.name);
     r.seed(root, "", "seed", d.seed);
     r.boolean(root, "", "surface", d.surface);
+    r.choice(root, "", "solver", d.solver, {{"springs", SolverKind::Springs}});
 
     if (const toml::table* t = r.table(root, "terrain")) {
         const std::string p = "terrain.";

@@ -48,8 +48,12 @@ Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh)
         spawn.auto_center = false;
         def_.spawn = spawn;
     }
-    solver_ = std::make_unique<ParticleSolver>(terrain_, bvh_, spawn, def_.springs, def_.collision,
-                                               def_.integrator, def_.seed);
+    switch (def_.solver) {
+        case SolverKind::Springs:
+            solver_ = std::make_unique<ParticleSolver>(terrain_, bvh_, spawn, def_.springs, def_.collision,
+                                                       def_.integrator, def_.seed);
+            break;
+    }
 }
 
 Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def) {
