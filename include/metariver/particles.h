@@ -112,6 +112,11 @@ public:
     virtual const Particles& particles() const = 0;
     virtual const SolverCounters& counters() const = 0;
     virtual uint64_t frame() const = 0;
+    /// Moves the spawn volume's centre (future activations and respawns start there).
+    virtual void set_spawn_center(const Vec3& center) = 0;
+    /// Pours water: moves the spawn centre to `center` and (re)spawns `count` particles
+    /// there at once, taking inactive particles first, then the oldest-poured ones.
+    virtual void pour(const Vec3& center, int count) = 0;
 };
 
 /// Owns the stepping of one particle set over one terrain: spawning, forces,
@@ -131,6 +136,9 @@ public:
     Particles& particles_mut() { return particles_; }
     const SolverCounters& counters() const override { return counters_; }
     uint64_t frame() const override { return frame_; }
+
+    void set_spawn_center(const Vec3& center) override { spawn_.center = center; }
+    void pour(const Vec3& center, int count) override;
 
     /// Places particle i at a random point of the spawn volume with the initial velocity.
     void spawn(size_t i);
@@ -154,6 +162,7 @@ private:
     SolverCounters counters_;
     uint64_t frame_ = 0;
     size_t next_to_activate_ = 0;
+    size_t next_to_pour_ = 0;  ///< round-robin cursor over active particles for pour()
 };
 
 }  // namespace mr

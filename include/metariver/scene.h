@@ -95,6 +95,8 @@ public:
 
     /// One frame: spawning and `substeps` solver steps, then field and surface.
     void step(float frame_dt);
+    /// Interaction: pour `count` particles at `center` (the source moves there).
+    void pour(const Vec3& center, int count) { solver_->pour(center, count); }
 
     const SceneDef& def() const { return def_; }
     const Terrain& terrain() const { return terrain_; }

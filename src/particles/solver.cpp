@@ -56,6 +56,20 @@ void ParticleSolver::spawn(size_t i) {
     particles_.active[i] = 1;
 }
 
+void ParticleSolver::pour(const Vec3& center, int count) {
+    spawn_.center = center;
+    const size_t n = particles_.size();
+    if (n == 0) return;
+    for (int k = 0; k < count; ++k) {
+        if (next_to_activate_ < n) {
+            spawn(next_to_activate_++);
+        } else {
+            spawn(next_to_pour_);
+            next_to_pour_ = (next_to_pour_ + 1) % n;
+        }
+    }
+}
+
 void ParticleSolver::step_frame(float frame_dt) {
     const bool due = spawn_.interval == 0 || frame_ % static_cast<uint64_t>(spawn_.interval) == 0;
     if (due) {

@@ -169,6 +169,20 @@ TEST(Solver, ActivatesOneParticleEverySpawnInterval) {
     EXPECT_EQ(active[19], 5u);
 }
 
+TEST(Solver, PourActivatesParticlesAtThePointThenRecyclesTheOldest) {
+    World w = make_world(flat_map(17, 17, 0.0f));
+    SpawnDef spawn{.count = 6, .center = Vec3(4, 3, 4), .half_extent = Vec3(0.5f), .interval = 1000};
+    ParticleSolver s(w.terrain, w.bvh, spawn, SpringDef{}, CollisionDef{}, IntegratorDef{}, 1);
+    s.pour(Vec3(12, 5, 12), 4);
+    EXPECT_EQ(s.particles().active_count(), 4u);
+    for (size_t i = 0; i < 4; ++i) EXPECT_NEAR(glm::length(s.particles().position[i] - Vec3(12, 5, 12)), 0.0f, 0.87f);
+    s.pour(Vec3(2, 5, 2), 4);  // 2 inactive left, then the 2 oldest are recycled
+    EXPECT_EQ(s.particles().active_count(), 6u);
+    EXPECT_LT(s.particles().position[0].x, 3.0f);
+    EXPECT_LT(s.particles().position[5].x, 3.0f);
+    EXPECT_GT(s.particles().position[2].x, 11.0f);
+}
+
 TEST(Solver, FreeFallFollowsSemiImplicitEuler) {
     World w = make_world(flat_map(9, 9, 0.0f));
     ParticleSolver s(w.terrain, w.bvh, one_particle_at(Vec3(4, 100, 4)), SpringDef{},
