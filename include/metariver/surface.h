@@ -8,9 +8,11 @@
 
 #include <metariver/core.h>
 #include <metariver/field.h>
+#include <metariver/sparse_field.h>
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace mr {
@@ -52,5 +54,42 @@ extern const std::array<std::array<int8_t, 16>, 256> kTriTable;
 /// the threshold. Vertices are placed by linear interpolation along crossed grid
 /// edges, one per edge (welded). `out` is cleared and refilled; its capacity is reused.
 void extract_surface(const ScalarGrid& grid, float threshold, SurfaceMesh& out);
+
+/// Numbers from the last extract_surface_sparse, for tests and the bench.
+struct SurfaceStats {
+    size_t blocks = 0;            ///< blocks in the field's directory
+    size_t candidate_blocks = 0;  ///< blocks whose cells' value range straddles the threshold
+    size_t active_blocks = 0;     ///< candidates that own a vertex or a triangle
+    size_t vertices = 0;
+    size_t triangles = 0;
+    double ms_select = 0.0;    ///< choosing candidate blocks from block min/max (serial)
+    double ms_classify = 0.0;  ///< pass 1: inside bits, crossed-edge masks, counts (parallel)
+    double ms_offsets = 0.0;   ///< prefix sums and sizing the output (serial)
+    double ms_emit = 0.0;      ///< pass 2: vertices and triangles (parallel)
+};
+
+/// Per-frame scratch of extract_surface_sparse, owned by the caller and reused: once a
+/// frame at least as large has run, an extraction allocates nothing (no vector grows).
+struct SurfaceWorkspace {
+    SurfaceWorkspace();
+    ~SurfaceWorkspace();
+    SurfaceWorkspace(SurfaceWorkspace&&) noexcept;
+    SurfaceWorkspace& operator=(SurfaceWorkspace&&) noexcept;
+
+    SurfaceStats stats;
+    /// Bytes of reserved scratch (capacities), for steady-state checks.
+    size_t capacity_bytes() const;
+
+    struct Impl;
+    std::unique_ptr<Impl> impl;
+};
+
+/// extract_surface on a SparseField, block-parallel (oneTBB) and skipping blocks whose
+/// value range cannot cross the threshold. Gives the mesh extract_surface gives on
+/// field.to_dense(): the same vertices (positions and normals bit for bit, same
+/// arithmetic) and the same triangles, in a different but fixed order (by block, then
+/// by grid edge / cell), identical for any thread count. `out` is resized once per call;
+/// its capacity is reused.
+void extract_surface_sparse(const SparseField& field, float threshold, SurfaceMesh& out, SurfaceWorkspace& ws);
 
 }  // namespace mr

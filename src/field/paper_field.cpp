@@ -14,6 +14,15 @@ std::string_view to_string(FieldKernel k) {
     switch (k) {
         case FieldKernel::InverseSquare: return "inverse_square";
         case FieldKernel::RadiusOverR: return "radius_over_r";
+        case FieldKernel::Poly6: return "poly6";
+    }
+    return "?";
+}
+
+std::string_view to_string(FieldBounds b) {
+    switch (b) {
+        case FieldBounds::Particles: return "particles";
+        case FieldBounds::Terrain: return "terrain";
     }
     return "?";
 }
@@ -64,6 +73,13 @@ bool compute_field_paper(std::span<const Vec3> balls, const FieldDef& def, Scala
     const float scale = 1.0f / static_cast<float>(balls.size() + 1);
     if (def.kernel == FieldKernel::InverseSquare) {
         accumulate(balls, out, scale, [](float r2) { return 1.0f / r2; });
+    } else if (def.kernel == FieldKernel::Poly6) {
+        // Dense twin of the sparse path (tests): a sum, not a mean, compact support.
+        const float inv_r2 = 1.0f / (def.radius * def.radius);
+        accumulate(balls, out, 1.0f, [inv_r2](float r2) {
+            const float q = 1.0f - r2 * inv_r2;
+            return q > 0.0f ? q * q * q : 0.0f;
+        });
     } else {
         const float radius = def.radius;
         accumulate(balls, out, scale, [radius](float r2) { return radius / std::sqrt(r2); });
