@@ -8,9 +8,11 @@
 #pragma once
 
 #include <metariver/core.h>
+#include <metariver/neighbor_grid.h>
 #include <metariver/terrain.h>
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string_view>
 #include <vector>
@@ -20,13 +22,16 @@ namespace mr {
 /// Particles as structure of arrays. Hot data (position, velocity) lives in arrays
 /// of its own so the force and integration loops stream through memory; `active`
 /// marks particles that have spawned (the paper activates one every spawn_interval
-/// frames). Index i is the particle's stable id.
+/// frames). Active particles always form a prefix [0, active_count). The grid solver
+/// reorders every array by neighbour-grid cell each step for locality; `id` is the
+/// stable identity that survives the reordering (id == index while nothing reorders).
 struct Particles {
     std::vector<Vec3> position;       ///< metres
     std::vector<Vec3> last_position;  ///< position before the latest integration, metres
     std::vector<Vec3> velocity;       ///< metres per second
     std::vector<Vec3> force;          ///< accumulated acceleration this step, m/s^2 (unit mass)
     std::vector<uint8_t> active;      ///< 1 once spawned
+    std::vector<uint32_t> id;         ///< stable particle id
 
     size_t size() const { return position.size(); }
     void resize(size_t n);
@@ -52,8 +57,10 @@ struct SpawnDef {
 };
 
 enum class SpringMode {
-    Pairs,  ///< the paper's all-pairs loop, O(N^2)
+    Pairs,  ///< the paper's all-pairs loop, O(N^2), serial: the reference
+    Grid,   ///< neighbour grid, O(N), parallel per-particle gather: same forces
 };
+std::string_view to_string(SpringMode m);
 
 /// The paper's eq. 3: for each pair (i, j) with v = p_i - p_j, if |v| - r < max_distance
 /// the acceleration a = 0.5 * k * (r * v/|v| - v) is added to i and subtracted from j.
@@ -71,11 +78,23 @@ enum class CollisionMode {
 };
 std::string_view to_string(CollisionMode m);
 
+/// How the robust mode finds the segment's hit (both give the same hits; tests check).
+enum class CollisionQuery {
+    Tree,         ///< the AABB tree, every leaf the segment crosses
+    Heightfield,  ///< walk the heightfield cells under the segment (fast; tree for long segments)
+};
+std::string_view to_string(CollisionQuery q);
+
 struct CollisionDef {
     CollisionMode mode = CollisionMode::Paper;
     float damping = 0.7f;        ///< fraction of speed lost at a bounce, [0, 1]
     float offset = 0.07f;        ///< metres the particle is placed above the hit point, [0, 10]
     int leaf_triangles = 8;      ///< AABB tree leaf size, [2, 4096]
+    /// Particle radius, metres, [0, 100]: the centre is kept `radius` above the terrain
+    /// (the terrain is offset vertically by it: exact on flat ground, conservative by
+    /// r(1 - cos(slope)) on slopes). 0 = points, as the paper.
+    float radius = 0.0f;
+    CollisionQuery query = CollisionQuery::Tree;
 };
 
 struct IntegratorDef {
@@ -100,6 +119,11 @@ inline constexpr float kTunnelEpsilon = 1e-3f;
 
 /// Spring accelerations (eq. 3) for the active particles, all pairs, added to p.force.
 void add_spring_forces_pairs(Particles& p, const SpringDef& def);
+/// The same forces through a neighbour grid built over p with cell size >=
+/// min_distance + max_distance; parallel, each particle gathers its own sum.
+void add_spring_forces_grid(Particles& p, const NeighborGrid& grid, const SpringDef& def);
+/// Cell size the grid needs for these springs (their reach), metres.
+float spring_reach(const SpringDef& def);
 
 /// What the Simulation drives: one implementation per `solver` scene value (the
 /// paper's springs here; Bullet and PBF elsewhere). All share spawning rules, counters
@@ -140,16 +164,33 @@ public:
     void set_spawn_center(const Vec3& center) override { spawn_.center = center; }
     void pour(const Vec3& center, int count) override;
 
+    /// Activates particles at the given positions (with the initial velocity), in
+    /// order, starting at the first inactive one; extra positions are ignored.
+    void place(std::span<const Vec3> positions);
+
     /// Places particle i at a random point of the spawn volume with the initial velocity.
     void spawn(size_t i);
     /// Depth of p below the terrain mesh (> 0 below), or 0 outside the rectangle.
     float depth_below_surface(const Vec3& p) const;
 
+    /// The neighbour grid of the latest step (grid spring mode).
+    const NeighborGrid& grid() const { return grid_; }
+
 private:
-    void collide(size_t i, float dt);
-    void collide_paper(size_t i, float dt);
-    void collide_robust(size_t i, float dt);
+    struct StepCounts {
+        uint64_t collisions = 0;
+        uint64_t guarded = 0;
+        uint64_t tunneled = 0;
+    };
+    /// Collide particle i (touches only particle i: safe in parallel loops).
+    void collide(size_t i, float dt, StepCounts& c);
+    void collide_paper(size_t i, float dt, StepCounts& c);
+    void collide_robust(size_t i, float dt, StepCounts& c);
+    std::optional<RayHit> robust_hit(const Vec3& from, const Vec3& to) const;
     bool out_of_bounds(const Vec3& p) const;
+    /// Bins active particles and reorders every array by cell (grid mode).
+    void sort_by_cell();
+    size_t slot_of_id(uint32_t id) const;
 
     const Terrain& terrain_;
     const Bvh& bvh_;
@@ -161,8 +202,14 @@ private:
     Particles particles_;
     SolverCounters counters_;
     uint64_t frame_ = 0;
-    size_t next_to_activate_ = 0;
-    size_t next_to_pour_ = 0;  ///< round-robin cursor over active particles for pour()
+    size_t next_to_activate_ = 0;  ///< active particles form the prefix [0, next_to_activate_)
+    uint32_t next_to_pour_ = 0;    ///< round-robin cursor over particle ids for pour()
+    NeighborGrid grid_;
+    std::vector<uint8_t> respawn_flag_;
+    // Reorder scratch (reused; no allocation once warm).
+    std::vector<uint32_t> perm_;
+    std::vector<Vec3> scratch_vec_;
+    std::vector<uint32_t> scratch_id_;
 };
 
 }  // namespace mr

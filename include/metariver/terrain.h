@@ -122,6 +122,21 @@ std::optional<float> ray_triangle_paper(const Vec3& origin, const Vec3& dir, con
 std::optional<float> ray_triangle_watertight(const Vec3& origin, const Vec3& dir, const Vec3& a,
                                              const Vec3& b, const Vec3& c);
 
+/// Robust segment query that walks the heightfield's cells instead of the tree: every
+/// cell whose x/z rectangle the segment's x/z bounding box touches (grown by a hair so
+/// edges shared with a neighbour cell are always tested from both sides), culled by the
+/// cell's highest corner, watertight test on its two triangles, nearest hit. Returns
+/// the same hits as Bvh::intersect_segment (tests check the twin), O(cells crossed)
+/// instead of O(log T) box tests, which wins for the short per-step segments of
+/// particles. Segments whose box spans more than `max_cells` cells report
+/// `too_long = true` so the caller falls back to the tree.
+struct HeightfieldQuery {
+    std::optional<RayHit> hit;
+    bool too_long = false;
+};
+HeightfieldQuery intersect_segment_heightfield(const Terrain& terrain, const Vec3& from, const Vec3& to,
+                                               int max_cells = 64);
+
 struct BvhDef {
     int leaf_triangles = 8;  ///< max triangles per leaf, in [2, 4096]
 };

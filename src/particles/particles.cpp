@@ -8,6 +8,8 @@ void Particles::resize(size_t n) {
     velocity.assign(n, Vec3(0.0f));
     force.assign(n, Vec3(0.0f));
     active.assign(n, 0);
+    id.resize(n);
+    for (size_t i = 0; i < n; ++i) id[i] = static_cast<uint32_t>(i);
 }
 
 size_t Particles::active_count() const {

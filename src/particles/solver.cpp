@@ -6,13 +6,23 @@
 //    the particle is placed at hit + offset up + v dt. A particle whose path crosses
 //    a triangle of another leaf, or a seam the non-watertight test misses, falls
 //    through: the paper's reported failure, kept here on purpose.
-//  - robust mode: the swept segment is queried through the whole tree with the
-//    watertight test (Woop et al. 2013), the bounce is re-checked along its own
-//    segment, and a heightfield guard lifts any particle still below the mesh.
+//  - robust mode: the swept segment is queried through the whole tree (or by walking
+//    the heightfield's cells: same hits) with the watertight test (Woop et al. 2013),
+//    the bounce is re-checked along its own segment, and a heightfield guard lifts any
+//    particle still below the mesh.
 // Particles below the terrain box or outside its rectangle are re-spawned.
+//
+// Parallel and deterministic: forces are per-particle gathers, integration and
+// collision are independent per particle (tbb::parallel_for), and everything that
+// draws random numbers (activation, respawn) runs serially in index order afterwards,
+// so results do not depend on the thread count.
 #include <metariver/particles.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 namespace mr {
@@ -26,9 +36,16 @@ std::string_view to_string(CollisionMode m) {
     return "?";
 }
 
-ParticleSolver::ParticleSolver(const Terrain& terrain, const Bvh& bvh, SpawnDef spawn,
-                               SpringDef springs, CollisionDef collision,
-                               IntegratorDef integrator, uint32_t seed)
+std::string_view to_string(CollisionQuery q) {
+    switch (q) {
+        case CollisionQuery::Tree: return "tree";
+        case CollisionQuery::Heightfield: return "heightfield";
+    }
+    return "?";
+}
+
+ParticleSolver::ParticleSolver(const Terrain& terrain, const Bvh& bvh, SpawnDef spawn, SpringDef springs,
+                               CollisionDef collision, IntegratorDef integrator, uint32_t seed)
     : terrain_(terrain),
       bvh_(bvh),
       spawn_(spawn),
@@ -36,11 +53,14 @@ ParticleSolver::ParticleSolver(const Terrain& terrain, const Bvh& bvh, SpawnDef 
       collision_(collision),
       integrator_(integrator),
       rng_(seed) {
-    particles_.resize(static_cast<size_t>(std::max(spawn_.count, 0)));
-    for (size_t i = 0; i < particles_.size(); ++i) {
+    const size_t n = static_cast<size_t>(std::max(spawn_.count, 0));
+    particles_.resize(n);
+    for (size_t i = 0; i < n; ++i) {
         particles_.position[i] = spawn_.center;
         particles_.last_position[i] = spawn_.center;
+        particles_.id[i] = static_cast<uint32_t>(i);
     }
+    respawn_flag_.assign(n, 0);
 }
 
 void ParticleSolver::spawn(size_t i) {
@@ -56,16 +76,33 @@ void ParticleSolver::spawn(size_t i) {
     particles_.active[i] = 1;
 }
 
+size_t ParticleSolver::slot_of_id(uint32_t id) const {
+    const auto& ids = particles_.id;
+    if (id < ids.size() && ids[id] == id) return id;  // nothing reordered it
+    return static_cast<size_t>(std::find(ids.begin(), ids.end(), id) - ids.begin());
+}
+
+void ParticleSolver::place(std::span<const Vec3> positions) {
+    for (const Vec3& q : positions) {
+        if (next_to_activate_ >= particles_.size()) break;
+        const size_t i = next_to_activate_++;
+        particles_.position[i] = q;
+        particles_.last_position[i] = q;
+        particles_.velocity[i] = spawn_.initial_velocity;
+        particles_.active[i] = 1;
+    }
+}
+
 void ParticleSolver::pour(const Vec3& center, int count) {
     spawn_.center = center;
     const size_t n = particles_.size();
     if (n == 0) return;
     for (int k = 0; k < count; ++k) {
         if (next_to_activate_ < n) {
-            spawn(next_to_activate_++);
+            spawn(next_to_activate_++);  // inactive particles are the suffix
         } else {
-            spawn(next_to_pour_);
-            next_to_pour_ = (next_to_pour_ + 1) % n;
+            spawn(slot_of_id(next_to_pour_));
+            next_to_pour_ = static_cast<uint32_t>((next_to_pour_ + 1) % n);
         }
     }
 }
@@ -74,8 +111,7 @@ void ParticleSolver::step_frame(float frame_dt) {
     const bool due = spawn_.interval == 0 || frame_ % static_cast<uint64_t>(spawn_.interval) == 0;
     if (due) {
         const size_t n = spawn_.interval == 0 ? particles_.size() : 1;
-        for (size_t k = 0; k < n && next_to_activate_ < particles_.size(); ++k)
-            spawn(next_to_activate_++);
+        for (size_t k = 0; k < n && next_to_activate_ < particles_.size(); ++k) spawn(next_to_activate_++);
     }
     const float dt = integrator_.fixed_dt > 0.0f ? integrator_.fixed_dt : frame_dt;
     const int sub = std::max(integrator_.substeps, 1);
@@ -92,33 +128,84 @@ bool ParticleSolver::out_of_bounds(const Vec3& p) const {
     return p.y < terrain_.bounds().min.y || !terrain_.contains_xz(p.x, p.z) || !std::isfinite(p.y);
 }
 
+void ParticleSolver::sort_by_cell() {
+    Particles& p = particles_;
+    const size_t n = p.size();
+    grid_.build(p.position, p.active, std::max(spring_reach(springs_), 1e-3f));
+    // New order: binned (active) particles by cell, then the inactive suffix unchanged.
+    const auto order = grid_.order();
+    perm_.assign(order.begin(), order.end());
+    for (size_t i = order.size(); i < n; ++i) perm_.push_back(static_cast<uint32_t>(i));
+    auto permute = [&](std::vector<Vec3>& v) {
+        scratch_vec_.resize(n);
+        for (size_t k = 0; k < n; ++k) scratch_vec_[k] = v[perm_[k]];
+        v.swap(scratch_vec_);
+    };
+    permute(p.position);
+    permute(p.last_position);
+    permute(p.velocity);
+    scratch_id_.resize(n);
+    for (size_t k = 0; k < n; ++k) scratch_id_[k] = p.id[perm_[k]];
+    p.id.swap(scratch_id_);
+    // active stays a prefix of the same length: nothing to move.
+    grid_.relabel_identity();
+}
+
 void ParticleSolver::step(float dt) {
     Particles& p = particles_;
     const size_t n = p.size();
+    const bool grid_springs = springs_.mode == SpringMode::Grid;
+    if (grid_springs) sort_by_cell();
+
     const Vec3 g(0.0f, -integrator_.gravity, 0.0f);
     std::fill(p.force.begin(), p.force.end(), g);
-    add_spring_forces_pairs(p, springs_);
+    if (springs_.stiffness != 0.0f) {
+        if (grid_springs)
+            add_spring_forces_grid(p, grid_, springs_);
+        else
+            add_spring_forces_pairs(p, springs_);
+    }
 
+    std::atomic<uint64_t> steps{0}, collisions{0}, guarded{0}, tunneled{0};
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 512), [&](const tbb::blocked_range<size_t>& range) {
+        StepCounts c;
+        uint64_t local_steps = 0;
+        for (size_t i = range.begin(); i != range.end(); ++i) {
+            respawn_flag_[i] = 0;
+            if (!p.active[i]) continue;
+            p.velocity[i] += p.force[i] * dt;
+            p.last_position[i] = p.position[i];
+            p.position[i] += p.velocity[i] * dt;
+            ++local_steps;
+            collide(i, dt, c);
+            if (out_of_bounds(p.position[i])) {
+                respawn_flag_[i] = 1;
+                continue;
+            }
+            if (depth_below_surface(p.position[i]) > kTunnelEpsilon) ++c.tunneled;
+        }
+        steps += local_steps;
+        collisions += c.collisions;
+        guarded += c.guarded;
+        tunneled += c.tunneled;
+    });
+    counters_.particle_steps += steps;
+    counters_.collisions += collisions;
+    counters_.guarded += guarded;
+    counters_.tunneled += tunneled;
+    // Serial, in index order: the RNG sequence does not depend on the thread count.
     for (size_t i = 0; i < n; ++i) {
-        if (!p.active[i]) continue;
-        p.velocity[i] += p.force[i] * dt;
-        p.last_position[i] = p.position[i];
-        p.position[i] += p.velocity[i] * dt;
-        ++counters_.particle_steps;
-        collide(i, dt);
-        if (out_of_bounds(p.position[i])) {
+        if (respawn_flag_[i]) {
             ++counters_.respawned;
             spawn(i);
-            continue;
         }
-        if (depth_below_surface(p.position[i]) > kTunnelEpsilon) ++counters_.tunneled;
     }
 }
 
-void ParticleSolver::collide(size_t i, float dt) {
+void ParticleSolver::collide(size_t i, float dt, StepCounts& c) {
     switch (collision_.mode) {
-        case CollisionMode::Paper: collide_paper(i, dt); break;
-        case CollisionMode::Robust: collide_robust(i, dt); break;
+        case CollisionMode::Paper: collide_paper(i, dt, c); break;
+        case CollisionMode::Robust: collide_robust(i, dt, c); break;
         case CollisionMode::None: break;
     }
 }
@@ -127,28 +214,40 @@ namespace {
 Vec3 reflect_about(const Vec3& v, const Vec3& n) { return v - 2.0f * glm::dot(v, n) * n; }
 }  // namespace
 
-void ParticleSolver::collide_paper(size_t i, float dt) {
+// Collisions run on the particle's centre moved down by its radius, i.e. against the
+// terrain lifted by the radius.
+void ParticleSolver::collide_paper(size_t i, float dt, StepCounts& c) {
     Particles& p = particles_;
-    const auto hit = bvh_.intersect_paper(terrain_, p.last_position[i], p.position[i]);
+    const Vec3 lift(0.0f, collision_.radius, 0.0f);
+    const auto hit = bvh_.intersect_paper(terrain_, p.last_position[i] - lift, p.position[i] - lift);
     if (!hit) return;
-    ++counters_.collisions;
+    ++c.collisions;
     const Vec3 v = reflect_about(p.velocity[i], hit->normal) * (1.0f - collision_.damping);
     p.velocity[i] = v;
-    p.position[i] = hit->point + Vec3(0.0f, collision_.offset, 0.0f) + v * dt;
+    p.position[i] = hit->point + lift + Vec3(0.0f, collision_.offset, 0.0f) + v * dt;
 }
 
-void ParticleSolver::collide_robust(size_t i, float dt) {
+std::optional<RayHit> ParticleSolver::robust_hit(const Vec3& from, const Vec3& to) const {
+    if (collision_.query == CollisionQuery::Heightfield) {
+        HeightfieldQuery q = intersect_segment_heightfield(terrain_, from, to);
+        if (!q.too_long) return q.hit;
+    }
+    return bvh_.intersect_segment(terrain_, from, to);
+}
+
+void ParticleSolver::collide_robust(size_t i, float dt, StepCounts& c) {
     Particles& p = particles_;
-    Vec3 from = p.last_position[i];
-    Vec3 to = p.position[i];
+    const Vec3 lift(0.0f, collision_.radius, 0.0f);
+    Vec3 from = p.last_position[i] - lift;
+    Vec3 to = p.position[i] - lift;
     Vec3 v = p.velocity[i];
     // A bounce moves the particle along a new segment (hit + offset -> + v dt) that can
     // itself cross the ground near a crease; re-check it a few times, then guard.
     constexpr int kMaxBounces = 4;
     for (int b = 0; b < kMaxBounces; ++b) {
-        const auto hit = bvh_.intersect_segment(terrain_, from, to);
+        const auto hit = robust_hit(from, to);
         if (!hit) break;
-        ++counters_.collisions;
+        ++c.collisions;
         v = reflect_about(v, hit->normal) * (1.0f - collision_.damping);
         // Straight up from a point on a heightfield never goes below it.
         from = hit->point + Vec3(0.0f, collision_.offset, 0.0f);
@@ -158,7 +257,7 @@ void ParticleSolver::collide_robust(size_t i, float dt) {
     if (terrain_.contains_xz(to.x, to.z)) {
         const float h = terrain_.height_mesh(to.x, to.z);
         if (to.y < h) {
-            ++counters_.guarded;
+            ++c.guarded;
             const Vec3 n = terrain_.normal_mesh(to.x, to.z);
             const float vn = glm::dot(v, n);
             if (vn < 0.0f) v -= vn * n;
@@ -166,7 +265,7 @@ void ParticleSolver::collide_robust(size_t i, float dt) {
         }
     }
     p.velocity[i] = v;
-    p.position[i] = to;
+    p.position[i] = to + lift;
 }
 
 }  // namespace mr

@@ -5,7 +5,23 @@
 // it is the reference the neighbour-grid path is checked against.
 #include <metariver/particles.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+
 namespace mr {
+
+std::string_view to_string(SpringMode m) {
+    switch (m) {
+        case SpringMode::Pairs: return "pairs";
+        case SpringMode::Grid: return "grid";
+    }
+    return "?";
+}
+
+float spring_reach(const SpringDef& def) { return def.min_distance + def.max_distance; }
 
 void add_spring_forces_pairs(Particles& p, const SpringDef& def) {
     if (def.stiffness == 0.0f) return;
@@ -27,6 +43,104 @@ void add_spring_forces_pairs(Particles& p, const SpringDef& def) {
         }
         p.force[i] += acc_i;
     }
+}
+
+namespace {
+
+/// Candidates gathered per chunk; 3 x 512 floats stay on the stack (no heap at all).
+constexpr int kChunk = 512;
+
+/// Sum of the spring accelerations on a particle at (xi, yi, zi) from m candidates.
+/// Eight independent lanes so the loop vectorises without reassociating the sum (the
+/// result is the same whatever the vector width), a candidate at distance 0 (the
+/// particle itself, or one exactly on top of it) adds nothing, as in the pair loop.
+[[gnu::target_clones("avx2", "default")]] void spring_sum(float xi, float yi, float zi, const float* cx,
+                                                         const float* cy, const float* cz, int m, float r,
+                                                         float max_d, float half_k, float out[3]) {
+    float ax[8] = {}, ay[8] = {}, az[8] = {};
+    int k = 0;
+    for (; k + 8 <= m; k += 8) {
+        for (int l = 0; l < 8; ++l) {
+            const float dx = xi - cx[k + l], dy = yi - cy[k + l], dz = zi - cz[k + l];
+            const float d2 = dx * dx + dy * dy + dz * dz;
+            const float len = std::sqrt(d2);
+            // Branch-free (computed for every candidate, then masked) so the loop
+            // vectorises; max(len, 1e-20) keeps the masked-out value finite (k r <= 5e9).
+            const float s_all = half_k * (r / std::max(len, 1e-20f) - 1.0f);
+            const float on = static_cast<float>((d2 > 0.0f) & (len - r < max_d));
+            const float s = s_all * on;
+            ax[l] += s * dx;
+            ay[l] += s * dy;
+            az[l] += s * dz;
+        }
+    }
+    for (int l = 0; k < m; ++k, ++l) {
+        const float dx = xi - cx[k], dy = yi - cy[k], dz = zi - cz[k];
+        const float d2 = dx * dx + dy * dy + dz * dz;
+        const float len = std::sqrt(d2);
+        const float s = (d2 > 0.0f && len - r < max_d) ? half_k * (r / len - 1.0f) : 0.0f;
+        ax[l] += s * dx;
+        ay[l] += s * dy;
+        az[l] += s * dz;
+    }
+    float sx = 0.0f, sy = 0.0f, sz = 0.0f;
+    for (int l = 0; l < 8; ++l) {
+        sx += ax[l];
+        sy += ay[l];
+        sz += az[l];
+    }
+    out[0] = sx;
+    out[1] = sy;
+    out[2] = sz;
+}
+
+}  // namespace
+
+// Each particle sums its own share of every pair it is in: a(i, j) = -a(j, i), so the
+// totals equal the pair loop's, with no writes to other particles (no atomics). Work
+// goes cell by cell: the candidates of the 27 cells around a cell are gathered once
+// into contiguous arrays and every particle of the cell runs over them.
+void add_spring_forces_grid(Particles& p, const NeighborGrid& grid, const SpringDef& def) {
+    if (def.stiffness == 0.0f || spring_reach(def) <= 0.0f) return;
+    const float half_k = 0.5f * def.stiffness;
+    const float r = def.min_distance;
+    const float max_d = def.max_distance;
+    const auto order = grid.order();
+    const auto sx = grid.sorted_x(), sy = grid.sorted_y(), sz = grid.sorted_z();
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.run_count(), 16), [&](const tbb::blocked_range<size_t>& range) {
+        alignas(32) float cx[kChunk], cy[kChunk], cz[kChunk];
+        for (size_t run = range.begin(); run != range.end(); ++run) {
+            const uint32_t begin = grid.run_start(run), end = grid.run_start(run + 1);
+            int fill = 0;
+            bool first_chunk = true;
+            const auto flush = [&] {
+                for (uint32_t k = begin; k < end; ++k) {
+                    const uint32_t i = order[k];
+                    const Vec3 pi = p.position[i];
+                    float a[3];
+                    spring_sum(pi.x, pi.y, pi.z, cx, cy, cz, fill, r, max_d, half_k, a);
+                    p.force[i] += Vec3(a[0], a[1], a[2]);
+                }
+                fill = 0;
+                first_chunk = false;
+            };
+            grid.for_each_neighbor_range(run, [&](uint32_t s, uint32_t e) {
+                while (s < e) {
+                    if (fill == kChunk) flush();
+                    const uint32_t take = std::min<uint32_t>(e - s, static_cast<uint32_t>(kChunk - fill));
+                    // Ranges are short (a few cells): a plain loop beats memcpy calls.
+                    for (uint32_t t = 0; t < take; ++t) {
+                        cx[fill + int(t)] = sx[s + t];
+                        cy[fill + int(t)] = sy[s + t];
+                        cz[fill + int(t)] = sz[s + t];
+                    }
+                    fill += static_cast<int>(take);
+                    s += take;
+                }
+            });
+            if (fill > 0 || first_chunk) flush();
+        }
+    });
 }
 
 }  // namespace mr

@@ -1,0 +1,68 @@
+// Segment vs heightfield by walking cells: the fast path of the robust collision mode.
+// Watertight ray/triangle test: Woop, Benthin, Wald, "Watertight Ray/Triangle
+// Intersection", JCGT 2013 (ray_triangle_watertight).
+#include <metariver/terrain.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace mr {
+
+HeightfieldQuery intersect_segment_heightfield(const Terrain& terrain, const Vec3& from, const Vec3& to,
+                                               int max_cells) {
+    HeightfieldQuery q;
+    const int W = terrain.columns(), H = terrain.rows();
+    if (W < 2 || H < 2) return q;
+    const float s = terrain.area_scale();
+    const float inv = 1.0f / s;
+    // Cells touched by the segment's x/z box, grown by a relative hair so a segment
+    // running along a shared edge tests the triangles on both sides.
+    const float eps = 1e-4f;
+    const float x0 = std::min(from.x, to.x) * inv - eps, x1 = std::max(from.x, to.x) * inv + eps;
+    const float z0 = std::min(from.z, to.z) * inv - eps, z1 = std::max(from.z, to.z) * inv + eps;
+    if (!(x1 >= 0.0f && z1 >= 0.0f && x0 <= float(W - 1) && z0 <= float(H - 1))) return q;  // also NaN
+    const int j0 = std::max(0, static_cast<int>(std::floor(x0)));
+    const int j1 = std::min(W - 2, static_cast<int>(std::floor(x1)));
+    const int i0 = std::max(0, static_cast<int>(std::floor(z0)));
+    const int i1 = std::min(H - 2, static_cast<int>(std::floor(z1)));
+    if (static_cast<int64_t>(j1 - j0 + 1) * (i1 - i0 + 1) > max_cells) {
+        q.too_long = true;
+        return q;
+    }
+    const float ymin = std::min(from.y, to.y);
+    const Vec3 dir = to - from;
+    const auto verts = terrain.vertices();
+    float best_t = 2.0f;
+    uint32_t best_tri = 0;
+    for (int i = i0; i <= i1; ++i) {
+        for (int j = j0; j <= j1; ++j) {
+            const size_t c = static_cast<size_t>(i) * W + j;
+            const Vec3& a = verts[c];
+            const Vec3& b = verts[c + 1];
+            const Vec3& d = verts[c + W];
+            const Vec3& e = verts[c + W + 1];
+            // The segment cannot reach a cell whose highest corner is below its lowest point.
+            if (std::max(std::max(a.y, b.y), std::max(d.y, e.y)) < ymin) continue;
+            const uint32_t tri = 2u * static_cast<uint32_t>(static_cast<size_t>(i) * (W - 1) + j);
+            if (auto t = ray_triangle_watertight(from, dir, a, d, b); t && *t < best_t) {
+                best_t = *t;
+                best_tri = tri;
+            }
+            if (auto t = ray_triangle_watertight(from, dir, b, d, e); t && *t < best_t) {
+                best_t = *t;
+                best_tri = tri + 1;
+            }
+        }
+    }
+    if (best_t <= 1.0f) {
+        RayHit h;
+        h.t = best_t;
+        h.triangle = best_tri;
+        h.point = from + best_t * dir;
+        h.normal = terrain.triangle_normal(best_tri);
+        q.hit = h;
+    }
+    return q;
+}
+
+}  // namespace mr
