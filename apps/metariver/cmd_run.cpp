@@ -118,7 +118,6 @@ int run(const RunOptions& o) {
     }
 
     const SolverCounters& c = sim.counters();
-    const ScalarGrid& g = sim.field();
     const SceneDef& d = sim.def();
     if (!o.stats.empty()) {
         nlohmann::json j;
@@ -136,7 +135,7 @@ int run(const RunOptions& o) {
         j["particles_active"] = sim.particles().active_count();
         j["triangles"] = sim.surface().triangle_count();
         j["vertices"] = sim.surface().vertex_count();
-        j["field_grid"] = {g.nx, g.ny, g.nz};
+        j["field_grid"] = sim.field_dims();
         j["field_overflows"] = sim.field_overflows();
         j["particle_steps"] = c.particle_steps;
         j["collisions"] = c.collisions;

@@ -32,5 +32,11 @@ struct SceneOptions {
 
 /// Registers `run`; `action` is set to the function to call after parsing.
 void register_run(CLI::App& app, std::function<int()>& action);
+/// Registers `view` (the interactive viewer; apps/metariver/cmd_view.cpp).
+void register_view(CLI::App& app, std::function<int()>& action);
+/// Registers `render` (headless PNG/MP4 rendering; apps/metariver/cmd_render.cpp).
+void register_render(CLI::App& app, std::function<int()>& action);
+/// Registers `bench`.
+void register_bench(CLI::App& app, std::function<int()>& action);
 
 }  // namespace mr::app

@@ -12,6 +12,9 @@ int main(int argc, char** argv) {
     app.require_subcommand(1);
     std::function<int()> action;
     mr::app::register_run(app, action);
+    mr::app::register_view(app, action);
+    mr::app::register_render(app, action);
+    mr::app::register_bench(app, action);
     if (argc > 1 && argv[1][0] != '-') {
         std::string known;
         bool found = false;

@@ -31,15 +31,24 @@ struct ScalarGrid {
 };
 
 enum class FieldKernel {
-    InverseSquare,  ///< the paper's eq. 2: 1 / r^2 (r in metres)
-    RadiusOverR,    ///< the paper's code: radius / r
+    InverseSquare,  ///< the paper's eq. 2: 1 / r^2 (r in metres); dense, every ball everywhere
+    RadiusOverR,    ///< the paper's code: radius / r; dense
+    Poly6,          ///< compact (1 - r^2/radius^2)^3, summed (not averaged): sparse blocks, parallel
 };
+
+/// Where the field's grid lies.
+enum class FieldBounds {
+    Particles,  ///< the particles' bounding box grown by bounds_offset (the paper)
+    Terrain,    ///< the terrain's box (fixed; compact kernels only)
+};
+std::string_view to_string(FieldBounds b);
 
 std::string_view to_string(FieldKernel k);
 
 struct FieldDef {
     FieldKernel kernel = FieldKernel::InverseSquare;
-    float radius = 2.0f;         ///< metaball radius, metres (used by RadiusOverR)
+    FieldBounds bounds = FieldBounds::Particles;
+    float radius = 2.0f;         ///< metaball radius, metres (RadiusOverR; Poly6: support radius)
     float resolution = 2.0f;     ///< grid cells per metre, in (0, 64]
     float bounds_offset = 4.0f;  ///< metres the particles' bounding box grows by on every side
     float threshold = 0.54f;     ///< iso value: a sample is inside when value > threshold

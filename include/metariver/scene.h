@@ -3,12 +3,15 @@
 // Simulation that owns terrain, particles, solver, field and surface.
 #pragma once
 
+#include <metariver/bullet_solver.h>
 #include <metariver/core.h>
 #include <metariver/field.h>
+#include <metariver/sparse_field.h>
 #include <metariver/particles.h>
 #include <metariver/surface.h>
 #include <metariver/terrain.h>
 
+#include <array>
 #include <memory>
 #include <optional>
 #include <string>
@@ -36,6 +39,7 @@ struct TerrainSourceDef {
 
 enum class SolverKind {
     Springs,  ///< the paper's own physics: gravity, springs, terrain collision
+    Bullet,   ///< the paper's engine physics (2.4) on Bullet: rigid spheres vs the terrain
 };
 std::string_view to_string(SolverKind s);
 
@@ -49,6 +53,7 @@ struct SceneDef {
     SpringDef springs;
     CollisionDef collision;
     IntegratorDef integrator;
+    BulletDef bullet;  ///< solver = bullet only
     FieldDef field;
     bool surface = true;  ///< build the field and the surface every frame
 };
@@ -103,7 +108,12 @@ public:
     const Bvh& bvh() const { return bvh_; }
     const Particles& particles() const { return solver_->particles(); }
     const SolverCounters& counters() const { return solver_->counters(); }
+    /// The dense field (paper kernels); empty when the scene uses a compact kernel.
     const ScalarGrid& field() const { return field_; }
+    /// The sparse field (compact kernels); empty for the paper's kernels.
+    const SparseField& sparse_field() const { return sparse_; }
+    /// Samples per axis of the latest field, whichever kind.
+    std::array<int, 3> field_dims() const;
     const SurfaceMesh& surface() const { return surface_; }
     const FrameTimings& last_timings() const { return timings_; }
     uint64_t frame() const { return solver_->frame(); }
@@ -121,6 +131,9 @@ private:
     std::unique_ptr<Solver> solver_;
     std::vector<Vec3> balls_;
     ScalarGrid field_;
+    SparseField sparse_;
+    SparseFieldDef sparse_def_;
+    SurfaceWorkspace surface_ws_;
     SurfaceMesh surface_;
     FrameTimings timings_;
     uint64_t field_overflows_ = 0;

@@ -25,6 +25,7 @@ std::string_view to_string(TerrainSource s) {
 std::string_view to_string(SolverKind s) {
     switch (s) {
         case SolverKind::Springs: return "springs";
+        case SolverKind::Bullet: return "bullet";
     }
     return "?";
 }
@@ -111,10 +112,36 @@ SceneDef paper_bowl() {
     return d;
 }
 
+/// The paper's engine-physics scenes (2.4) on Bullet: rigid spheres against the
+/// terrain mesh, no springs, no sphere-sphere collisions, the engine's gravity (Unity's
+/// default, 9.81: the paper's scenes were Unity scenes). NativeCollision: strict17.png,
+/// 40 balls every 8 frames, field resolution 1, threshold 0.48, bounds offset 4.
+SceneDef paper_engine() {
+    SceneDef d = paper_full();
+    d.name = "paper-engine";
+    d.solver = SolverKind::Bullet;
+    d.spawn.count = 40;
+    d.spawn.interval = 8;
+    d.integrator.gravity = 9.81f;
+    d.field.resolution = 1.0f;
+    d.field.threshold = 0.48f;
+    d.field.bounds_offset = 4.0f;
+    return d;
+}
+
+/// The paper's Nile scene with its engine physics: paper-nile's parameters on Bullet.
+SceneDef paper_nile_engine() {
+    SceneDef d = paper_nile();
+    d.name = "paper-nile-engine";
+    d.solver = SolverKind::Bullet;
+    d.integrator.gravity = 9.81f;
+    return d;
+}
+
 }  // namespace
 
 std::vector<std::string> preset_names() {
-    return {"default", "paper-full", "paper-nile", "paper-bowl"};
+    return {"default", "paper-full", "paper-nile", "paper-bowl", "paper-engine", "paper-nile-engine"};
 }
 
 Result<SceneDef> preset(std::string_view name) {
@@ -122,6 +149,8 @@ Result<SceneDef> preset(std::string_view name) {
     if (name == "paper-full") return paper_full();
     if (name == "paper-nile") return paper_nile();
     if (name == "paper-bowl") return paper_bowl();
+    if (name == "paper-engine") return paper_engine();
+    if (name == "paper-nile-engine") return paper_nile_engine();
     std::string known;
     for (const auto& n : preset_names()) known += (known.empty() ? "" : ", ") + n;
     return Error{fmt::format("unknown preset '{}' (known: {})", name, known)};
@@ -177,6 +206,7 @@ Status validate(const SceneDef& d) {
     c.range("collision.damping", d.collision.damping, 0.0, 1.0);
     c.range("collision.offset", d.collision.offset, 0.0, 10.0);
     c.range("collision.bvh_leaf_triangles", d.collision.leaf_triangles, 2, 4096);
+    c.range("collision.radius", d.collision.radius, 0.0, 100.0);
     c.range("forces.gravity", d.integrator.gravity, -1000.0, 1000.0);
     if (d.integrator.fixed_dt != 0.0f) c.positive("integrator.dt", d.integrator.fixed_dt, 1.0);
     c.range("integrator.substeps", d.integrator.substeps, 1, 1000);
@@ -184,6 +214,15 @@ Status validate(const SceneDef& d) {
     c.positive("field.radius", d.field.radius, 1e4);
     c.range("field.bounds_offset", d.field.bounds_offset, 0.0, 1e4);
     c.positive("field.threshold", d.field.threshold, 1e9);
+    if (c.error.empty() && d.field.bounds == FieldBounds::Terrain && d.field.kernel != FieldKernel::Poly6)
+        c.error = "field.bounds: \"terrain\" needs a compact kernel (field.kernel = \"poly6\"); the paper's kernels reach every sample";
+    c.positive("bullet.sphere_radius", d.bullet.sphere_radius, 1e3);
+    c.positive("bullet.mass", d.bullet.mass, 1e6);
+    c.range("bullet.friction", d.bullet.friction, 0.0, 100.0);
+    c.range("bullet.restitution", d.bullet.restitution, 0.0, 1.0);
+    c.positive("bullet.dt", d.bullet.fixed_dt, 1.0);
+    c.range("bullet.max_substeps", d.bullet.max_substeps, 0, 1000);
+    c.range("bullet.solver_iterations", d.bullet.solver_iterations, 1, 1000);
     if (!c.error.empty()) return Error{c.error};
     return Ok{};
 }

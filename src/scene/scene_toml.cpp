@@ -167,11 +167,11 @@ Result<SceneDef> parse_scene_toml(std::string_view text, const std::string& orig
     SceneDef d = base;
     Reader r(origin);
     r.allow(root, "", {"name", "seed", "solver", "surface", "terrain", "particles", "forces", "springs", "collision",
-                       "integrator", "field"});
+                       "integrator", "field", "bullet"});
     r.string(root, "", "name", d.name);
     r.seed(root, "", "seed", d.seed);
     r.boolean(root, "", "surface", d.surface);
-    r.choice(root, "", "solver", d.solver, {{"springs", SolverKind::Springs}});
+    r.choice(root, "", "solver", d.solver, {{"springs", SolverKind::Springs}, {"bullet", SolverKind::Bullet}});
 
     if (const toml::table* t = r.table(root, "terrain")) {
         const std::string p = "terrain.";
@@ -227,16 +227,19 @@ Result<SceneDef> parse_scene_toml(std::string_view text, const std::string& orig
         r.number(*t, p, "stiffness", d.springs.stiffness);
         r.number(*t, p, "min_distance", d.springs.min_distance);
         r.number(*t, p, "max_distance", d.springs.max_distance);
-        r.choice(*t, p, "mode", d.springs.mode, {{"pairs", SpringMode::Pairs}});
+        r.choice(*t, p, "mode", d.springs.mode, {{"pairs", SpringMode::Pairs}, {"grid", SpringMode::Grid}});
     }
     if (const toml::table* t = r.table(root, "collision")) {
         const std::string p = "collision.";
-        r.allow(*t, p, {"mode", "damping", "offset", "bvh_leaf_triangles"});
+        r.allow(*t, p, {"mode", "damping", "offset", "bvh_leaf_triangles", "radius", "query"});
         r.choice(*t, p, "mode", d.collision.mode,
                  {{"paper", CollisionMode::Paper}, {"robust", CollisionMode::Robust}, {"none", CollisionMode::None}});
         r.number(*t, p, "damping", d.collision.damping);
         r.number(*t, p, "offset", d.collision.offset);
         r.integer(*t, p, "bvh_leaf_triangles", d.collision.leaf_triangles, 2, 4096);
+        r.number(*t, p, "radius", d.collision.radius);
+        r.choice(*t, p, "query", d.collision.query,
+                 {{"tree", CollisionQuery::Tree}, {"heightfield", CollisionQuery::Heightfield}});
     }
     if (const toml::table* t = r.table(root, "integrator")) {
         const std::string p = "integrator.";
@@ -246,13 +249,35 @@ Result<SceneDef> parse_scene_toml(std::string_view text, const std::string& orig
     }
     if (const toml::table* t = r.table(root, "field")) {
         const std::string p = "field.";
-        r.allow(*t, p, {"kernel", "radius", "resolution", "bounds_offset", "threshold"});
+        r.allow(*t, p, {"kernel", "bounds", "radius", "resolution", "bounds_offset", "threshold"});
         r.choice(*t, p, "kernel", d.field.kernel,
-                 {{"inverse_square", FieldKernel::InverseSquare}, {"radius_over_r", FieldKernel::RadiusOverR}});
+                 {{"inverse_square", FieldKernel::InverseSquare},
+                  {"radius_over_r", FieldKernel::RadiusOverR},
+                  {"poly6", FieldKernel::Poly6}});
+        r.choice(*t, p, "bounds", d.field.bounds,
+                 {{"particles", FieldBounds::Particles}, {"terrain", FieldBounds::Terrain}});
         r.number(*t, p, "radius", d.field.radius);
         r.number(*t, p, "resolution", d.field.resolution);
         r.number(*t, p, "bounds_offset", d.field.bounds_offset);
         r.number(*t, p, "threshold", d.field.threshold);
+    }
+    if (const toml::table* t = r.table(root, "bullet")) {
+        const std::string p = "bullet.";
+        r.allow(*t, p, {"terrain", "sphere_radius", "mass", "friction", "restitution", "particle_collisions", "dt",
+                        "max_substeps", "solver_iterations", "ccd", "sleep", "springs"});
+        r.choice(*t, p, "terrain", d.bullet.terrain,
+                 {{"mesh", BulletTerrainShape::Mesh}, {"heightfield", BulletTerrainShape::Heightfield}});
+        r.number(*t, p, "sphere_radius", d.bullet.sphere_radius);
+        r.number(*t, p, "mass", d.bullet.mass);
+        r.number(*t, p, "friction", d.bullet.friction);
+        r.number(*t, p, "restitution", d.bullet.restitution);
+        r.boolean(*t, p, "particle_collisions", d.bullet.particle_collisions);
+        r.number(*t, p, "dt", d.bullet.fixed_dt);
+        r.integer(*t, p, "max_substeps", d.bullet.max_substeps, 0, 1000);
+        r.integer(*t, p, "solver_iterations", d.bullet.solver_iterations, 1, 1000);
+        r.boolean(*t, p, "ccd", d.bullet.ccd);
+        r.boolean(*t, p, "sleep", d.bullet.sleep);
+        r.boolean(*t, p, "springs", d.bullet.springs);
     }
     if (r.failed()) return Error{r.error()};
     if (d.source.kind == TerrainSource::File && d.source.heightmap.empty())

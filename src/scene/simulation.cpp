@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 
 namespace mr {
@@ -48,10 +49,29 @@ Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh)
         spawn.auto_center = false;
         def_.spawn = spawn;
     }
+    // Compact kernel: the sparse field over the particles' box or the terrain's.
+    sparse_def_.kernel = poly6_kernel(def_.field.radius, 1.0f);
+    sparse_def_.resolution = def_.field.resolution;
+    sparse_def_.bounds_offset = def_.field.bounds_offset;
+    if (def_.field.bounds == FieldBounds::Terrain) {
+        const Aabb b = terrain_.bounds();
+        const float h = 1.0f / def_.field.resolution;
+        const auto samples = [&](float e) { return static_cast<int>(std::ceil(e / h)) + 1; };
+        sparse_def_.domain = DomainMode::FixedBox;
+        sparse_def_.box = SampleGrid{.origin = b.min, .spacing = h, .nx = samples(b.extent().x),
+                                     .ny = samples(b.extent().y + 2.0f * def_.field.bounds_offset),
+                                     .nz = samples(b.extent().z)};
+    } else {
+        sparse_def_.domain = DomainMode::BallBounds;
+    }
     switch (def_.solver) {
         case SolverKind::Springs:
             solver_ = std::make_unique<ParticleSolver>(terrain_, bvh_, spawn, def_.springs, def_.collision,
                                                        def_.integrator, def_.seed);
+            break;
+        case SolverKind::Bullet:
+            solver_ = std::make_unique<BulletSolver>(terrain_, spawn, def_.springs, def_.integrator, def_.bullet,
+                                                     def_.seed);
             break;
     }
 }
@@ -83,12 +103,28 @@ void Simulation::step(float frame_dt) {
     }
     t0 = Clock::now();
     solver_->particles().gather_active_positions(balls_);
+    if (def_.field.kernel == FieldKernel::Poly6) {
+        if (!sparse_.build(balls_, sparse_def_)) ++field_overflows_;
+        timings_.field_ms = ms_since(t0);
+        t0 = Clock::now();
+        extract_surface_sparse(sparse_, def_.field.threshold, surface_, surface_ws_);
+        timings_.surface_ms = ms_since(t0);
+        return;
+    }
     if (!compute_field_paper(balls_, def_.field, field_)) ++field_overflows_;
     timings_.field_ms = ms_since(t0);
 
     t0 = Clock::now();
     extract_surface(field_, def_.field.threshold, surface_);
     timings_.surface_ms = ms_since(t0);
+}
+
+std::array<int, 3> Simulation::field_dims() const {
+    if (def_.field.kernel == FieldKernel::Poly6) {
+        const SampleGrid& g = sparse_.grid();
+        return {g.nx, g.ny, g.nz};
+    }
+    return {field_.nx, field_.ny, field_.nz};
 }
 
 uint64_t Simulation::state_hash() const {

@@ -210,5 +210,92 @@ TEST(Presets, PaperScenesCarryTheirExactParameters) {
     EXPECT_NE(bad.error().message.find("paper-nile"), std::string::npos) << "lists the known presets";
 }
 
+TEST(SceneToml, BulletTableIsRead) {
+    auto r = parse(R"(
+solver = "bullet"
+[bullet]
+terrain = "heightfield"
+sphere_radius = 0.25
+mass = 2
+friction = 0.1
+restitution = 0.3
+particle_collisions = true
+dt = 0.01
+max_substeps = 4
+solver_iterations = 20
+ccd = true
+sleep = false
+springs = true
+)");
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    EXPECT_EQ(r->solver, SolverKind::Bullet);
+    EXPECT_EQ(r->bullet.terrain, BulletTerrainShape::Heightfield);
+    EXPECT_FLOAT_EQ(r->bullet.sphere_radius, 0.25f);
+    EXPECT_FLOAT_EQ(r->bullet.mass, 2.0f);
+    EXPECT_FLOAT_EQ(r->bullet.friction, 0.1f);
+    EXPECT_FLOAT_EQ(r->bullet.restitution, 0.3f);
+    EXPECT_TRUE(r->bullet.particle_collisions);
+    EXPECT_FLOAT_EQ(r->bullet.fixed_dt, 0.01f);
+    EXPECT_EQ(r->bullet.max_substeps, 4);
+    EXPECT_EQ(r->bullet.solver_iterations, 20);
+    EXPECT_TRUE(r->bullet.ccd);
+    EXPECT_FALSE(r->bullet.sleep);
+    EXPECT_TRUE(r->bullet.springs);
+    EXPECT_EQ(to_string(r->solver), "bullet");
+}
+
+TEST(SceneToml, BadBulletValuesNameTheKey) {
+    expect_error("solver = \"havok\"\n", "solver: must be one of springs, bullet");
+    expect_error("[bullet]\nterrain = \"voxels\"\n", "bullet.terrain: must be one of mesh, heightfield");
+    expect_error("[bullet]\nsphere_radius = 0\n", "bullet.sphere_radius: must be in (0, 1000]");
+    expect_error("[bullet]\nsphere_radius = nan\n", "bullet.sphere_radius");
+    expect_error("[bullet]\nmass = -1\n", "bullet.mass: must be in (0, 1000000]");
+    expect_error("[bullet]\nfriction = -0.1\n", "bullet.friction: must be in [0, 100]");
+    expect_error("[bullet]\nrestitution = 2\n", "bullet.restitution: must be in [0, 1]");
+    expect_error("[bullet]\ndt = 0\n", "bullet.dt: must be in (0, 1]");
+    expect_error("[bullet]\nmax_substeps = -1\n", "bullet.max_substeps: must be in [0, 1000]");
+    expect_error("[bullet]\nmax_substeps = 1.5\n", "bullet.max_substeps: must be an integer");
+    expect_error("[bullet]\nsolver_iterations = 0\n", "bullet.solver_iterations: must be in [1, 1000]");
+    expect_error("[bullet]\nccd = 1\n", "bullet.ccd: must be true or false");
+    expect_error("[bullet]\nsprings = \"yes\"\n", "bullet.springs: must be true or false");
+    expect_error("[bullet]\ngravity = 9.81\n", "bullet.gravity: unknown key");
+    expect_error("bullet = 3\n", "bullet: must be a table");
+}
+
+TEST(Presets, PaperEngineScenesCarryTheirExactParameters) {
+    auto engine = preset("paper-engine");
+    ASSERT_TRUE(engine.ok());
+    EXPECT_EQ(engine->solver, SolverKind::Bullet);
+    EXPECT_EQ(engine->source.kind, TerrainSource::File);  // strict17.png from --heightmap
+    EXPECT_EQ(engine->spawn.count, 40);
+    EXPECT_EQ(engine->spawn.center, Vec3(8, 7, 15));
+    EXPECT_EQ(engine->spawn.half_extent, Vec3(2, 1, 0.2f));
+    EXPECT_EQ(engine->spawn.interval, 8);
+    EXPECT_FLOAT_EQ(engine->field.radius, 2.0f);
+    EXPECT_FLOAT_EQ(engine->field.resolution, 1.0f);
+    EXPECT_FLOAT_EQ(engine->field.threshold, 0.48f);
+    EXPECT_FLOAT_EQ(engine->field.bounds_offset, 4.0f);
+    EXPECT_FLOAT_EQ(engine->terrain.area_scale, 1.0f);
+    EXPECT_FLOAT_EQ(engine->terrain.height_scale, 7.0f);
+    EXPECT_FLOAT_EQ(engine->integrator.gravity, 9.81f);  // the engine's (Unity's) default
+    EXPECT_EQ(engine->bullet.terrain, BulletTerrainShape::Mesh);
+    EXPECT_FALSE(engine->bullet.springs);
+    EXPECT_FALSE(engine->bullet.particle_collisions);
+
+    auto nile = preset("paper-nile-engine");
+    ASSERT_TRUE(nile.ok());
+    EXPECT_EQ(nile->solver, SolverKind::Bullet);
+    EXPECT_EQ(nile->source.kind, TerrainSource::File);  // nile.png from --heightmap
+    EXPECT_EQ(nile->spawn.count, 50);
+    EXPECT_EQ(nile->spawn.center, Vec3(27, 4.6f, 31));
+    EXPECT_EQ(nile->spawn.half_extent, Vec3(2.5f, 1, 1));
+    EXPECT_EQ(nile->spawn.interval, 15);
+    EXPECT_FLOAT_EQ(nile->field.resolution, 1.0f);
+    EXPECT_FLOAT_EQ(nile->field.threshold, 0.32f);
+    EXPECT_FLOAT_EQ(nile->field.bounds_offset, 5.0f);
+    EXPECT_FLOAT_EQ(nile->integrator.gravity, 9.81f);
+    EXPECT_FALSE(nile->bullet.springs);
+}
+
 }  // namespace
 }  // namespace mr

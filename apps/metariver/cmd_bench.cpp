@@ -1,0 +1,383 @@
+// `metariver bench`: per-stage timings of the project's workloads, and (with --peers)
+// the installed peers on the same workloads in the same run, side by side.
+// Scenarios: the paper's scenes (own physics, as the paper), the default river at
+// 1k/10k/50k/100k particles (fast pipeline), W1 and W2 exactly as
+// ../shared/peers/README.md defines them. Medians and p95 over measured frames.
+#include "commands.h"
+#include "bench_peers.h"
+
+#include <metariver/io.h>
+#include <metariver/sparse_field.h>
+#include <metariver/surface.h>
+#include <metariver/workloads.h>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <thread>
+
+namespace mr::app {
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+using json = nlohmann::json;
+
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+struct BenchOptions {
+    std::string scenario;
+    int balls = 0;
+    int res = 0;
+    int spheres = 0;
+    int particles = 0;
+    int frames = 0;
+    int threads = 0;
+    std::string json_path;
+    std::string maps_dir = "../shared/heightmaps/metawater";
+    std::string peers_dir = "bench/peers";
+    bool peers = false;
+};
+
+/// One scenario's result: per-stage samples plus counts and quality numbers.
+struct ScenarioResult {
+    std::string name;
+    json params = json::object();
+    std::map<std::string, std::vector<double>> stage_ms;  // stage -> samples
+    std::vector<std::string> stage_order;
+    size_t particles = 0;
+    size_t triangles = 0;
+    json quality = json::object();  // tunneled, respawned, ...
+    std::string note;
+
+    void sample(const std::string& stage, double ms) {
+        if (!stage_ms.count(stage)) stage_order.push_back(stage);
+        stage_ms[stage].push_back(ms);
+    }
+};
+
+json machine_json(int threads) {
+    json m;
+    std::ifstream cpu("/proc/cpuinfo");
+    std::string line, model = "unknown";
+    while (std::getline(cpu, line))
+        if (line.rfind("model name", 0) == 0) {
+            model = line.substr(line.find(':') + 2);
+            break;
+        }
+    m["cpu"] = model;
+    m["hardware_threads"] = std::thread::hardware_concurrency();
+    m["threads_used"] = threads;
+    std::ifstream os("/etc/os-release");
+    while (std::getline(os, line))
+        if (line.rfind("PRETTY_NAME=", 0) == 0) m["os"] = line.substr(13, line.size() - 14);
+#ifdef __VERSION__
+    m["compiler"] = std::string("g++ ") + __VERSION__;
+#endif
+    return m;
+}
+
+// --- scenarios -------------------------------------------------------------------
+
+ScenarioResult bench_simulation(const std::string& name, const SceneDef& def, int warmup, int frames,
+                                const std::string& note = {}) {
+    ScenarioResult r;
+    r.name = name;
+    r.note = note;
+    auto sim = Simulation::create(def);
+    if (!sim) {
+        r.note = "skipped: " + sim.error().message;
+        return r;
+    }
+    Simulation& s = *sim.value();
+    for (int f = 0; f < warmup; ++f) s.step(1.0f / 60.0f);
+    for (int f = 0; f < frames; ++f) {
+        s.step(1.0f / 60.0f);
+        const FrameTimings& t = s.last_timings();
+        r.sample("simulate", t.simulate_ms);
+        r.sample("field", t.field_ms);
+        r.sample("surface", t.surface_ms);
+        r.sample("total", t.simulate_ms + t.field_ms + t.surface_ms);
+    }
+    r.particles = s.particles().active_count();
+    r.triangles = s.surface().triangle_count();
+    r.params = {{"scene", def.name},
+                {"particles", def.spawn.count},
+                {"springs", std::string(to_string(def.springs.mode))},
+                {"collision", std::string(to_string(def.collision.mode))},
+                {"field_kernel", std::string(to_string(def.field.kernel))},
+                {"frames", frames},
+                {"warmup", warmup}};
+    r.quality = {{"tunneled", s.counters().tunneled}, {"respawned", s.counters().respawned}};
+    return r;
+}
+
+ScenarioResult bench_w1(int n, int res, int frames) {
+    ScenarioResult r;
+    r.name = fmt::format("w1 N={} R={}", n, res);
+    const std::vector<Vec3> balls = w1_balls(n);
+    SparseFieldDef def;
+    def.kernel = w1_kernel_for(n);
+    def.domain = DomainMode::FixedBox;
+    def.box = w1_grid(res);
+    SparseField field;
+    SurfaceMesh mesh;
+    SurfaceWorkspace ws;
+    for (int f = -2; f < frames; ++f) {  // two warm-up frames
+        auto t0 = Clock::now();
+        if (auto st = field.build(balls, def); !st) {
+            r.note = "skipped: " + st.error().message;
+            return r;
+        }
+        const double field_ms = ms_since(t0);
+        t0 = Clock::now();
+        extract_surface_sparse(field, kW1Iso, mesh, ws);
+        const double surface_ms = ms_since(t0);
+        if (f < 0) continue;
+        r.sample("field", field_ms);
+        r.sample("surface", surface_ms);
+        r.sample("total", field_ms + surface_ms);
+    }
+    double coord_sum = 0.0;
+    for (const Vec3& b : balls) coord_sum += double(b.x) + double(b.y) + double(b.z);
+    r.particles = static_cast<size_t>(n);
+    r.triangles = mesh.triangle_count();
+    r.params = {{"N", n}, {"R", res}, {"rcoef", 0.3}, {"frames", frames}, {"coord_sum", coord_sum}};
+    r.quality = {{"vertices", mesh.vertex_count()}};
+    return r;
+}
+
+ScenarioResult bench_w2(int n) {
+    ScenarioResult r;
+    r.name = fmt::format("w2 spheres={}", n);
+    auto terrain = Terrain::build(w2_heightmap(), w2_terrain_def());
+    auto bvh = Bvh::build(terrain.value(), BvhDef{});
+    const std::vector<Vec3> spheres = w2_spheres(n);
+    // Spheres as particles: robust collision with the sphere radius; sphere-sphere
+    // contact through the springs' minimum distance = 2 x radius with max_distance 0
+    // (repulsion only while overlapping), as Bullet's spheres touch each other.
+    SpawnDef spawn{.count = n, .center = Vec3(128, 20, 128), .half_extent = Vec3(0.0f), .interval = 1000000};
+    SpringDef springs{.stiffness = 2000.0f, .min_distance = 2.0f * kW2Radius, .max_distance = 0.0f,
+                      .mode = SpringMode::Grid};
+    CollisionDef collision{.mode = CollisionMode::Robust, .damping = 0.5f, .offset = 0.0f, .leaf_triangles = 8,
+                           .radius = kW2Radius, .query = CollisionQuery::Heightfield};
+    IntegratorDef integrator{.gravity = 9.82f, .fixed_dt = 1.0f / 60.0f, .substeps = 2};
+    ParticleSolver solver(terrain.value(), bvh.value(), spawn, springs, collision, integrator, 12345u);
+    solver.place(spheres);
+    double fall_ms = 0.0;
+    for (int step = 1; step <= 600; ++step) {
+        const auto t0 = Clock::now();
+        solver.step_frame(1.0f / 60.0f);
+        const double ms = ms_since(t0);
+        if (step <= 120)
+            fall_ms += ms;
+        else
+            r.sample("step", ms);
+    }
+    // Quality after 600 steps, as the Bullet driver measures it.
+    size_t below = 0, penetrating = 0, outside = 0;
+    const Particles& p = solver.particles();
+    for (size_t i = 0; i < p.size(); ++i) {
+        const Vec3& c = p.position[i];
+        if (c.x < 0 || c.x > 256 || c.z < 0 || c.z > 256) {
+            ++outside;
+            continue;
+        }
+        const float h = terrain->height_mesh(c.x, c.z);
+        if (c.y < h) ++below;
+        const Vec3 nrm = terrain->normal_mesh(c.x, c.z);
+        const float dist = glm::dot(c - Vec3(c.x, h, c.z), nrm);  // signed distance to the triangle's plane
+        if (kW2Radius - dist > 0.25f) ++penetrating;
+    }
+    r.particles = static_cast<size_t>(n);
+    r.params = {{"spheres", n}, {"steps", 600}, {"substeps", integrator.substeps}, {"stiffness", springs.stiffness}};
+    r.quality = {{"fall_ms_total", fall_ms},
+                 {"tunneled", below},
+                 {"tunneled_steps", solver.counters().tunneled},
+                 {"penetrating_0_25", penetrating},
+                 {"outside", outside},
+                 {"respawned", solver.counters().respawned}};
+    return r;
+}
+
+// --- output ----------------------------------------------------------------------
+
+json result_json(const ScenarioResult& r, int threads) {
+    json j;
+    j["scenario"] = r.name;
+    j["params"] = r.params;
+    j["particles"] = r.particles;
+    j["triangles"] = r.triangles;
+    j["threads"] = threads;
+    j["quality"] = r.quality;
+    if (!r.note.empty()) j["note"] = r.note;
+    json stages = json::object();
+    for (const auto& s : r.stage_order) {
+        const Percentiles p = percentiles(r.stage_ms.at(s));
+        stages[s] = {{"median_ms", p.median}, {"p95_ms", p.p95}, {"samples", r.stage_ms.at(s).size()}};
+    }
+    j["stages"] = stages;
+    return j;
+}
+
+void print_table(const std::vector<ScenarioResult>& results) {
+    fmt::print("{:<24} {:<9} {:>10} {:>10} {:>10} {:>11}  {}\n", "scenario", "stage", "median ms", "p95 ms",
+               "particles", "triangles", "quality");
+    for (const auto& r : results) {
+        if (r.stage_order.empty()) {
+            fmt::print("{:<24} {}\n", r.name, r.note);
+            continue;
+        }
+        bool first = true;
+        for (const auto& s : r.stage_order) {
+            const Percentiles p = percentiles(r.stage_ms.at(s));
+            fmt::print("{:<24} {:<9} {:>10.3f} {:>10.3f} {:>10} {:>11}  {}\n", first ? r.name : "", s, p.median, p.p95,
+                       first ? std::to_string(r.particles) : "", first ? std::to_string(r.triangles) : "",
+                       first ? r.quality.dump() : "");
+            first = false;
+        }
+    }
+}
+
+int run_bench(const BenchOptions& o) {
+    const int threads = o.threads > 0 ? o.threads : tbb::info::default_concurrency();
+    if (o.threads < 0 || o.threads > 256) {
+        fmt::print(stderr, "metariver bench: --threads: must be in [0, 256] (got {})\n", o.threads);
+        return kExitBadInput;
+    }
+    const std::vector<std::string> known = {"paper", "river", "w1", "w2"};
+    if (!o.scenario.empty() && std::find(known.begin(), known.end(), o.scenario) == known.end()) {
+        fmt::print(stderr, "metariver bench: --scenario: must be one of paper, river, w1, w2 (got '{}')\n", o.scenario);
+        return kExitBadInput;
+    }
+    if (o.balls < 0 || o.balls > 10'000'000 || o.res < 0 || (o.res != 0 && o.res < 2) || o.res > 1024) {
+        fmt::print(stderr, "metariver bench: --balls must be in [1, 10000000] and --res in [2, 1024]\n");
+        return kExitBadInput;
+    }
+    if (o.spheres < 0 || o.spheres > 1'000'000 || o.particles < 0 || o.particles > kMaxParticles) {
+        fmt::print(stderr, "metariver bench: --spheres must be in [1, 1000000], --particles in [1, {}]\n", kMaxParticles);
+        return kExitBadInput;
+    }
+    if (o.frames < 0 || o.frames > 100000) {
+        fmt::print(stderr, "metariver bench: --frames: must be in [1, 100000] (got {})\n", o.frames);
+        return kExitBadInput;
+    }
+    if (!o.json_path.empty()) {
+        const fs::path dir = fs::path(o.json_path).parent_path();
+        std::error_code ec;
+        if (!dir.empty() && !fs::is_directory(dir, ec)) {
+            fmt::print(stderr, "metariver bench: --json {}: folder '{}' does not exist\n", o.json_path, dir.string());
+            return kExitBadInput;
+        }
+    }
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
+    const auto want = [&](const char* s) { return o.scenario.empty() || o.scenario == s; };
+    const int frames = o.frames;
+    std::vector<ScenarioResult> results;
+    PeerRequest peer_request{.peers_dir = o.peers_dir, .threads = threads};  // the W1/W2 sizes run, for --peers
+
+    if (want("paper")) {
+        struct PaperScene {
+            const char* preset;
+            const char* map;
+        };
+        for (const PaperScene& ps : {PaperScene{"paper-full", "strict17.png"}, PaperScene{"paper-nile", "nile.png"},
+                                     PaperScene{"paper-bowl", "bowl.png"}}) {
+            SceneDef d = preset(ps.preset).value();
+            const fs::path map = fs::path(o.maps_dir) / ps.map;
+            std::string note;
+            if (fs::exists(map)) {
+                d.source.kind = TerrainSource::File;
+                d.source.heightmap = map.string();
+            } else if (d.source.kind == TerrainSource::File) {
+                results.push_back(ScenarioResult{.name = ps.preset, .note = "skipped: " + map.string() + " not found (--maps DIR)"});
+                continue;
+            }
+            // The paper's own physics and pipeline; 1500 frames fill every spawn slot.
+            results.push_back(bench_simulation(ps.preset, d, 1500, frames ? frames : 300, note));
+        }
+    }
+    if (want("river")) {
+        std::vector<int> sizes = {1000, 10000, 50000, 100000};
+        if (o.particles) sizes = {o.particles};
+        for (int n : sizes) {
+            const int f = frames ? frames : (n >= 50000 ? 60 : 120);
+            results.push_back(bench_simulation(fmt::format("river {}", n), river_scene(n), 30, f));
+        }
+    }
+    if (want("w1")) {
+        std::vector<std::pair<int, int>> cases = {{50, 32}, {1000, 64}, {1000, 128}, {10000, 128}, {10000, 256}};
+        if (o.balls || o.res) cases = {{o.balls ? o.balls : 1000, o.res ? o.res : 128}};
+        for (auto [n, res] : cases) results.push_back(bench_w1(n, res, frames ? frames : 10));
+        peer_request.w1_cases = cases;
+    }
+    if (want("w2")) {
+        std::vector<int> sizes = {1000, 10000};
+        if (o.spheres) sizes = {o.spheres};
+        for (int n : sizes) results.push_back(bench_w2(n));
+        peer_request.w2_sizes = sizes;
+    }
+
+    print_table(results);
+    json peers_json;
+    if (o.peers) {  // bench_peers.cpp: run the installed peers on the same sizes, print side by side
+        std::vector<std::string> missing;
+        const std::vector<PeerRow> peer_rows = run_peers(peer_request, missing);
+        std::vector<OursRow> ours;
+        const auto med = [](const ScenarioResult& r, const char* s) {
+            return r.stage_ms.count(s) ? percentiles(r.stage_ms.at(s)).median : 0.0;
+        };
+        for (const auto& r : results)
+            if (r.params.contains("N") && r.params.contains("R"))
+                ours.push_back({.workload = "w1", .n = r.params["N"].get<int>(), .r = r.params["R"].get<int>(),
+                                .field_surface_ms = med(r, "total"), .surface_ms = med(r, "surface"),
+                                .triangles = r.triangles});
+            else if (r.params.contains("spheres"))
+                ours.push_back({.workload = "w2", .n = r.params["spheres"].get<int>(), .step_ms = med(r, "step")});
+        peers_json = print_peers_side_by_side(ours, peer_rows, missing, threads);
+    }
+    if (!o.json_path.empty()) {
+        json j;
+        j["machine"] = machine_json(threads);
+        json arr = json::array();
+        for (const auto& r : results) arr.push_back(result_json(r, threads));
+        j["results"] = arr;
+        if (o.peers) j["peers"] = peers_json;
+        if (auto s = write_file_atomic(o.json_path, j.dump(2) + "\n"); !s) {
+            fmt::print(stderr, "metariver bench: {}\n", s.error().message);
+            return kExitFailure;
+        }
+        fmt::print("wrote {}\n", o.json_path);
+    }
+    return kExitOk;
+}
+
+}  // namespace
+
+void register_bench(CLI::App& app, std::function<int()>& action) {
+    auto o = std::make_shared<BenchOptions>();
+    CLI::App* cmd = app.add_subcommand("bench", "time every stage on the project's workloads (and peers with --peers)");
+    cmd->add_option("--scenario", o->scenario, "one of paper, river, w1, w2 (default: all)");
+    cmd->add_option("--balls", o->balls, "W1: number of balls");
+    cmd->add_option("--res", o->res, "W1: samples per axis");
+    cmd->add_option("--spheres", o->spheres, "W2: number of spheres");
+    cmd->add_option("--particles", o->particles, "river: number of particles");
+    cmd->add_option("--frames", o->frames, "measured frames per scenario (default: per scenario)");
+    cmd->add_option("--threads", o->threads, "worker threads (default: all cores)");
+    cmd->add_option("--json", o->json_path, "write the results as JSON");
+    cmd->add_option("--maps", o->maps_dir, "folder with the paper's heightmaps (default ../shared/heightmaps/metawater)");
+    cmd->add_flag("--peers", o->peers, "also run the installed peers on the same workloads");
+    cmd->add_option("--peers-dir", o->peers_dir, "folder with the peer drivers (default bench/peers)");
+    cmd->callback([o, &action] { action = [o] { return run_bench(*o); }; });
+}
+
+}  // namespace mr::app

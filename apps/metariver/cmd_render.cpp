@@ -1,0 +1,359 @@
+// `metariver render`: headless rendering of a scene to a numbered PNG sequence or an
+// MP4 (raw RGB frames piped to the ffmpeg program). OpenGL 4.5 core on EGL's
+// surfaceless platform (no display), the same renderer as the viewer. Every option is
+// checked before anything is written; a failure part-way removes what this run wrote.
+#include "commands.h"
+
+#include <metariver/io.h>
+#include <metariver/render.h>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+#include <regex>
+#include <unistd.h>
+#include <vector>
+
+namespace mr::app {
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+struct RenderOptions {
+    SceneOptions scene;
+    long long frames = 60;
+    std::string size = "1280x720";
+    std::string out = "out/render";
+    std::string camera;
+    double orbit_deg = 0.0;
+    long long warmup = 0;
+    long long steps = 1;
+    double dt = 1.0 / 60.0;
+    int fps = 30;
+    std::string water = "realistic";
+    bool particles = false;
+    std::optional<int> bvh_level;
+    std::string texture;
+    std::string stats;
+    bool progress = true;
+};
+
+constexpr long long kMaxFrames = 1'000'000;
+constexpr int kMinSide = 16, kMaxSide = 8192;
+
+int fail(int code, const std::string& message) {
+    fmt::print(stderr, "metariver render: {}\n", message);
+    return code;
+}
+
+double ms_since(Clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+bool ends_with_mp4(const std::string& s) {
+    if (s.size() < 4) return false;
+    std::string tail = s.substr(s.size() - 4);
+    std::transform(tail.begin(), tail.end(), tail.begin(), [](unsigned char c) { return std::tolower(c); });
+    return tail == ".mp4";
+}
+
+/// The ffmpeg program on PATH, or empty.
+std::string find_program(const std::string& name) {
+    const char* path = std::getenv("PATH");
+    if (!path) return {};
+    std::string p = path;
+    size_t start = 0;
+    while (start <= p.size()) {
+        const size_t end = std::min(p.find(':', start), p.size());
+        const std::string dir = p.substr(start, end - start);
+        if (!dir.empty()) {
+            const std::string candidate = dir + "/" + name;
+            if (access(candidate.c_str(), X_OK) == 0 && !fs::is_directory(candidate)) return candidate;
+        }
+        start = end + 1;
+    }
+    return {};
+}
+
+std::string shell_quote(const std::string& s) {
+    std::string q = "'";
+    for (char c : s) q += (c == '\'') ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+}
+
+/// True when a file can be created in `dir` (probed by creating one: permission bits
+/// say nothing for root, or on a read-only mount).
+bool folder_writable(const fs::path& dir) {
+    const fs::path probe = dir / fmt::format(".metariver-probe-{}", getpid());
+    FILE* f = std::fopen(probe.c_str(), "wb");
+    if (!f) return false;
+    std::fclose(f);
+    std::error_code ec;
+    fs::remove(probe, ec);
+    return true;
+}
+
+/// Draws "[#####.....] 12/60 frames, 3.1 fps" on one terminal line.
+void print_progress(long long done, long long total, double elapsed_s) {
+    constexpr int kWidth = 30;
+    const int filled = static_cast<int>(kWidth * done / std::max(total, 1LL));
+    const double fps = elapsed_s > 0.0 ? static_cast<double>(done) / elapsed_s : 0.0;
+    const double eta = fps > 0.0 ? static_cast<double>(total - done) / fps : 0.0;
+    fmt::print(stderr, "\r[{}{}] {}/{} frames, {:.1f} fps, {:.0f} s left   ", std::string(static_cast<size_t>(filled), '#'),
+               std::string(static_cast<size_t>(kWidth - filled), '.'), done, total, fps, eta);
+    std::fflush(stderr);
+}
+
+int render(const RenderOptions& o) {
+    // ---- every input is checked before anything is written ----
+    if (o.frames < 1 || o.frames > kMaxFrames)
+        return fail(kExitBadInput, fmt::format("--frames: must be in [1, {}] (got {})", kMaxFrames, o.frames));
+    if (o.warmup < 0 || o.warmup > kMaxFrames)
+        return fail(kExitBadInput, fmt::format("--warmup: must be in [0, {}] (got {})", kMaxFrames, o.warmup));
+    if (o.steps < 1 || o.steps > 1000)
+        return fail(kExitBadInput, fmt::format("--steps: must be in [1, 1000] (got {})", o.steps));
+    if (!std::isfinite(o.dt) || o.dt <= 0.0 || o.dt > 1.0)
+        return fail(kExitBadInput, fmt::format("--dt: must be in (0, 1] seconds (got {})", o.dt));
+    if (o.fps < 1 || o.fps > 240) return fail(kExitBadInput, fmt::format("--fps: must be in [1, 240] (got {})", o.fps));
+    if (!std::isfinite(o.orbit_deg) || std::abs(o.orbit_deg) > 36000.0)
+        return fail(kExitBadInput, fmt::format("--orbit: must be in [-36000, 36000] degrees (got {})", o.orbit_deg));
+    int width = 0, height = 0;
+    {
+        std::smatch m;
+        if (!std::regex_match(o.size, m, std::regex("([0-9]{1,6})x([0-9]{1,6})")))
+            return fail(kExitBadInput, fmt::format("--size: expected WIDTHxHEIGHT, e.g. 1280x720 (got '{}')", o.size));
+        width = std::stoi(m[1].str());
+        height = std::stoi(m[2].str());
+        if (width < kMinSide || width > kMaxSide || height < kMinSide || height > kMaxSide)
+            return fail(kExitBadInput, fmt::format("--size: width and height must be in [{}, {}] pixels (got '{}')",
+                                                   kMinSide, kMaxSide, o.size));
+    }
+    render::WaterShading shading = render::WaterShading::Realistic;
+    if (o.water == "gouraud") shading = render::WaterShading::Gouraud;
+    else if (o.water != "realistic")
+        return fail(kExitBadInput, fmt::format("--water: must be realistic or gouraud (got '{}')", o.water));
+    if (!o.camera.empty()) {
+        render::Camera probe;
+        if (auto s = render::parse_camera(o.camera, probe); !s) return fail(kExitBadInput, s.error().message);
+    }
+    std::optional<render::Image> texture;
+    if (!o.texture.empty()) {
+        auto img = render::load_image(o.texture, 4);
+        if (!img) return fail(kExitBadInput, "--texture " + img.error().message);
+        texture = std::move(img.value());
+    }
+    auto def = o.scene.resolve();
+    if (!def) return fail(kExitBadInput, def.error().message);
+
+    const bool mp4 = ends_with_mp4(o.out);
+    std::string ffmpeg;
+    if (mp4) {
+        ffmpeg = find_program("ffmpeg");
+        if (ffmpeg.empty())
+            return fail(kExitBadInput, fmt::format("--out {}: writing MP4 needs the ffmpeg program, which is not on PATH "
+                                                   "(install it: apt-get install ffmpeg; or give a folder for PNG frames)", o.out));
+        const fs::path parent = fs::path(o.out).parent_path().empty() ? fs::path(".") : fs::path(o.out).parent_path();
+        std::error_code ec;
+        if (!fs::is_directory(parent, ec))
+            return fail(kExitBadInput, fmt::format("--out {}: folder '{}' does not exist", o.out, parent.string()));
+        if (fs::is_directory(o.out, ec)) return fail(kExitBadInput, fmt::format("--out {}: is a folder", o.out));
+        if (!folder_writable(parent))
+            return fail(kExitBadInput, fmt::format("--out {}: folder '{}' is not writable", o.out, parent.string()));
+    } else {
+        std::error_code ec;
+        if (fs::exists(o.out, ec) && !fs::is_directory(o.out, ec))
+            return fail(kExitBadInput, fmt::format("--out {}: exists and is not a folder (give a folder, or a .mp4 file)", o.out));
+    }
+    if (!o.stats.empty()) {
+        const fs::path parent = fs::path(o.stats).parent_path().empty() ? fs::path(".") : fs::path(o.stats).parent_path();
+        std::error_code ec;
+        if (!fs::is_directory(parent, ec))
+            return fail(kExitBadInput, fmt::format("--stats {}: folder '{}' does not exist", o.stats, parent.string()));
+    }
+
+    auto sim_result = Simulation::create(def.value());
+    if (!sim_result) return fail(kExitBadInput, sim_result.error().message);
+    std::unique_ptr<Simulation> sim = std::move(sim_result.value());
+
+    auto context = render::HeadlessContext::create();
+    if (!context) return fail(kExitFailure, context.error().message);
+    auto renderer_result = render::Renderer::create();
+    if (!renderer_result) return fail(kExitFailure, renderer_result.error().message);
+    render::Renderer& renderer = *renderer_result.value();
+
+    // ---- outputs: created now; everything is recorded so a failure can take it back ----
+    bool created_dir = false;
+    std::vector<std::string> written;
+    std::string mp4_tmp;
+    FILE* pipe = nullptr;
+    auto cleanup = [&] {
+        std::error_code ec;
+        if (pipe) {
+            pclose(pipe);
+            pipe = nullptr;
+        }
+        for (const auto& f : written) fs::remove(f, ec);
+        if (!mp4_tmp.empty()) fs::remove(mp4_tmp, ec);
+        if (created_dir) fs::remove_all(o.out, ec);
+    };
+    if (mp4) {
+        const fs::path out(o.out);
+        mp4_tmp = (out.parent_path() / fmt::format(".{}.partial-{}.mp4", out.filename().string(), getpid())).string();
+        // Odd sizes are padded to even ones (yuv420p needs them); -nostdin keeps ffmpeg
+        // off the terminal; its errors go to our stderr.
+        const std::string cmd = fmt::format(
+            "{} -nostdin -hide_banner -loglevel error -y -f rawvideo -pix_fmt rgb24 -s {}x{} -r {} -i - "
+            "-vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2' -c:v libx264 -preset veryfast -crf 20 -pix_fmt yuv420p -f mp4 {}",
+            shell_quote(ffmpeg), width, height, o.fps, shell_quote(mp4_tmp));
+        std::signal(SIGPIPE, SIG_IGN);  // a dying ffmpeg is reported by fwrite/pclose, not a signal
+        pipe = popen(cmd.c_str(), "w");
+        if (!pipe) return fail(kExitFailure, fmt::format("--out {}: cannot start ffmpeg", o.out));
+    } else {
+        std::error_code ec;
+        if (!fs::exists(o.out, ec)) {
+            if (!fs::create_directories(o.out, ec) || ec)
+                return fail(kExitBadInput, fmt::format("--out {}: cannot create folder: {}", o.out, ec ? ec.message() : "unknown error"));
+            created_dir = true;
+        }
+        if (!folder_writable(o.out)) {
+            cleanup();
+            return fail(kExitBadInput, fmt::format("--out {}: folder is not writable", o.out));
+        }
+    }
+
+    if (texture) renderer.set_terrain_texture(texture->pixels, texture->width, texture->height);
+    render::Camera camera = render::frame_terrain(sim->terrain());
+    if (!o.camera.empty()) (void)render::parse_camera(o.camera, camera);  // checked above
+    render::RenderSettings settings;
+    settings.shading = shading;
+    settings.particles = o.particles;
+    if (o.bvh_level) {
+        settings.bvh = true;
+        settings.bvh_level = *o.bvh_level;
+    }
+
+    const float dt = static_cast<float>(o.dt);
+    for (long long i = 0; i < o.warmup; ++i) sim->step(dt);
+    renderer.set_scene(*sim);
+
+    const bool show_progress = o.progress && isatty(STDERR_FILENO) && o.frames >= 10;
+    const int digits = std::max(5, static_cast<int>(std::to_string(o.frames - 1).size()));
+    std::vector<double> sim_ms, render_ms, write_ms;
+    std::vector<uint8_t> rgb;
+    const float yaw0 = camera.yaw_deg;
+    const auto t_start = Clock::now();
+    for (long long f = 0; f < o.frames; ++f) {
+        auto t0 = Clock::now();
+        for (long long s = 0; s < o.steps; ++s) sim->step(dt);
+        sim_ms.push_back(ms_since(t0));
+
+        t0 = Clock::now();
+        camera.yaw_deg = yaw0 + static_cast<float>(o.orbit_deg * static_cast<double>(f) / static_cast<double>(o.frames));
+        render::fit_clip_planes(camera, sim->terrain());
+        renderer.update(*sim);
+        renderer.draw(camera, width, height, settings);
+        renderer.read_rgb(rgb);  // waits for the GPU: the time covers the whole frame
+        render_ms.push_back(ms_since(t0));
+
+        t0 = Clock::now();
+        if (mp4) {
+            if (std::fwrite(rgb.data(), 1, rgb.size(), pipe) != rgb.size()) {
+                cleanup();
+                if (show_progress) fmt::print(stderr, "\n");
+                return fail(kExitFailure, fmt::format("--out {}: ffmpeg stopped accepting frames", o.out));
+            }
+        } else {
+            const std::string path = (fs::path(o.out) / fmt::format("frame_{:0{}}.png", f, digits)).string();
+            if (auto s = render::write_png(path, rgb, width, height, 3); !s) {
+                cleanup();
+                if (show_progress) fmt::print(stderr, "\n");
+                return fail(kExitFailure, s.error().message);
+            }
+            written.push_back(path);
+        }
+        write_ms.push_back(ms_since(t0));
+        if (show_progress) print_progress(f + 1, o.frames, ms_since(t_start) / 1000.0);
+    }
+    if (show_progress) fmt::print(stderr, "\n");
+    if (mp4) {
+        const int status = pclose(pipe);
+        pipe = nullptr;
+        std::error_code ec;
+        if (status != 0 || !fs::exists(mp4_tmp, ec)) {
+            cleanup();
+            return fail(kExitFailure, fmt::format("--out {}: ffmpeg failed (exit status {})", o.out, status));
+        }
+        fs::rename(mp4_tmp, o.out, ec);
+        if (ec) {
+            cleanup();
+            return fail(kExitFailure, fmt::format("--out {}: cannot move the video into place: {}", o.out, ec.message()));
+        }
+        mp4_tmp.clear();
+    }
+    const double total_s = ms_since(t_start) / 1000.0;
+    const Percentiles pr = percentiles(render_ms), ps = percentiles(sim_ms), pw = percentiles(write_ms);
+    if (!o.stats.empty()) {
+        auto stage = [](const Percentiles& p) {
+            return nlohmann::json{{"median", p.median}, {"p95", p.p95}, {"mean", p.mean}, {"max", p.max}};
+        };
+        nlohmann::json j;
+        j["scene"] = sim->def().name;
+        j["frames"] = o.frames;
+        j["size"] = {width, height};
+        j["gl"] = renderer.gl_description();
+        j["water_triangles"] = renderer.stats().water_triangles;
+        j["terrain_triangles"] = renderer.stats().terrain_triangles;
+        j["gl_objects_created"] = renderer.stats().gl_objects_created;
+        j["buffer_reallocations"] = renderer.stats().buffer_reallocations;
+        j["stage_ms"] = {{"simulate", stage(ps)}, {"render", stage(pr)}, {"write", stage(pw)}};
+        j["total_s"] = total_s;
+        if (auto s = write_file_atomic(o.stats, j.dump(2) + "\n"); !s) {
+            cleanup();
+            return fail(kExitFailure, s.error().message);
+        }
+    }
+    fmt::print("{}: {} frames {}x{} in {:.1f} s; per frame median: render {:.2f} ms (draw + read back), "
+               "simulate {:.2f} ms, write {:.2f} ms; water {} triangles; {}\n",
+               sim->def().name, o.frames, width, height, total_s, pr.median, ps.median, pw.median,
+               renderer.stats().water_triangles, renderer.gl_description());
+    if (mp4) fmt::print("wrote {}\n", o.out);
+    else fmt::print("wrote {} PNG frames to {} (frame_{:0{}}.png .. frame_{:0{}}.png)\n", written.size(), o.out, 0, digits,
+                    o.frames - 1, digits);
+    if (!o.stats.empty()) fmt::print("wrote stats to {}\n", o.stats);
+    return kExitOk;
+}
+
+}  // namespace
+
+void register_render(CLI::App& app, std::function<int()>& action) {
+    auto opts = std::make_shared<RenderOptions>();
+    CLI::App* cmd = app.add_subcommand("render", "render a scene headless (EGL, no display) to PNG frames or an MP4");
+    opts->scene.add_to(*cmd);
+    cmd->add_option("--frames", opts->frames, "images to render (default 60)");
+    cmd->add_option("--size", opts->size, "image size WIDTHxHEIGHT, each in [16, 8192] (default 1280x720)");
+    cmd->add_option("--out", opts->out, "folder for frame_NNNNN.png, or a FILE.mp4 (needs ffmpeg) (default out/render)");
+    cmd->add_option("--camera", opts->camera, "orbit camera YAW,PITCH,DISTANCE[,TX,TY,TZ] in degrees and metres (default: frames the terrain)");
+    cmd->add_option("--orbit", opts->orbit_deg, "degrees the camera turns around the target over the sequence (default 0)");
+    cmd->add_option("--warmup", opts->warmup, "simulation frames before the first image (default 0)");
+    cmd->add_option("--steps", opts->steps, "simulation frames per image (default 1)");
+    cmd->add_option("--dt", opts->dt, "simulation frame time in seconds (default 1/60)");
+    cmd->add_option("--fps", opts->fps, "MP4 frame rate (default 30)");
+    cmd->add_option("--water", opts->water, "water shading: realistic or gouraud (the paper's look) (default realistic)");
+    cmd->add_flag("--particles", opts->particles, "debug: draw the particles as spheres");
+    cmd->add_option("--bvh", opts->bvh_level, "debug: draw the AABB tree's boxes at this depth (-1: the leaves)");
+    cmd->add_option("--texture", opts->texture, "image draped over the terrain (PNG/JPEG)");
+    cmd->add_option("--stats", opts->stats, "write render timings as JSON to this file");
+    cmd->add_flag("!--no-progress", opts->progress, "no progress bar");
+    cmd->callback([opts, &action] { action = [opts] { return render(*opts); }; });
+}
+
+}  // namespace mr::app

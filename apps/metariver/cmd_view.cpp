@@ -1,0 +1,603 @@
+// `metariver view`: the interactive viewer. A GLFW window (OpenGL 4.5 core) with Dear
+// ImGui: orbit / pan / zoom, pause / step / reset, every scene parameter editable live
+// (the Simulation is rebuilt from the edited SceneDef; the heightmap is reloaded only
+// when the terrain changed), click on the terrain to pour water, drop a heightmap file
+// on the window to load it, a screenshot key, and a stats overlay. The simulation runs
+// at a fixed time step, decoupled from the display rate.
+#include "commands.h"
+
+#include <metariver/io.h>
+#include <metariver/render.h>
+
+// libepoxy's GL header first; GLFW must not pull in its own.
+#include <epoxy/gl.h>
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+#include <backends/imgui_impl_glfw.h>
+#include <backends/imgui_impl_opengl3.h>
+#include <fmt/format.h>
+#include <imgui.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cstdlib>
+#include <deque>
+#include <filesystem>
+#include <memory>
+#include <regex>
+#include <vector>
+
+namespace mr::app {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ViewOptions {
+    SceneOptions scene;
+    std::string size = "1280x720";
+    std::string texture;
+    std::string screenshot_dir = ".";
+    std::string screenshot;      ///< written when the viewer closes (for scripts)
+    long long frames = 0;        ///< close after this many display frames (0: when the window closes)
+    double dt = 1.0 / 60.0;      ///< fixed simulation step, seconds
+    bool vsync = true;
+    bool paused = false;
+    bool particles = false;
+    std::optional<int> bvh_level;
+};
+
+int fail(int code, const std::string& message) {
+    fmt::print(stderr, "metariver view: {}\n", message);
+    return code;
+}
+
+/// State shared with GLFW's callbacks (through the window's user pointer).
+struct Input {
+    float scroll = 0.0f;
+    std::vector<std::string> dropped;
+};
+
+/// Key presses (edges) from GLFW's key state; Dear ImGui 1.86 names only a few keys.
+class KeyEdges {
+public:
+    bool pressed(GLFWwindow* w, int key) {
+        const bool down = glfwGetKey(w, key) == GLFW_PRESS;
+        const bool was = down_[static_cast<size_t>(key)];
+        down_[static_cast<size_t>(key)] = down;
+        return down && !was;
+    }
+
+private:
+    std::array<bool, GLFW_KEY_LAST + 1> down_{};
+};
+
+/// What decides whether a scene edit needs the terrain (and tree) rebuilt and uploaded.
+std::string terrain_key(const SceneDef& d) {
+    return fmt::format("{}|{}|{}|{}|{}|{}|{}|{}|{}", to_string(d.source.kind), d.source.heightmap, d.source.width,
+                       d.source.height, d.source.seed, d.terrain.area_scale, d.terrain.height_scale,
+                       d.terrain.paper_row_orientation, d.collision.leaf_triangles);
+}
+
+template <class E, size_t N>
+bool enum_combo(const char* label, E& value, const std::array<E, N>& values) {
+    bool changed = false;
+    const std::string current(to_string(value));
+    if (ImGui::BeginCombo(label, current.c_str())) {
+        for (E v : values) {
+            const std::string name(to_string(v));
+            if (ImGui::Selectable(name.c_str(), v == value) && v != value) {
+                value = v;
+                changed = true;
+            }
+        }
+        ImGui::EndCombo();
+    }
+    return changed;
+}
+
+/// Widgets that report an edit once it is finished (slider released, text entered), so
+/// dragging a value does not rebuild the Simulation every frame.
+bool drag_float(const char* label, float& v, float speed, float lo, float hi, const char* format = "%.3f") {
+    ImGui::DragFloat(label, &v, speed, lo, hi, format, ImGuiSliderFlags_AlwaysClamp);
+    return ImGui::IsItemDeactivatedAfterEdit();
+}
+bool drag_int(const char* label, int& v, float speed, int lo, int hi) {
+    ImGui::DragInt(label, &v, speed, lo, hi, "%d", ImGuiSliderFlags_AlwaysClamp);
+    return ImGui::IsItemDeactivatedAfterEdit();
+}
+bool drag_vec3(const char* label, Vec3& v, float speed, float lo, float hi) {
+    ImGui::DragFloat3(label, &v.x, speed, lo, hi, "%.2f", ImGuiSliderFlags_AlwaysClamp);
+    return ImGui::IsItemDeactivatedAfterEdit();
+}
+bool drag_u32(const char* label, uint32_t& v) {
+    int i = static_cast<int>(std::min<uint32_t>(v, 1'000'000'000u));
+    ImGui::DragInt(label, &i, 1.0f, 0, 1'000'000'000, "%d", ImGuiSliderFlags_AlwaysClamp);
+    v = static_cast<uint32_t>(i);
+    return ImGui::IsItemDeactivatedAfterEdit();
+}
+
+/// The scene editor: every SceneDef field. Returns true when an edit was committed.
+bool scene_editor(SceneDef& d) {
+    bool commit = false;
+    if (ImGui::CollapsingHeader("Scene", ImGuiTreeNodeFlags_DefaultOpen)) {
+        commit |= enum_combo("solver", d.solver, std::array{SolverKind::Springs, SolverKind::Bullet});
+        commit |= drag_u32("spawn seed", d.seed);
+        commit |= ImGui::Checkbox("build surface", &d.surface);
+    }
+    if (ImGui::CollapsingHeader("Terrain")) {
+        commit |= enum_combo("source", d.source.kind,
+                             std::array{TerrainSource::Valley, TerrainSource::Strict, TerrainSource::Bowl,
+                                        TerrainSource::Flat, TerrainSource::File});
+        if (d.source.kind == TerrainSource::File) {
+            ImGui::TextWrapped("heightmap: %s", d.source.heightmap.empty() ? "(drop a PNG on the window)"
+                                                                            : d.source.heightmap.c_str());
+        } else {
+            commit |= drag_int("width", d.source.width, 1.0f, 2, 1025);
+            commit |= drag_int("height", d.source.height, 1.0f, 2, 1025);
+            commit |= drag_u32("terrain seed", d.source.seed);
+        }
+        commit |= drag_float("area scale (m)", d.terrain.area_scale, 0.01f, 0.01f, 100.0f);
+        commit |= drag_float("height scale (m)", d.terrain.height_scale, 0.1f, 0.01f, 1000.0f);
+        commit |= ImGui::Checkbox("paper row orientation", &d.terrain.paper_row_orientation);
+    }
+    if (ImGui::CollapsingHeader("Particles / spawn", ImGuiTreeNodeFlags_DefaultOpen)) {
+        commit |= drag_int("count", d.spawn.count, 5.0f, 1, 200000);
+        commit |= ImGui::Checkbox("auto spawn centre", &d.spawn.auto_center);
+        if (d.spawn.auto_center) commit |= drag_float("auto height (m)", d.spawn.auto_height, 0.05f, 0.0f, 100.0f);
+        else commit |= drag_vec3("spawn centre (m)", d.spawn.center, 0.1f, -1e4f, 1e4f);
+        commit |= drag_vec3("half extent (m)", d.spawn.half_extent, 0.05f, 0.0f, 1e3f);
+        commit |= drag_int("interval (frames)", d.spawn.interval, 0.2f, 0, 10000);
+        commit |= drag_vec3("initial velocity", d.spawn.initial_velocity, 0.05f, -100.0f, 100.0f);
+    }
+    if (ImGui::CollapsingHeader("Forces and springs", ImGuiTreeNodeFlags_DefaultOpen)) {
+        commit |= drag_float("gravity (m/s^2)", d.integrator.gravity, 0.05f, -100.0f, 100.0f);
+        commit |= drag_float("stiffness k", d.springs.stiffness, 0.05f, 0.0f, 1000.0f);
+        commit |= drag_float("rest length r (m)", d.springs.min_distance, 0.01f, 0.0f, 100.0f);
+        commit |= drag_float("max distance (m)", d.springs.max_distance, 0.01f, 0.0f, 100.0f);
+        commit |= enum_combo("spring mode", d.springs.mode, std::array{SpringMode::Pairs, SpringMode::Grid});
+    }
+    if (ImGui::CollapsingHeader("Collision and integrator")) {
+        commit |= enum_combo("collision", d.collision.mode,
+                             std::array{CollisionMode::Paper, CollisionMode::Robust, CollisionMode::None});
+        commit |= enum_combo("query", d.collision.query, std::array{CollisionQuery::Tree, CollisionQuery::Heightfield});
+        commit |= drag_float("damping", d.collision.damping, 0.005f, 0.0f, 1.0f);
+        commit |= drag_float("offset (m)", d.collision.offset, 0.005f, 0.0f, 10.0f);
+        commit |= drag_float("particle radius (m)", d.collision.radius, 0.01f, 0.0f, 100.0f);
+        commit |= drag_int("tree leaf triangles", d.collision.leaf_triangles, 0.2f, 2, 4096);
+        commit |= drag_float("fixed dt (s, 0: frame)", d.integrator.fixed_dt, 0.001f, 0.0f, 1.0f, "%.4f");
+        commit |= drag_int("substeps", d.integrator.substeps, 0.2f, 1, 1000);
+    }
+    if (d.solver == SolverKind::Bullet && ImGui::CollapsingHeader("Bullet")) {
+        commit |= drag_float("sphere radius (m)", d.bullet.sphere_radius, 0.01f, 0.01f, 100.0f);
+        commit |= drag_float("friction", d.bullet.friction, 0.01f, 0.0f, 100.0f);
+        commit |= drag_float("restitution", d.bullet.restitution, 0.01f, 0.0f, 1.0f);
+        commit |= ImGui::Checkbox("sphere-sphere collisions", &d.bullet.particle_collisions);
+        commit |= ImGui::Checkbox("continuous collision (CCD)", &d.bullet.ccd);
+        commit |= ImGui::Checkbox("springs on spheres", &d.bullet.springs);
+    }
+    if (ImGui::CollapsingHeader("Field and surface", ImGuiTreeNodeFlags_DefaultOpen)) {
+        commit |= enum_combo("kernel", d.field.kernel,
+                             std::array{FieldKernel::InverseSquare, FieldKernel::RadiusOverR, FieldKernel::Poly6});
+        commit |= enum_combo("bounds", d.field.bounds, std::array{FieldBounds::Particles, FieldBounds::Terrain});
+        commit |= drag_float("radius (m)", d.field.radius, 0.01f, 0.01f, 100.0f);
+        commit |= drag_float("resolution (cells/m)", d.field.resolution, 0.01f, 0.05f, 64.0f);
+        commit |= drag_float("bounds offset (m)", d.field.bounds_offset, 0.05f, 0.0f, 100.0f);
+        commit |= drag_float("threshold", d.field.threshold, 0.001f, 1e-6f, 1e3f, "%.4f");
+    }
+    return commit;
+}
+
+std::string next_screenshot_path(const std::string& dir) {
+    for (int i = 0; i < 100000; ++i) {
+        const fs::path p = fs::path(dir) / fmt::format("metariver_screenshot_{:03}.png", i);
+        std::error_code ec;
+        if (!fs::exists(p, ec)) return p.string();
+    }
+    return (fs::path(dir) / "metariver_screenshot.png").string();
+}
+
+/// Reads the window's back buffer (scene and UI) and writes it as a PNG.
+Status screenshot(const std::string& path, int width, int height) {
+    std::vector<uint8_t> rgb(static_cast<size_t>(width) * height * 3);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+    glReadBuffer(GL_BACK);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glReadPixels(0, 0, width, height, GL_RGB, GL_UNSIGNED_BYTE, rgb.data());
+    const size_t row = static_cast<size_t>(width) * 3;
+    for (int y = 0; y < height / 2; ++y)
+        std::swap_ranges(rgb.begin() + static_cast<long>(y * row), rgb.begin() + static_cast<long>((y + 1) * row),
+                         rgb.begin() + static_cast<long>((height - 1 - y) * row));
+    return render::write_png(path, rgb, width, height, 3);
+}
+
+int view(const ViewOptions& o) {
+    const char* display = std::getenv("DISPLAY");
+    const char* wayland = std::getenv("WAYLAND_DISPLAY");
+    if ((!display || !*display) && (!wayland || !*wayland))
+        return fail(kExitBadInput, "no display (DISPLAY and WAYLAND_DISPLAY are not set); render headless instead: "
+                                   "metariver render --out out/render (PNG frames) or --out river.mp4");
+    int width = 0, height = 0;
+    {
+        std::smatch m;
+        if (!std::regex_match(o.size, m, std::regex("([0-9]{1,5})x([0-9]{1,5})")) ||
+            (width = std::stoi(m[1].str())) < 64 || width > 8192 || (height = std::stoi(m[2].str())) < 64 || height > 8192)
+            return fail(kExitBadInput, fmt::format("--size: expected WIDTHxHEIGHT with each in [64, 8192] (got '{}')", o.size));
+    }
+    if (!std::isfinite(o.dt) || o.dt <= 0.0 || o.dt > 1.0)
+        return fail(kExitBadInput, fmt::format("--dt: must be in (0, 1] seconds (got {})", o.dt));
+    if (o.frames < 0) return fail(kExitBadInput, fmt::format("--frames: must be >= 0 (got {})", o.frames));
+    std::error_code ec;
+    if (!fs::is_directory(o.screenshot_dir, ec))
+        return fail(kExitBadInput, fmt::format("--screenshot-dir {}: not a folder", o.screenshot_dir));
+    std::optional<render::Image> texture;
+    if (!o.texture.empty()) {
+        auto img = render::load_image(o.texture, 4);
+        if (!img) return fail(kExitBadInput, "--texture " + img.error().message);
+        texture = std::move(img.value());
+    }
+    auto resolved = o.scene.resolve();
+    if (!resolved) return fail(kExitBadInput, resolved.error().message);
+    SceneDef def = resolved.value();  // the scene as the user describes it (auto centre kept)
+    auto map_result = load_scene_heightmap(def);
+    if (!map_result) return fail(kExitBadInput, map_result.error().message);
+    Heightmap map = std::move(map_result.value());
+    auto sim_result = Simulation::create(def, map);
+    if (!sim_result) return fail(kExitBadInput, sim_result.error().message);
+    std::unique_ptr<Simulation> sim = std::move(sim_result.value());
+
+    static std::string glfw_error;
+    glfwSetErrorCallback([](int, const char* msg) { glfw_error = msg ? msg : "unknown GLFW error"; });
+    if (!glfwInit())
+        return fail(kExitBadInput, fmt::format("cannot open the display ({}); render headless instead: metariver render",
+                                               glfw_error));
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 4);
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 5);
+    glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+    glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+    const std::string title = fmt::format("metariver - {}", def.name);
+    GLFWwindow* window = glfwCreateWindow(width, height, title.c_str(), nullptr, nullptr);
+    if (!window) {
+        glfwTerminate();
+        return fail(kExitBadInput, fmt::format("cannot create an OpenGL 4.5 core window ({}); render headless instead: "
+                                               "metariver render", glfw_error));
+    }
+    glfwMakeContextCurrent(window);
+    glfwSwapInterval(o.vsync ? 1 : 0);
+
+    Input input;
+    glfwSetWindowUserPointer(window, &input);
+    // Ours first: ImGui's GLFW backend chains to callbacks installed before it.
+    glfwSetScrollCallback(window, [](GLFWwindow* w, double, double dy) {
+        static_cast<Input*>(glfwGetWindowUserPointer(w))->scroll += static_cast<float>(dy);
+    });
+    glfwSetDropCallback(window, [](GLFWwindow* w, int count, const char** paths) {
+        auto* in = static_cast<Input*>(glfwGetWindowUserPointer(w));
+        for (int i = 0; i < count; ++i) in->dropped.emplace_back(paths[i]);
+    });
+
+    IMGUI_CHECKVERSION();
+    ImGui::CreateContext();
+    ImGuiIO& io = ImGui::GetIO();
+    io.IniFilename = nullptr;  // no imgui.ini next to the user's files
+    ImGui::StyleColorsDark();
+    ImGui::GetStyle().WindowRounding = 4.0f;
+    ImGui_ImplGlfw_InitForOpenGL(window, true);
+    ImGui_ImplOpenGL3_Init("#version 450 core");
+
+    int code = kExitOk;
+    {
+        auto renderer_result = render::Renderer::create();
+        if (!renderer_result) {
+            code = fail(kExitFailure, renderer_result.error().message);
+        } else {
+            render::Renderer& renderer = *renderer_result.value();
+            if (texture) renderer.set_terrain_texture(texture->pixels, texture->width, texture->height);
+            renderer.set_scene(*sim);
+            render::Camera camera = render::frame_terrain(sim->terrain());
+            render::RenderSettings settings;
+            settings.particles = o.particles;
+            if (o.bvh_level) {
+                settings.bvh = true;
+                settings.bvh_level = *o.bvh_level;
+            }
+
+            SceneDef edit = def;
+            std::string status, error;
+            bool paused = o.paused, step_once = false;
+            float sim_dt = static_cast<float>(o.dt);
+            int max_steps = 4;          // per display frame; beyond that the sim runs slow
+            int pour_count = 20;
+            float pour_height = 1.0f;
+            double accumulator = 0.0;
+            uint64_t steps_total = 0, steps_dropped = 0;
+            int steps_this_frame = 0;
+            bool want_screenshot = false;
+            KeyEdges keys;
+            std::deque<double> recent_ms;   // for the fps readout
+            std::vector<double> frame_ms;   // every frame, for the summary
+            double press_x = 0, press_y = 0;
+            bool left_down = false, dragged = false;
+            double last_x = 0, last_y = 0;
+
+            // Rebuilds the Simulation from `next` (terrain and heightmap only if they changed).
+            auto apply = [&](const SceneDef& next) -> bool {
+                if (auto v = validate(next); !v) {
+                    error = v.error().message;
+                    return false;
+                }
+                const bool terrain_changed = terrain_key(next) != terrain_key(def);
+                Heightmap next_map;
+                if (terrain_changed) {
+                    auto m = load_scene_heightmap(next);
+                    if (!m) {
+                        error = m.error().message;
+                        return false;
+                    }
+                    next_map = std::move(m.value());
+                }
+                auto s = Simulation::create(next, terrain_changed ? next_map : map);
+                if (!s) {
+                    error = s.error().message;
+                    return false;
+                }
+                if (terrain_changed) map = std::move(next_map);
+                sim = std::move(s.value());
+                renderer.set_scene(*sim, terrain_changed);
+                if (terrain_changed) camera = render::frame_terrain(sim->terrain());
+                def = next;
+                error.clear();
+                accumulator = 0.0;
+                return true;
+            };
+
+            auto t_last = std::chrono::steady_clock::now();
+            for (long long frame = 0; !glfwWindowShouldClose(window); ++frame) {
+                glfwPollEvents();
+                const auto now = std::chrono::steady_clock::now();
+                const double elapsed = std::chrono::duration<double>(now - t_last).count();
+                t_last = now;
+                if (frame > 0) {
+                    frame_ms.push_back(elapsed * 1000.0);
+                    recent_ms.push_back(elapsed * 1000.0);
+                    if (recent_ms.size() > 60) recent_ms.pop_front();
+                }
+
+                // Fixed simulation step: run as many steps as the real time allows, at
+                // most max_steps per display frame (the rest is dropped, not queued).
+                steps_this_frame = 0;
+                if (!paused) {
+                    accumulator += std::min(elapsed, 0.25);
+                    while (accumulator >= sim_dt && steps_this_frame < max_steps) {
+                        sim->step(sim_dt);
+                        accumulator -= sim_dt;
+                        ++steps_this_frame;
+                    }
+                    if (accumulator >= sim_dt) {
+                        steps_dropped += static_cast<uint64_t>(accumulator / sim_dt);
+                        accumulator = std::fmod(accumulator, static_cast<double>(sim_dt));
+                    }
+                } else if (step_once) {
+                    sim->step(sim_dt);
+                    ++steps_this_frame;
+                }
+                step_once = false;
+                steps_total += static_cast<uint64_t>(steps_this_frame);
+
+                int fb_w = 0, fb_h = 0, win_w = 0, win_h = 0;
+                glfwGetFramebufferSize(window, &fb_w, &fb_h);
+                glfwGetWindowSize(window, &win_w, &win_h);
+
+                // ---- mouse: orbit (left drag), pan (right/middle drag), zoom (wheel), pour (click) ----
+                double mx = 0, my = 0;
+                glfwGetCursorPos(window, &mx, &my);
+                if (!io.WantCaptureMouse) {
+                    const bool left = glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS;
+                    const bool right = glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS ||
+                                       glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_MIDDLE) == GLFW_PRESS;
+                    const float dx = static_cast<float>(mx - last_x), dy = static_cast<float>(my - last_y);
+                    if (left && !left_down) {
+                        left_down = true;
+                        dragged = false;
+                        press_x = mx;
+                        press_y = my;
+                    } else if (left && left_down) {
+                        if (std::abs(mx - press_x) + std::abs(my - press_y) > 4.0) dragged = true;
+                        if (dragged) camera.orbit(-0.3f * dx, 0.3f * dy);
+                    } else if (!left && left_down) {
+                        left_down = false;
+                        if (!dragged && win_w > 0 && win_h > 0) {
+                            if (auto hit = render::pick_terrain(camera, static_cast<float>(mx), static_cast<float>(my),
+                                                                win_w, win_h, sim->terrain(), sim->bvh())) {
+                                sim->pour(*hit + Vec3(0.0f, pour_height, 0.0f), pour_count);
+                                status = fmt::format("poured {} at ({:.1f}, {:.1f}, {:.1f})", pour_count, hit->x, hit->y, hit->z);
+                            }
+                        }
+                    }
+                    if (right) camera.pan(dx / static_cast<float>(std::max(win_h, 1)), dy / static_cast<float>(std::max(win_h, 1)));
+                    if (input.scroll != 0.0f) camera.zoom(std::pow(0.88f, input.scroll));
+                } else {
+                    left_down = false;
+                }
+                input.scroll = 0.0f;
+                last_x = mx;
+                last_y = my;
+
+                // ---- keys ----
+                {
+                    // Poll every key each frame (edges stay right), act only when the UI
+                    // does not own the keyboard.
+                    const bool k = !io.WantCaptureKeyboard;
+                    const bool space = keys.pressed(window, GLFW_KEY_SPACE), n = keys.pressed(window, GLFW_KEY_N),
+                               right = keys.pressed(window, GLFW_KEY_RIGHT), r = keys.pressed(window, GLFW_KEY_R),
+                               f12 = keys.pressed(window, GLFW_KEY_F12), p = keys.pressed(window, GLFW_KEY_P),
+                               f = keys.pressed(window, GLFW_KEY_F), g = keys.pressed(window, GLFW_KEY_G),
+                               b = keys.pressed(window, GLFW_KEY_B), v = keys.pressed(window, GLFW_KEY_V),
+                               esc = keys.pressed(window, GLFW_KEY_ESCAPE);
+                    if (k && space) paused = !paused;
+                    if (k && (n || right)) {
+                        paused = true;
+                        step_once = true;
+                    }
+                    if (k && r) apply(def);
+                    if (k && (f12 || p)) want_screenshot = true;
+                    if (k && f) camera = render::frame_terrain(sim->terrain());
+                    if (k && g)
+                        settings.shading = settings.shading == render::WaterShading::Gouraud ? render::WaterShading::Realistic
+                                                                                            : render::WaterShading::Gouraud;
+                    if (k && b) settings.bvh = !settings.bvh;
+                    if (k && v) settings.particles = !settings.particles;
+                    if (k && esc) glfwSetWindowShouldClose(window, GLFW_TRUE);
+                }
+
+                // ---- a dropped heightmap replaces the terrain ----
+                if (!input.dropped.empty()) {
+                    SceneDef next = def;
+                    next.source.kind = TerrainSource::File;
+                    next.source.heightmap = input.dropped.back();
+                    input.dropped.clear();
+                    if (apply(next)) {
+                        edit = def;
+                        status = "loaded " + next.source.heightmap;
+                    }
+                }
+
+                // ---- UI ----
+                ImGui_ImplOpenGL3_NewFrame();
+                ImGui_ImplGlfw_NewFrame();
+                ImGui::NewFrame();
+                ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
+                ImGui::SetNextWindowSize(ImVec2(400, static_cast<float>(std::min(win_h - 16, 700))), ImGuiCond_FirstUseEver);
+                ImGui::Begin("metariver");
+                ImGui::PushItemWidth(-170.0f);  // room for the labels on the right
+                if (ImGui::Button(paused ? "Run (space)" : "Pause (space)")) paused = !paused;
+                ImGui::SameLine();
+                if (ImGui::Button("Step (N)")) {
+                    paused = true;
+                    step_once = true;
+                }
+                ImGui::SameLine();
+                if (ImGui::Button("Reset (R)")) apply(def);
+                ImGui::SameLine();
+                if (ImGui::Button("Shot (P)")) want_screenshot = true;
+                ImGui::DragFloat("sim step (s)", &sim_dt, 0.0005f, 0.001f, 0.1f, "%.4f", ImGuiSliderFlags_AlwaysClamp);
+                ImGui::DragInt("max steps/frame", &max_steps, 0.1f, 1, 64, "%d", ImGuiSliderFlags_AlwaysClamp);
+                ImGui::DragInt("pour count", &pour_count, 0.5f, 1, 10000, "%d", ImGuiSliderFlags_AlwaysClamp);
+                ImGui::DragFloat("pour height (m)", &pour_height, 0.05f, 0.0f, 50.0f, "%.2f", ImGuiSliderFlags_AlwaysClamp);
+                ImGui::TextDisabled("click terrain: pour | drag: orbit | right drag: pan | wheel: zoom");
+                ImGui::TextDisabled("drop a PNG heightmap on the window to load it");
+                if (ImGui::CollapsingHeader("View", ImGuiTreeNodeFlags_DefaultOpen)) {
+                    ImGui::Checkbox("terrain", &settings.terrain);
+                    ImGui::SameLine();
+                    ImGui::Checkbox("water", &settings.water);
+                    ImGui::SameLine();
+                    ImGui::Checkbox("sky", &settings.sky);
+                    ImGui::SameLine();
+                    ImGui::Checkbox("fog", &settings.fog);
+                    int shading = settings.shading == render::WaterShading::Gouraud ? 1 : 0;
+                    ImGui::RadioButton("realistic water", &shading, 0);
+                    ImGui::SameLine();
+                    ImGui::RadioButton("Gouraud (paper, G)", &shading, 1);
+                    settings.shading = shading ? render::WaterShading::Gouraud : render::WaterShading::Realistic;
+                    ImGui::Checkbox("particles (V)", &settings.particles);
+                    ImGui::SameLine();
+                    ImGui::DragFloat("##radius", &settings.particle_radius, 0.01f, 0.02f, 5.0f, "r %.2f m");
+                    ImGui::Checkbox("AABB tree (B)", &settings.bvh);
+                    ImGui::SameLine();
+                    ImGui::SliderInt("depth##bvh", &settings.bvh_level, -1, 16, settings.bvh_level < 0 ? "leaves" : "%d");
+                    ImGui::ColorEdit3("deep water", &settings.water_color.x, ImGuiColorEditFlags_NoInputs);
+                    ImGui::SameLine();
+                    ImGui::DragFloat("absorption", &settings.water_absorption, 0.005f, 0.0f, 5.0f);
+                    ImGui::DragFloat3("sun", &settings.sun_direction.x, 0.01f, -1.0f, 1.0f);
+                    if (texture) ImGui::Checkbox("terrain texture", &settings.terrain_texture);
+                }
+                if (scene_editor(edit)) {
+                    if (!apply(edit)) { /* keep the edit on screen with its error */ }
+                }
+                if (!error.empty()) ImGui::TextColored(ImVec4(1.0f, 0.4f, 0.3f, 1.0f), "%s", error.c_str());
+                if (!status.empty()) ImGui::TextWrapped("%s", status.c_str());
+                ImGui::PopItemWidth();
+                ImGui::End();
+
+                // Stats overlay.
+                double mean_ms = 0.0;
+                for (double v : recent_ms) mean_ms += v;
+                mean_ms = recent_ms.empty() ? 0.0 : mean_ms / static_cast<double>(recent_ms.size());
+                ImGui::SetNextWindowPos(ImVec2(static_cast<float>(win_w) - 8.0f, 8.0f), ImGuiCond_Always, ImVec2(1.0f, 0.0f));
+                ImGui::SetNextWindowBgAlpha(0.55f);
+                ImGui::Begin("stats", nullptr,
+                             ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoInputs |
+                                 ImGuiWindowFlags_NoFocusOnAppearing | ImGuiWindowFlags_NoNav);
+                const FrameTimings& t = sim->last_timings();
+                const SolverCounters& c = sim->counters();
+                const render::RenderStats& rs = renderer.stats();
+                ImGui::Text("%.1f fps  (%.2f ms/frame)%s", mean_ms > 0 ? 1000.0 / mean_ms : 0.0, mean_ms, paused ? "  PAUSED" : "");
+                ImGui::Text("sim frame %llu, %d step(s) this frame, dropped %llu", static_cast<unsigned long long>(sim->frame()),
+                            steps_this_frame, static_cast<unsigned long long>(steps_dropped));
+                ImGui::Text("simulate %.2f ms  field %.2f ms  surface %.2f ms", t.simulate_ms, t.field_ms, t.surface_ms);
+                ImGui::Text("particles %zu / %zu", sim->particles().active_count(), sim->particles().size());
+                ImGui::Text("water %zu triangles, terrain %zu", sim->surface().triangle_count(), rs.terrain_triangles);
+                ImGui::Text("tunneled %llu  respawned %llu  collisions %llu", static_cast<unsigned long long>(c.tunneled),
+                            static_cast<unsigned long long>(c.respawned), static_cast<unsigned long long>(c.collisions));
+                ImGui::Text("upload %.1f KB/frame, GL objects %llu", static_cast<double>(rs.last_upload_bytes) / 1024.0,
+                            static_cast<unsigned long long>(rs.gl_objects_created));
+                ImGui::End();
+                ImGui::Render();
+
+                // ---- draw ----
+                render::fit_clip_planes(camera, sim->terrain());
+                renderer.update(*sim);
+                if (fb_w > 0 && fb_h > 0) {
+                    renderer.draw(camera, fb_w, fb_h, settings);
+                    renderer.present_to_default_framebuffer();
+                }
+                glBindFramebuffer(GL_FRAMEBUFFER, 0);
+                glViewport(0, 0, fb_w, fb_h);
+                ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+                const bool last = o.frames > 0 && frame + 1 >= o.frames;
+                if (want_screenshot || (last && !o.screenshot.empty())) {
+                    const std::string path = (last && !o.screenshot.empty()) ? o.screenshot : next_screenshot_path(o.screenshot_dir);
+                    if (auto s = screenshot(path, fb_w, fb_h); s) status = "screenshot: " + path;
+                    else status = s.error().message;
+                    fmt::print("{}\n", status);
+                    want_screenshot = false;
+                }
+                glfwSwapBuffers(window);
+                if (last) glfwSetWindowShouldClose(window, GLFW_TRUE);
+            }
+            const Percentiles p = percentiles(frame_ms);
+            fmt::print("view: {} display frames, frame time median {:.2f} ms ({:.1f} fps), p95 {:.2f} ms; "
+                       "{} simulation steps of {:.4f} s; {}\n",
+                       frame_ms.size() + 1, p.median, p.median > 0 ? 1000.0 / p.median : 0.0, p.p95, steps_total, sim_dt,
+                       renderer.gl_description());
+        }
+    }
+    ImGui_ImplOpenGL3_Shutdown();
+    ImGui_ImplGlfw_Shutdown();
+    ImGui::DestroyContext();
+    glfwDestroyWindow(window);
+    glfwTerminate();
+    return code;
+}
+
+}  // namespace
+
+void register_view(CLI::App& app, std::function<int()>& action) {
+    auto opts = std::make_shared<ViewOptions>();
+    CLI::App* cmd = app.add_subcommand("view", "interactive viewer (needs a display; see `render` for headless)");
+    opts->scene.add_to(*cmd);
+    cmd->add_option("--size", opts->size, "window size WIDTHxHEIGHT (default 1280x720)");
+    cmd->add_option("--dt", opts->dt, "fixed simulation step in seconds (default 1/60)");
+    cmd->add_option("--texture", opts->texture, "image draped over the terrain (PNG/JPEG)");
+    cmd->add_option("--screenshot-dir", opts->screenshot_dir, "folder for screenshots (key P or F12) (default .)");
+    cmd->add_option("--frames", opts->frames, "close after this many display frames (default: when the window closes)");
+    cmd->add_option("--screenshot", opts->screenshot, "with --frames: write a screenshot of the last frame to this PNG");
+    cmd->add_flag("!--no-vsync", opts->vsync, "do not wait for the display's refresh (measure fps)");
+    cmd->add_flag("--paused", opts->paused, "start paused");
+    cmd->add_flag("--particles", opts->particles, "debug: draw the particles as spheres");
+    cmd->add_option("--bvh", opts->bvh_level, "debug: draw the AABB tree's boxes at this depth (-1: the leaves)");
+    cmd->callback([opts, &action] { action = [opts] { return view(*opts); }; });
+}
+
+}  // namespace mr::app

@@ -1,0 +1,183 @@
+// metariver render: the OpenGL 4.5 renderer (terrain, water surface, sky, debug views),
+// the orbit camera and its picking ray, a headless EGL context, and PNG writing.
+//
+// This header carries no OpenGL type: the renderer keeps its GL objects behind a
+// pointer, so apps and tests include it without the GL headers. The renderer reads
+// the Simulation's plain views (terrain, tree, particles, surface); it never changes them.
+//
+// Water shading: Schlick's Fresnel term (F0 = 0.02, water) mixes a reflection of the
+// analytic sky with the refracted terrain colour behind the water, absorbed with
+// Beer-Lambert over the water depth read from the terrain's depth buffer; Blinn-Phong
+// specular for the sun. The paper's look (per-vertex "Gouraud" lighting, translucent
+// blue) is kept as WaterShading::Gouraud.
+#pragma once
+
+#include <metariver/core.h>
+#include <metariver/scene.h>
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <glm/mat4x4.hpp>
+
+namespace mr::render {
+
+/// An orbit camera: the eye sits `distance` metres from `target`, at `yaw` degrees
+/// around +y (0: on the +z side, looking towards -z) and `pitch` degrees above the
+/// horizontal plane.
+struct Camera {
+    Vec3 target{0.0f};
+    float yaw_deg = 30.0f;
+    float pitch_deg = 35.0f;
+    float distance = 80.0f;    ///< metres, > 0
+    float fov_y_deg = 45.0f;   ///< vertical field of view, degrees, (1, 170)
+    float near_m = 0.1f;       ///< near plane, metres
+    float far_m = 1000.0f;     ///< far plane, metres
+
+    Vec3 eye() const;
+    glm::mat4 view() const;
+    glm::mat4 projection(float aspect) const;
+    /// Rotates by mouse motion (degrees); pitch is kept in [-89, 89].
+    void orbit(float dyaw_deg, float dpitch_deg);
+    /// Moves the target in the view plane by a fraction of the distance.
+    void pan(float dx, float dy);
+    /// Multiplies the distance by `factor` (> 0), clamped to [0.5, 1e5] metres.
+    void zoom(float factor);
+};
+
+/// A camera that frames the terrain (and its near/far planes fitted to it).
+Camera frame_terrain(const Terrain& terrain);
+/// Fits near/far to the terrain's bounds for the camera's current eye.
+void fit_clip_planes(Camera& camera, const Terrain& terrain);
+
+/// Parses "YAW,PITCH,DISTANCE" or "YAW,PITCH,DISTANCE,TX,TY,TZ" (degrees, metres) onto
+/// `camera`. The message names the option and the expected form.
+Status parse_camera(const std::string& text, Camera& camera);
+
+/// The world-space ray under a pixel (x right, y down, in pixels of a w x h view).
+struct Ray {
+    Vec3 origin{0.0f};
+    Vec3 direction{0.0f, 0.0f, -1.0f};  ///< unit length
+};
+Ray pixel_ray(const Camera& camera, float x, float y, int width, int height);
+/// Where the pixel's ray first meets the terrain (Bvh::intersect_segment), if anywhere.
+std::optional<Vec3> pick_terrain(const Camera& camera, float x, float y, int width, int height,
+                                 const Terrain& terrain, const Bvh& bvh);
+
+enum class WaterShading {
+    Realistic,  ///< per pixel: Fresnel sky reflection, refraction, depth tint, specular
+    Gouraud,    ///< the paper's look: lighting per vertex, interpolated, translucent blue
+};
+
+/// What to draw and how. Every field is read each frame; changing one costs no upload.
+struct RenderSettings {
+    bool terrain = true;
+    bool water = true;
+    bool sky = true;
+    bool particles = false;           ///< debug: the active particles as shaded spheres
+    float particle_radius = 0.3f;     ///< metres, drawn radius of a particle sphere
+    bool bvh = false;                 ///< debug: the AABB tree's boxes as lines
+    int bvh_level = -1;               ///< tree depth to draw (0 = root); -1 = the leaves
+    WaterShading shading = WaterShading::Realistic;
+    Vec3 water_color{0.05f, 0.32f, 0.38f};  ///< colour deep water tends to (linear RGB)
+    float water_absorption = 0.45f;   ///< Beer-Lambert extinction per metre of water
+    float water_refraction = 0.03f;   ///< screen-space refraction offset (fraction of the view)
+    Vec3 sun_direction{-0.55f, 0.65f, -0.25f};  ///< towards the sun (normalised when used)
+    bool terrain_texture = true;      ///< use the texture given by set_terrain_texture, if any
+    bool fog = true;                  ///< aerial perspective towards the horizon colour
+};
+
+/// Counters tests and the viewer's overlay read.
+struct RenderStats {
+    uint64_t frames = 0;              ///< draw() calls
+    uint64_t gl_objects_created = 0;  ///< buffers, textures, framebuffers, programs ever created
+    uint64_t buffer_reallocations = 0;  ///< times a dynamic buffer had to grow
+    uint64_t bytes_uploaded = 0;      ///< total bytes sent by update() and set_scene()
+    uint64_t last_upload_bytes = 0;   ///< bytes sent by the latest update()
+    size_t water_triangles = 0;
+    size_t terrain_triangles = 0;
+    size_t particles = 0;
+    size_t bvh_boxes = 0;             ///< boxes drawn in the latest frame
+};
+
+/// The OpenGL renderer. Needs a current OpenGL 4.5 core context (a window's, or the
+/// HeadlessContext's) for its whole life; all GL objects are created by create() and
+/// set_scene() and reused: draw() and update() create none (dynamic buffers grow by
+/// 1.5x and are orphaned with glBufferData before each refill).
+class Renderer {
+public:
+    /// Compiles the shaders and creates the fixed GL objects. Fails (one line) when the
+    /// context is not OpenGL 4.5 core or a shader does not compile.
+    static Result<std::unique_ptr<Renderer>> create();
+    ~Renderer();
+    Renderer(const Renderer&) = delete;
+    Renderer& operator=(const Renderer&) = delete;
+
+    /// Uploads the terrain mesh (with skirts down to its box), its normals and the AABB
+    /// tree's boxes, then the water and particles of `sim`. Pass terrain_changed = false
+    /// for a rebuilt Simulation over the same terrain and tree (only the water and
+    /// particles are sent then).
+    void set_scene(const Simulation& sim, bool terrain_changed = true);
+    /// Uploads what changed since the last call: the water surface and particles, only
+    /// when the simulation advanced a frame (or is a different Simulation).
+    void update(const Simulation& sim);
+    /// An RGBA8 image draped over the terrain's x/z rectangle (image row 0 at the far
+    /// end, as the heightmap); an empty span removes it.
+    void set_terrain_texture(std::span<const uint8_t> rgba, int width, int height);
+
+    /// Draws a frame of width x height pixels into the renderer's own framebuffer.
+    void draw(const Camera& camera, int width, int height, const RenderSettings& settings);
+    /// Copies the latest frame into the bound draw framebuffer 0 (a window).
+    void present_to_default_framebuffer();
+    /// Reads the latest frame as tightly packed RGB8, top row first; `out` is resized
+    /// to width * height * 3 (its capacity is reused).
+    void read_rgb(std::vector<uint8_t>& out);
+
+    const RenderStats& stats() const;
+    /// "llvmpipe (LLVM 15.0.6, 256 bits) / 4.5 (Core Profile) Mesa 22.3.6".
+    std::string gl_description() const;
+
+private:
+    struct Impl;
+    explicit Renderer(std::unique_ptr<Impl> impl);
+    std::unique_ptr<Impl> impl_;
+};
+
+/// An OpenGL 4.5 core context without a window or display: EGL on Mesa's surfaceless
+/// platform (EGL_PLATFORM_SURFACELESS_MESA, EGL_NO_CONFIG_KHR, no surface). Current on
+/// the creating thread until destroyed. Sets XDG_RUNTIME_DIR to /tmp when unset (Mesa
+/// warns otherwise).
+class HeadlessContext {
+public:
+    /// Fails (one line, no abort) when libEGL, the surfaceless platform or a 4.5 core
+    /// context is not available.
+    static Result<std::unique_ptr<HeadlessContext>> create();
+    ~HeadlessContext();
+    HeadlessContext(const HeadlessContext&) = delete;
+    HeadlessContext& operator=(const HeadlessContext&) = delete;
+
+private:
+    HeadlessContext() = default;
+    void* display_ = nullptr;
+    void* context_ = nullptr;
+};
+
+/// Encodes RGB8 (channels 3) or RGBA8 (4) pixels, top row first, as PNG bytes.
+std::vector<uint8_t> encode_png(std::span<const uint8_t> pixels, int width, int height, int channels);
+/// Writes a PNG atomically (temporary sibling, then rename).
+Status write_png(const std::string& path, std::span<const uint8_t> pixels, int width, int height,
+                 int channels);
+/// Loads a PNG/JPEG as RGBA8 (for terrain textures and golden images).
+struct Image {
+    int width = 0;
+    int height = 0;
+    int channels = 0;
+    std::vector<uint8_t> pixels;
+};
+Result<Image> load_image(const std::string& path, int channels);
+
+}  // namespace mr::render

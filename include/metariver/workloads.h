@@ -1,0 +1,36 @@
+// metariver workloads: the scenes and inputs that tests, `metariver bench` and the
+// peer drivers share, defined once (box2d's shared/benchmarks.h idea).
+//
+// W1 and W2 are defined in shared/peers/README.md; the formulas here reproduce them
+// exactly (same LCG, same order of draws), so our numbers sit beside the peers'.
+#pragma once
+
+#include <metariver/core.h>
+#include <metariver/scene.h>
+#include <metariver/terrain.h>
+
+#include <vector>
+
+namespace mr {
+
+// W1 balls: w1_balls() in sparse_field.h (the field layer's tests use them too).
+
+// W1 kernel and grid: w1_kernel_for() and w1_grid() in sparse_field.h.
+
+/// W2 'spheres on terrain': the 257 x 257 valley heightfield (heights in metres,
+/// sample (i, j) at world (x, z) = (i, j)), as a Heightmap for TerrainDef
+/// {area_scale 1, height_scale 1, paper_row_orientation false}.
+Heightmap w2_heightmap();
+TerrainDef w2_terrain_def();
+/// The analytic W2 height h(x, z).
+float w2_height(float x, float z);
+/// The first n spheres of the W2 spawn lattice with the seeded jitter.
+std::vector<Vec3> w2_spheres(int n, uint32_t seed = 12345u);
+inline constexpr float kW2Radius = 0.5f;
+
+/// The default river scene scaled to n particles for the fast pipeline: neighbour-grid
+/// springs, robust heightfield collision, all particles spawned at once along the
+/// upper channel, spacing shrinking as n grows so the river keeps its size.
+SceneDef river_scene(int n);
+
+}  // namespace mr

@@ -1,0 +1,91 @@
+// A headless OpenGL 4.5 core context: EGL on Mesa's surfaceless platform, no display,
+// no window, no surface (rendering goes to the renderer's framebuffer object).
+//
+// libepoxy resolves EGL and GL entry points; <epoxy/egl.h> is included instead of
+// <EGL/egl.h> (the two declare khronos_boolean_enum_t twice). libepoxy aborts the
+// process when libEGL cannot be loaded, so its presence is checked with dlopen first:
+// a machine without Mesa gets an error value, not a crash.
+#include <metariver/render.h>
+
+#include <epoxy/egl.h>
+#include <fmt/format.h>
+
+#include <cstdlib>
+#include <dlfcn.h>
+
+namespace mr::render {
+
+namespace {
+
+std::string egl_error_name(EGLint e) {
+    switch (e) {
+        case EGL_SUCCESS: return "EGL_SUCCESS";
+        case EGL_NOT_INITIALIZED: return "EGL_NOT_INITIALIZED";
+        case EGL_BAD_ALLOC: return "EGL_BAD_ALLOC";
+        case EGL_BAD_ATTRIBUTE: return "EGL_BAD_ATTRIBUTE";
+        case EGL_BAD_CONFIG: return "EGL_BAD_CONFIG";
+        case EGL_BAD_CONTEXT: return "EGL_BAD_CONTEXT";
+        case EGL_BAD_DISPLAY: return "EGL_BAD_DISPLAY";
+        case EGL_BAD_MATCH: return "EGL_BAD_MATCH";
+        case EGL_BAD_PARAMETER: return "EGL_BAD_PARAMETER";
+        default: return fmt::format("EGL error 0x{:x}", e);
+    }
+}
+
+}  // namespace
+
+Result<std::unique_ptr<HeadlessContext>> HeadlessContext::create() {
+    setenv("XDG_RUNTIME_DIR", "/tmp", 0);  // keeps Mesa from warning; never overrides
+    static void* libegl = dlopen("libEGL.so.1", RTLD_NOW | RTLD_GLOBAL);
+    if (!libegl) return Error{"headless OpenGL: libEGL.so.1 not found (install libegl1 and libegl-mesa0)"};
+
+    const char* client_ext = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
+    const std::string ext = client_ext ? client_ext : "";
+    if (ext.find("EGL_MESA_platform_surfaceless") == std::string::npos ||
+        ext.find("EGL_EXT_platform_base") == std::string::npos)
+        return Error{"headless OpenGL: EGL has no surfaceless platform (EGL_MESA_platform_surfaceless; install libegl-mesa0)"};
+
+    EGLDisplay dpy = eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
+    if (dpy == EGL_NO_DISPLAY) return Error{"headless OpenGL: no EGL surfaceless display"};
+    EGLint major = 0, minor = 0;
+    if (!eglInitialize(dpy, &major, &minor))
+        return Error{fmt::format("headless OpenGL: eglInitialize failed ({})", egl_error_name(eglGetError()))};
+    const char* dpy_ext_c = eglQueryString(dpy, EGL_EXTENSIONS);
+    const std::string dpy_ext = dpy_ext_c ? dpy_ext_c : "";
+    if (dpy_ext.find("EGL_KHR_no_config_context") == std::string::npos ||
+        dpy_ext.find("EGL_KHR_surfaceless_context") == std::string::npos) {
+        eglTerminate(dpy);
+        return Error{"headless OpenGL: EGL lacks EGL_KHR_no_config_context / EGL_KHR_surfaceless_context"};
+    }
+    if (!eglBindAPI(EGL_OPENGL_API)) {
+        eglTerminate(dpy);
+        return Error{"headless OpenGL: EGL cannot bind the desktop OpenGL API"};
+    }
+    const EGLint attrs[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 5,
+                            EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
+    EGLContext ctx = eglCreateContext(dpy, EGL_NO_CONFIG_KHR, EGL_NO_CONTEXT, attrs);
+    if (ctx == EGL_NO_CONTEXT) {
+        const EGLint e = eglGetError();
+        eglTerminate(dpy);
+        return Error{fmt::format("headless OpenGL: no OpenGL 4.5 core context ({})", egl_error_name(e))};
+    }
+    if (!eglMakeCurrent(dpy, EGL_NO_SURFACE, EGL_NO_SURFACE, ctx)) {
+        const EGLint e = eglGetError();
+        eglDestroyContext(dpy, ctx);
+        eglTerminate(dpy);
+        return Error{fmt::format("headless OpenGL: eglMakeCurrent failed ({})", egl_error_name(e))};
+    }
+    auto out = std::unique_ptr<HeadlessContext>(new HeadlessContext());
+    out->display_ = dpy;
+    out->context_ = ctx;
+    return out;
+}
+
+HeadlessContext::~HeadlessContext() {
+    if (!display_) return;
+    eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+    eglDestroyContext(display_, context_);
+    eglTerminate(display_);
+}
+
+}  // namespace mr::render

@@ -1,0 +1,580 @@
+// The OpenGL 4.5 renderer: sky, terrain, water surface, debug particles and tree boxes.
+//
+// A frame, in passes:
+//   1. scene framebuffer (colour + depth textures): sky, terrain with skirts, debug
+//      particles and boxes;
+//   2. final framebuffer: the scene's colour and depth are blitted in, then the water
+//      is drawn depth-tested against the terrain, sampling the scene's colour (what
+//      lies behind, refracted) and depth (how much water the view ray crosses);
+//   3. the final colour goes to a window (blit) or to memory (glReadPixels).
+// GL objects are made once (create, set_scene, first use of a size); frames only refill
+// buffers (orphaned with glBufferData, grown by 1.5x) and re-specify textures on resize.
+#include <metariver/render.h>
+
+#include "shaders.h"
+
+#include <epoxy/gl.h>
+#include <fmt/format.h>
+#include <glm/gtc/type_ptr.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cstring>
+#include <string>
+
+namespace mr::render {
+
+namespace {
+
+/// The std140 block `Frame` of shaders.h, field for field.
+struct FrameUniforms {
+    glm::mat4 viewproj;
+    glm::mat4 inv_viewproj;
+    glm::vec4 eye;
+    glm::vec4 sun;
+    glm::vec4 viewport;
+    glm::vec4 water;
+    glm::vec4 params;
+    glm::vec4 terrain;
+    glm::vec4 rect;
+    glm::vec4 mode;
+};
+static_assert(sizeof(FrameUniforms) == 2 * 64 + 8 * 16, "std140 layout of Frame");
+
+/// Terrain vertex: position, normal, and 1 on the skirt (the cut at the edge).
+struct TerrainVertex {
+    Vec3 pos;
+    Vec3 normal;
+    float skirt;
+};
+
+/// One AABB tree box for the debug view.
+struct BoxInstance {
+    Vec3 min;
+    Vec3 max;
+    float depth;
+};
+
+Result<GLuint> compile(GLenum stage, const char* body, const char* what) {
+    const GLuint s = glCreateShader(stage);
+    const char* sources[] = {glsl::kCommon, body};
+    glShaderSource(s, 2, sources, nullptr);
+    glCompileShader(s);
+    GLint ok = 0;
+    glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
+    if (!ok) {
+        std::array<char, 4096> log{};
+        glGetShaderInfoLog(s, static_cast<GLsizei>(log.size()), nullptr, log.data());
+        glDeleteShader(s);
+        std::string msg(log.data());
+        std::replace(msg.begin(), msg.end(), '\n', ' ');
+        return Error{fmt::format("renderer: {} shader does not compile: {}", what, msg)};
+    }
+    return s;
+}
+
+Result<GLuint> link(const char* vert, const char* frag, const char* what) {
+    auto vs = compile(GL_VERTEX_SHADER, vert, what);
+    if (!vs) return vs.error();
+    auto fs = compile(GL_FRAGMENT_SHADER, frag, what);
+    if (!fs) {
+        glDeleteShader(vs.value());
+        return fs.error();
+    }
+    const GLuint p = glCreateProgram();
+    glAttachShader(p, vs.value());
+    glAttachShader(p, fs.value());
+    glLinkProgram(p);
+    glDeleteShader(vs.value());
+    glDeleteShader(fs.value());
+    GLint ok = 0;
+    glGetProgramiv(p, GL_LINK_STATUS, &ok);
+    if (!ok) {
+        std::array<char, 4096> log{};
+        glGetProgramInfoLog(p, static_cast<GLsizei>(log.size()), nullptr, log.data());
+        glDeleteProgram(p);
+        return Error{fmt::format("renderer: {} program does not link: {}", what, log.data())};
+    }
+    return p;
+}
+
+}  // namespace
+
+/// A GL buffer refilled whole each time: created once; orphaned with glBufferData
+/// before each refill (the driver hands out fresh storage instead of waiting for draws
+/// still reading the old one) and grown by 1.5x when the data outgrows it.
+struct DynamicBuffer {
+    GLuint id = 0;
+    size_t capacity = 0;
+    size_t size = 0;
+
+    void upload(const void* data, size_t bytes, RenderStats& stats) {
+        if (bytes > capacity) {
+            capacity = std::max({bytes, capacity + capacity / 2, size_t{4096}});
+            ++stats.buffer_reallocations;
+        }
+        glNamedBufferData(id, static_cast<GLsizeiptr>(capacity), nullptr, GL_DYNAMIC_DRAW);
+        if (bytes) glNamedBufferSubData(id, 0, static_cast<GLsizeiptr>(bytes), data);
+        size = bytes;
+        stats.bytes_uploaded += bytes;
+        stats.last_upload_bytes += bytes;
+    }
+};
+
+/// A framebuffer with a colour texture and a depth texture, re-specified on resize.
+struct Target {
+    GLuint fbo = 0, color = 0, depth = 0;
+    int width = 0, height = 0;
+
+    void resize(int w, int h) {
+        if (w == width && h == height) return;
+        width = w;
+        height = h;
+        glBindTexture(GL_TEXTURE_2D, color);
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, w, h, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+        glBindTexture(GL_TEXTURE_2D, depth);
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT32F, w, h, 0, GL_DEPTH_COMPONENT, GL_FLOAT, nullptr);
+        glBindTexture(GL_TEXTURE_2D, 0);
+        glNamedFramebufferTexture(fbo, GL_COLOR_ATTACHMENT0, color, 0);
+        glNamedFramebufferTexture(fbo, GL_DEPTH_ATTACHMENT, depth, 0);
+    }
+};
+
+struct Renderer::Impl {
+    RenderStats stats;
+    GLuint prog_sky = 0, prog_terrain = 0, prog_water = 0, prog_particles = 0, prog_boxes = 0;
+    GLuint ubo = 0;
+    GLuint vao_empty = 0, vao_terrain = 0, vao_water = 0, vao_particles = 0, vao_boxes = 0;
+    GLuint terrain_vbo = 0, terrain_ibo = 0, cube_vbo = 0, box_vbo = 0;
+    GLuint terrain_tex = 0;
+    DynamicBuffer water_pos, water_normal, water_idx, particle_pos;
+    Target scene, final;
+
+    size_t terrain_index_count = 0;
+    Aabb terrain_bounds;
+    glm::vec4 terrain_rect{0.0f, 0.0f, 1.0f, 1.0f};  // x0, z0, x1, z1: texture u, v = 0 .. 1
+    bool has_texture = false;
+    int tree_depth = 0;
+    std::vector<uint32_t> level_first, level_count;  // boxes per tree depth
+    uint32_t leaves_first = 0, leaves_count = 0;
+
+    const Simulation* last_sim = nullptr;
+    uint64_t last_frame = ~uint64_t{0};
+    std::vector<Vec3> scratch_positions;  // reused for the active particles
+
+    GLuint create_buffer() {
+        GLuint b = 0;
+        glCreateBuffers(1, &b);
+        ++stats.gl_objects_created;
+        return b;
+    }
+    GLuint create_texture() {
+        GLuint t = 0;
+        glCreateTextures(GL_TEXTURE_2D, 1, &t);
+        glTextureParameteri(t, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+        glTextureParameteri(t, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+        glTextureParameteri(t, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+        glTextureParameteri(t, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+        ++stats.gl_objects_created;
+        return t;
+    }
+    GLuint create_vao() {
+        GLuint v = 0;
+        glCreateVertexArrays(1, &v);
+        ++stats.gl_objects_created;
+        return v;
+    }
+    void create_target(Target& t) {
+        glCreateFramebuffers(1, &t.fbo);
+        t.color = create_texture();
+        t.depth = create_texture();
+        glTextureParameteri(t.depth, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glTextureParameteri(t.depth, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        ++stats.gl_objects_created;
+    }
+
+    Status init() {
+        struct P {
+            GLuint* out;
+            const char* vs;
+            const char* fs;
+            const char* name;
+        };
+        const P programs[] = {{&prog_sky, glsl::kSkyVert, glsl::kSkyFrag, "sky"},
+                              {&prog_terrain, glsl::kTerrainVert, glsl::kTerrainFrag, "terrain"},
+                              {&prog_water, glsl::kWaterVert, glsl::kWaterFrag, "water"},
+                              {&prog_particles, glsl::kParticleVert, glsl::kParticleFrag, "particle"},
+                              {&prog_boxes, glsl::kBoxVert, glsl::kBoxFrag, "box"}};
+        for (const P& p : programs) {
+            auto r = link(p.vs, p.fs, p.name);
+            if (!r) return r.error();
+            *p.out = r.value();
+            ++stats.gl_objects_created;
+        }
+        ubo = create_buffer();
+        glNamedBufferData(ubo, sizeof(FrameUniforms), nullptr, GL_DYNAMIC_DRAW);
+
+        vao_empty = create_vao();
+
+        terrain_vbo = create_buffer();
+        terrain_ibo = create_buffer();
+        vao_terrain = create_vao();
+        glVertexArrayVertexBuffer(vao_terrain, 0, terrain_vbo, 0, sizeof(TerrainVertex));
+        glVertexArrayElementBuffer(vao_terrain, terrain_ibo);
+        const GLuint offsets[] = {offsetof(TerrainVertex, pos), offsetof(TerrainVertex, normal),
+                                  offsetof(TerrainVertex, skirt)};
+        const GLint sizes[] = {3, 3, 1};
+        for (GLuint a = 0; a < 3; ++a) {
+            glEnableVertexArrayAttrib(vao_terrain, a);
+            glVertexArrayAttribFormat(vao_terrain, a, sizes[a], GL_FLOAT, GL_FALSE, offsets[a]);
+            glVertexArrayAttribBinding(vao_terrain, a, 0);
+        }
+
+        water_pos.id = create_buffer();
+        water_normal.id = create_buffer();
+        water_idx.id = create_buffer();
+        vao_water = create_vao();
+        glVertexArrayVertexBuffer(vao_water, 0, water_pos.id, 0, sizeof(Vec3));
+        glVertexArrayVertexBuffer(vao_water, 1, water_normal.id, 0, sizeof(Vec3));
+        glVertexArrayElementBuffer(vao_water, water_idx.id);
+        for (GLuint a = 0; a < 2; ++a) {
+            glEnableVertexArrayAttrib(vao_water, a);
+            glVertexArrayAttribFormat(vao_water, a, 3, GL_FLOAT, GL_FALSE, 0);
+            glVertexArrayAttribBinding(vao_water, a, a);
+        }
+
+        particle_pos.id = create_buffer();
+        vao_particles = create_vao();
+        glVertexArrayVertexBuffer(vao_particles, 0, particle_pos.id, 0, sizeof(Vec3));
+        glEnableVertexArrayAttrib(vao_particles, 0);
+        glVertexArrayAttribFormat(vao_particles, 0, 3, GL_FLOAT, GL_FALSE, 0);
+        glVertexArrayAttribBinding(vao_particles, 0, 0);
+
+        // The unit cube's 12 edges as 24 line endpoints.
+        std::vector<Vec3> cube;
+        for (int axis = 0; axis < 3; ++axis) {
+            for (int a = 0; a < 2; ++a) {
+                for (int b = 0; b < 2; ++b) {
+                    Vec3 p0(0.0f), p1(0.0f);
+                    const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+                    p0[u] = p1[u] = static_cast<float>(a);
+                    p0[v] = p1[v] = static_cast<float>(b);
+                    p1[axis] = 1.0f;
+                    cube.push_back(p0);
+                    cube.push_back(p1);
+                }
+            }
+        }
+        cube_vbo = create_buffer();
+        glNamedBufferData(cube_vbo, static_cast<GLsizeiptr>(cube.size() * sizeof(Vec3)), cube.data(), GL_STATIC_DRAW);
+        box_vbo = create_buffer();
+        vao_boxes = create_vao();
+        glVertexArrayVertexBuffer(vao_boxes, 0, cube_vbo, 0, sizeof(Vec3));
+        glVertexArrayVertexBuffer(vao_boxes, 1, box_vbo, 0, sizeof(BoxInstance));
+        glVertexArrayBindingDivisor(vao_boxes, 1, 1);
+        glEnableVertexArrayAttrib(vao_boxes, 0);
+        glVertexArrayAttribFormat(vao_boxes, 0, 3, GL_FLOAT, GL_FALSE, 0);
+        glVertexArrayAttribBinding(vao_boxes, 0, 0);
+        const GLuint box_offsets[] = {offsetof(BoxInstance, min), offsetof(BoxInstance, max),
+                                      offsetof(BoxInstance, depth)};
+        for (GLuint a = 1; a < 4; ++a) {
+            glEnableVertexArrayAttrib(vao_boxes, a);
+            glVertexArrayAttribFormat(vao_boxes, a, a == 3 ? 1 : 3, GL_FLOAT, GL_FALSE, box_offsets[a - 1]);
+            glVertexArrayAttribBinding(vao_boxes, a, 1);
+        }
+
+        terrain_tex = create_texture();
+        glTextureParameteri(terrain_tex, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+        create_target(scene);
+        create_target(final);
+        if (glGetError() != GL_NO_ERROR) return Error{"renderer: OpenGL error while creating objects"};
+        return Ok{};
+    }
+
+    void upload_terrain(const Terrain& t, const Bvh& bvh, bool paper_rows) {
+        const auto verts = t.vertices();
+        const auto idx = t.indices();
+        // Smooth vertex normals: area-weighted sums of the faces around each vertex.
+        std::vector<TerrainVertex> tv(verts.size());
+        for (size_t i = 0; i < verts.size(); ++i) tv[i] = {verts[i], Vec3(0.0f), 0.0f};
+        for (size_t k = 0; k + 2 < idx.size(); k += 3) {
+            const Vec3 &a = verts[idx[k]], &b = verts[idx[k + 1]], &c = verts[idx[k + 2]];
+            Vec3 n = glm::cross(b - a, c - a);
+            if (n.y < 0.0f) n = -n;
+            tv[idx[k]].normal += n;
+            tv[idx[k + 1]].normal += n;
+            tv[idx[k + 2]].normal += n;
+        }
+        for (auto& v : tv) {
+            const float len = glm::length(v.normal);
+            v.normal = len > 0.0f ? v.normal / len : Vec3(0.0f, 1.0f, 0.0f);
+        }
+        std::vector<uint32_t> ti(idx.begin(), idx.end());
+        // Skirts: a wall from each border edge down to the bottom of the terrain's box.
+        const int W = t.columns(), H = t.rows();
+        const float bottom = t.bounds().min.y;
+        auto wall = [&](int i0, int j0, int i1, int j1, Vec3 outward) {
+            const Vec3 a = verts[static_cast<size_t>(i0) * W + j0], b = verts[static_cast<size_t>(i1) * W + j1];
+            const auto base = static_cast<uint32_t>(tv.size());
+            tv.push_back({a, outward, 1.0f});
+            tv.push_back({b, outward, 1.0f});
+            tv.push_back({Vec3(a.x, bottom, a.z), outward, 1.0f});
+            tv.push_back({Vec3(b.x, bottom, b.z), outward, 1.0f});
+            ti.insert(ti.end(), {base, base + 2, base + 1, base + 1, base + 2, base + 3});
+        };
+        for (int j = 0; j + 1 < W; ++j) {
+            wall(0, j, 0, j + 1, Vec3(0, 0, -1));
+            wall(H - 1, j, H - 1, j + 1, Vec3(0, 0, 1));
+        }
+        for (int i = 0; i + 1 < H; ++i) {
+            wall(i, 0, i + 1, 0, Vec3(-1, 0, 0));
+            wall(i, W - 1, i + 1, W - 1, Vec3(1, 0, 0));
+        }
+        glNamedBufferData(terrain_vbo, static_cast<GLsizeiptr>(tv.size() * sizeof(TerrainVertex)), tv.data(), GL_STATIC_DRAW);
+        glNamedBufferData(terrain_ibo, static_cast<GLsizeiptr>(ti.size() * sizeof(uint32_t)), ti.data(), GL_STATIC_DRAW);
+        stats.bytes_uploaded += tv.size() * sizeof(TerrainVertex) + ti.size() * sizeof(uint32_t);
+        terrain_index_count = ti.size();
+        stats.terrain_triangles = t.triangle_count();
+        // Heights for colouring: the mesh's own range (bounds() is grown by 1 m).
+        terrain_bounds = Aabb{};
+        for (const Vec3& v : verts) terrain_bounds.grow(v);
+        // Texture row 0 is the heightmap's row 0: at the far end (high z) in the paper's
+        // orientation, at z = 0 otherwise.
+        const float xmax = static_cast<float>(W - 1) * t.area_scale(), zmax = static_cast<float>(H - 1) * t.area_scale();
+        terrain_rect = paper_rows ? glm::vec4(0.0f, zmax, xmax, 0.0f) : glm::vec4(0.0f, 0.0f, xmax, zmax);
+
+        // Tree boxes grouped by depth, then the leaves, for drawing one level at a time.
+        const auto nodes = bvh.nodes();
+        std::vector<int> depth(nodes.size(), 0);
+        tree_depth = 0;
+        for (size_t n = 0; n < nodes.size(); ++n) {  // parents come before children
+            if (nodes[n].count == 0) {
+                depth[nodes[n].left] = depth[n] + 1;
+                depth[nodes[n].right] = depth[n] + 1;
+            }
+        }
+        // The build order may place children first; settle depths by repeated passes.
+        for (bool changed = true; changed;) {
+            changed = false;
+            for (size_t n = 0; n < nodes.size(); ++n) {
+                if (nodes[n].count != 0) continue;
+                for (uint32_t c : {nodes[n].left, nodes[n].right}) {
+                    if (depth[c] != depth[n] + 1) {
+                        depth[c] = depth[n] + 1;
+                        changed = true;
+                    }
+                }
+            }
+        }
+        for (int d : depth) tree_depth = std::max(tree_depth, d);
+        std::vector<BoxInstance> boxes;
+        boxes.reserve(nodes.size() * 2);
+        level_first.assign(static_cast<size_t>(tree_depth) + 1, 0);
+        level_count.assign(static_cast<size_t>(tree_depth) + 1, 0);
+        for (int d = 0; d <= tree_depth; ++d) {
+            level_first[static_cast<size_t>(d)] = static_cast<uint32_t>(boxes.size());
+            for (size_t n = 0; n < nodes.size(); ++n)
+                if (depth[n] == d) boxes.push_back({nodes[n].box.min, nodes[n].box.max, static_cast<float>(d)});
+            level_count[static_cast<size_t>(d)] = static_cast<uint32_t>(boxes.size()) - level_first[static_cast<size_t>(d)];
+        }
+        leaves_first = static_cast<uint32_t>(boxes.size());
+        for (size_t n = 0; n < nodes.size(); ++n)
+            if (nodes[n].count > 0) boxes.push_back({nodes[n].box.min, nodes[n].box.max, static_cast<float>(depth[n])});
+        leaves_count = static_cast<uint32_t>(boxes.size()) - leaves_first;
+        glNamedBufferData(box_vbo, static_cast<GLsizeiptr>(boxes.size() * sizeof(BoxInstance)), boxes.data(), GL_STATIC_DRAW);
+        stats.bytes_uploaded += boxes.size() * sizeof(BoxInstance);
+    }
+
+    void upload_dynamic(const Simulation& sim) {
+        stats.last_upload_bytes = 0;
+        const SurfaceMesh& m = sim.surface();
+        water_pos.upload(m.positions.data(), m.positions.size() * sizeof(Vec3), stats);
+        water_normal.upload(m.normals.data(), m.normals.size() * sizeof(Vec3), stats);
+        water_idx.upload(m.indices.data(), m.indices.size() * sizeof(uint32_t), stats);
+        stats.water_triangles = m.triangle_count();
+        sim.particles().gather_active_positions(scratch_positions);
+        particle_pos.upload(scratch_positions.data(), scratch_positions.size() * sizeof(Vec3), stats);
+        stats.particles = scratch_positions.size();
+        last_sim = &sim;
+        last_frame = sim.frame();
+    }
+};
+
+Renderer::Renderer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+Renderer::~Renderer() {
+    Impl& r = *impl_;
+    const GLuint programs[] = {r.prog_sky, r.prog_terrain, r.prog_water, r.prog_particles, r.prog_boxes};
+    for (GLuint p : programs) glDeleteProgram(p);
+    const GLuint buffers[] = {r.ubo, r.terrain_vbo, r.terrain_ibo, r.cube_vbo, r.box_vbo, r.water_pos.id,
+                              r.water_normal.id, r.water_idx.id, r.particle_pos.id};
+    glDeleteBuffers(static_cast<GLsizei>(std::size(buffers)), buffers);
+    const GLuint vaos[] = {r.vao_empty, r.vao_terrain, r.vao_water, r.vao_particles, r.vao_boxes};
+    glDeleteVertexArrays(static_cast<GLsizei>(std::size(vaos)), vaos);
+    const GLuint textures[] = {r.terrain_tex, r.scene.color, r.scene.depth, r.final.color, r.final.depth};
+    glDeleteTextures(static_cast<GLsizei>(std::size(textures)), textures);
+    const GLuint fbos[] = {r.scene.fbo, r.final.fbo};
+    glDeleteFramebuffers(2, fbos);
+}
+
+Result<std::unique_ptr<Renderer>> Renderer::create() {
+    if (epoxy_gl_version() < 45 || epoxy_is_desktop_gl() == 0)
+        return Error{fmt::format("renderer: needs OpenGL 4.5 core (the context has {}.{})", epoxy_gl_version() / 10,
+                                 epoxy_gl_version() % 10)};
+    auto impl = std::make_unique<Impl>();
+    if (auto s = impl->init(); !s) return s.error();
+    return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
+}
+
+void Renderer::set_scene(const Simulation& sim, bool terrain_changed) {
+    if (terrain_changed || impl_->terrain_index_count == 0) impl_->upload_terrain(sim.terrain(), sim.bvh(), sim.def().terrain.paper_row_orientation);
+    impl_->upload_dynamic(sim);
+}
+
+void Renderer::update(const Simulation& sim) {
+    Impl& r = *impl_;
+    if (&sim == r.last_sim && sim.frame() == r.last_frame) {
+        r.stats.last_upload_bytes = 0;  // nothing moved: nothing to send
+        return;
+    }
+    r.upload_dynamic(sim);
+}
+
+void Renderer::set_terrain_texture(std::span<const uint8_t> rgba, int width, int height) {
+    Impl& r = *impl_;
+    if (rgba.empty() || width <= 0 || height <= 0) {
+        r.has_texture = false;
+        return;
+    }
+    glBindTexture(GL_TEXTURE_2D, r.terrain_tex);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, width, height, 0, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
+    glGenerateMipmap(GL_TEXTURE_2D);
+    glBindTexture(GL_TEXTURE_2D, 0);
+    r.stats.bytes_uploaded += rgba.size();
+    r.has_texture = true;
+}
+
+void Renderer::draw(const Camera& camera, int width, int height, const RenderSettings& s) {
+    Impl& r = *impl_;
+    ++r.stats.frames;
+    r.scene.resize(width, height);
+    r.final.resize(width, height);
+
+    const float aspect = static_cast<float>(width) / static_cast<float>(std::max(height, 1));
+    const glm::mat4 proj = camera.projection(aspect);
+    FrameUniforms u{};
+    u.viewproj = proj * camera.view();
+    u.inv_viewproj = glm::inverse(u.viewproj);
+    u.eye = glm::vec4(camera.eye(), 1.0f);
+    const Vec3 sun = glm::length(s.sun_direction) > 0.0f ? glm::normalize(s.sun_direction) : Vec3(0, 1, 0);
+    u.sun = glm::vec4(sun, 0.0f);
+    u.viewport = glm::vec4(static_cast<float>(width), static_cast<float>(height), camera.near_m, camera.far_m);
+    u.water = glm::vec4(s.water_color, s.water_absorption);
+    u.params = glm::vec4(s.water_refraction, s.fog ? 1.0f : 0.0f, s.particle_radius, proj[1][1]);
+    const float fog_distance = 2.5f * glm::length(r.terrain_bounds.empty() ? Vec3(100.0f) : r.terrain_bounds.extent());
+    u.terrain = glm::vec4(r.terrain_bounds.empty() ? 0.0f : r.terrain_bounds.min.y,
+                          r.terrain_bounds.empty() ? 1.0f : r.terrain_bounds.max.y,
+                          (s.terrain_texture && r.has_texture) ? 1.0f : 0.0f, fog_distance);
+    u.rect = r.terrain_rect;
+    u.mode = glm::vec4(s.shading == WaterShading::Gouraud ? 1.0f : 0.0f, static_cast<float>(r.tree_depth), 0.0f, 0.0f);
+    glNamedBufferSubData(r.ubo, 0, sizeof(u), &u);
+    glBindBufferBase(GL_UNIFORM_BUFFER, 0, r.ubo);
+
+    // Pass 1: sky, terrain, debug views into the scene framebuffer.
+    glBindFramebuffer(GL_FRAMEBUFFER, r.scene.fbo);
+    glViewport(0, 0, width, height);
+    glDisable(GL_BLEND);
+    glDisable(GL_CULL_FACE);
+    glDepthMask(GL_TRUE);
+    const float clear_color[] = {0.74f, 0.83f, 0.92f, 1.0f};
+    const float clear_depth = 1.0f;
+    glClearNamedFramebufferfv(r.scene.fbo, GL_COLOR, 0, clear_color);
+    glClearNamedFramebufferfv(r.scene.fbo, GL_DEPTH, 0, &clear_depth);
+    if (s.sky) {
+        glDisable(GL_DEPTH_TEST);
+        glDepthMask(GL_FALSE);
+        glUseProgram(r.prog_sky);
+        glBindVertexArray(r.vao_empty);
+        glDrawArrays(GL_TRIANGLES, 0, 3);
+        glDepthMask(GL_TRUE);
+    }
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    if (s.terrain && r.terrain_index_count > 0) {
+        glUseProgram(r.prog_terrain);
+        glBindTextureUnit(0, r.terrain_tex);
+        glBindVertexArray(r.vao_terrain);
+        glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(r.terrain_index_count), GL_UNSIGNED_INT, nullptr);
+    }
+    if (s.particles && r.stats.particles > 0) {
+        glEnable(GL_PROGRAM_POINT_SIZE);
+        glUseProgram(r.prog_particles);
+        glBindVertexArray(r.vao_particles);
+        glDrawArrays(GL_POINTS, 0, static_cast<GLsizei>(r.stats.particles));
+    }
+    r.stats.bvh_boxes = 0;
+    if (s.bvh && !r.level_first.empty()) {
+        uint32_t first = r.leaves_first, count = r.leaves_count;
+        if (s.bvh_level >= 0) {
+            const auto lvl = static_cast<size_t>(std::min(s.bvh_level, r.tree_depth));
+            first = r.level_first[lvl];
+            count = r.level_count[lvl];
+        }
+        glUseProgram(r.prog_boxes);
+        glBindVertexArray(r.vao_boxes);
+        glDrawArraysInstancedBaseInstance(GL_LINES, 0, 24, static_cast<GLsizei>(count), first);
+        r.stats.bvh_boxes = count;
+    }
+
+    // Pass 2: the water over a copy of the scene, reading the scene's colour and depth.
+    glBlitNamedFramebuffer(r.scene.fbo, r.final.fbo, 0, 0, width, height, 0, 0, width, height,
+                           GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT, GL_NEAREST);
+    glBindFramebuffer(GL_FRAMEBUFFER, r.final.fbo);
+    if (s.water && r.water_idx.size > 0) {
+        glEnable(GL_CULL_FACE);
+        glCullFace(GL_BACK);
+        glFrontFace(GL_CCW);
+        glUseProgram(r.prog_water);
+        glBindTextureUnit(0, r.scene.color);
+        glBindTextureUnit(1, r.scene.depth);
+        glBindVertexArray(r.vao_water);
+        glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(r.water_idx.size / sizeof(uint32_t)), GL_UNSIGNED_INT, nullptr);
+        glDisable(GL_CULL_FACE);
+    }
+    glBindVertexArray(0);
+    glUseProgram(0);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
+void Renderer::present_to_default_framebuffer() {
+    const Impl& r = *impl_;
+    glBlitNamedFramebuffer(r.final.fbo, 0, 0, 0, r.final.width, r.final.height, 0, 0, r.final.width, r.final.height,
+                           GL_COLOR_BUFFER_BIT, GL_NEAREST);
+}
+
+void Renderer::read_rgb(std::vector<uint8_t>& out) {
+    const Impl& r = *impl_;
+    const size_t row = static_cast<size_t>(r.final.width) * 3;
+    out.resize(row * static_cast<size_t>(r.final.height));
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, r.final.fbo);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glReadPixels(0, 0, r.final.width, r.final.height, GL_RGB, GL_UNSIGNED_BYTE, out.data());
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+    // OpenGL's rows run bottom-up; images run top-down.
+    for (int y = 0; y < r.final.height / 2; ++y) {
+        uint8_t* a = out.data() + static_cast<size_t>(y) * row;
+        uint8_t* b = out.data() + static_cast<size_t>(r.final.height - 1 - y) * row;
+        std::swap_ranges(a, a + row, b);
+    }
+}
+
+const RenderStats& Renderer::stats() const { return impl_->stats; }
+
+std::string Renderer::gl_description() const {
+    const auto* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+    const auto* version = reinterpret_cast<const char*>(glGetString(GL_VERSION));
+    return fmt::format("{} / {}", renderer ? renderer : "?", version ? version : "?");
+}
+
+}  // namespace mr::render

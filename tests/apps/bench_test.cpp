@@ -1,0 +1,119 @@
+// End-to-end tests of `metariver bench`: the JSON it writes (keys the docs and the
+// peers' side-by-side rely on), bad options (exit 2, one line), and --peers never
+// crashing whether or not the peers are installed.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <sys/wait.h>
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+namespace {
+
+struct BenchRun {
+    int code = -1;
+    std::string out;
+    std::string err;
+};
+
+std::string slurp(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+class Bench : public ::testing::Test {
+protected:
+    void SetUp() override {
+        dir_ = fs::temp_directory_path() /
+               ("metariver_bench_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+        fs::remove_all(dir_);
+        fs::create_directories(dir_);
+    }
+    void TearDown() override { fs::remove_all(dir_); }
+
+    BenchRun run(const std::string& args) {
+        const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
+        // From the source tree, as documented (the drivers are found in bench/peers).
+        const std::string cmd = "cd " + std::string(METARIVER_SOURCE_DIR) + " && " + METARIVER_EXE + " bench " + args +
+                                " >" + out.string() + " 2>" + err.string();
+        const int status = std::system(cmd.c_str());
+        BenchRun r;
+        r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+        r.out = slurp(out);
+        r.err = slurp(err);
+        return r;
+    }
+
+    void expect_bad(const std::string& args, const std::string& must_contain) {
+        const BenchRun r = run(args);
+        EXPECT_EQ(r.code, 2) << args << "\n" << r.err;
+        EXPECT_NE(r.err.find(must_contain), std::string::npos) << args << ": '" << r.err << "'";
+        EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "one line: " << r.err;
+    }
+
+    fs::path dir_;
+};
+
+TEST_F(Bench, W2JsonHasTheDocumentedKeys) {
+    const fs::path out = dir_ / "bench.json";
+    const BenchRun r = run("--scenario w2 --spheres 200 --json " + out.string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    ASSERT_TRUE(fs::exists(out));
+    const json j = json::parse(slurp(out));
+    ASSERT_TRUE(j.contains("machine"));
+    EXPECT_TRUE(j["machine"].contains("cpu"));
+    ASSERT_TRUE(j.contains("results"));
+    ASSERT_EQ(j["results"].size(), 1u);
+    const json& res = j["results"][0];
+    for (const char* key : {"particles", "triangles", "threads", "stages"}) EXPECT_TRUE(res.contains(key)) << key;
+    EXPECT_EQ(res["particles"].get<int>(), 200);
+    EXPECT_GE(res["threads"].get<int>(), 1);
+    ASSERT_TRUE(res["stages"].is_object());
+    ASSERT_FALSE(res["stages"].empty());
+    for (const auto& [stage, s] : res["stages"].items()) {
+        ASSERT_TRUE(s.contains("median_ms")) << stage;
+        EXPECT_GE(s["median_ms"].get<double>(), 0.0) << stage;
+    }
+    EXPECT_FALSE(j.contains("peers")) << "peers only with --peers";
+}
+
+TEST_F(Bench, BadOptionsExitTwoWithOneLine) {
+    expect_bad("--scenario nope", "--scenario");
+    expect_bad("--balls -1", "--balls");
+    const fs::path missing = dir_ / "no-such-folder" / "bench.json";
+    expect_bad("--scenario w2 --spheres 10 --json " + missing.string(), "no-such-folder");
+    EXPECT_FALSE(fs::exists(dir_ / "no-such-folder"));
+}
+
+// --peers on a small W2: the Bullet driver (built with the bench when Bullet is there)
+// runs, or its absence is one line under "missing"; either way no crash, exit 0.
+TEST_F(Bench, PeersW2RowsOrMissingLines) {
+    const fs::path out = dir_ / "bench.json";
+    const BenchRun r = run("--scenario w2 --spheres 200 --peers --json " + out.string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    const json j = json::parse(slurp(out));
+    ASSERT_TRUE(j.contains("peers"));
+    const json& p = j["peers"];
+    ASSERT_TRUE(p.contains("rows") && p.contains("missing"));
+    EXPECT_FALSE(p["rows"].empty() && p["missing"].empty());
+    for (const json& row : p["rows"]) {
+        EXPECT_EQ(row["workload"], "w2");
+        EXPECT_EQ(row["n"].get<int>(), 200);
+        EXPECT_GT(row["median_ms"].get<double>(), 0.0);
+        EXPECT_GT(row["ours_ms"].get<double>(), 0.0);
+        EXPECT_GT(row["ratio_peer_over_ours"].get<double>(), 0.0);
+        EXPECT_EQ(row["driver"]["tunneled_below_surface"].get<int>(), 0);
+    }
+    EXPECT_NE(r.out.find("peers:"), std::string::npos) << r.out;
+}
+
+}  // namespace

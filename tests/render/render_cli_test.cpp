@@ -1,0 +1,184 @@
+// End-to-end tests of `metariver render` and `metariver view`: the PNG sequence has the
+// requested count and size and its frames differ as the water moves; bad --size,
+// unwritable --out, a missing ffmpeg fail with one line and exit code 2, writing nothing;
+// `view` without a display says so and points to `render`. Rendering tests skip when no
+// headless OpenGL can be created (a machine without Mesa).
+#include <metariver/render.h>
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <sys/wait.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CliResult {
+    int code = -1;
+    std::string out;
+    std::string err;
+};
+
+std::string slurp(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+bool headless_gl_available(std::string& why) {
+    static int state = -1;
+    static std::string reason;
+    if (state < 0) {
+        auto ctx = mr::render::HeadlessContext::create();
+        state = ctx.ok() ? 1 : 0;
+        if (!ctx.ok()) reason = ctx.error().message;
+    }
+    why = reason;
+    return state == 1;
+}
+
+#define REQUIRE_GL()                                                                  \
+    do {                                                                              \
+        std::string why;                                                              \
+        if (!headless_gl_available(why)) {                                            \
+            GTEST_SKIP() << "no headless OpenGL: " << why;                            \
+        }                                                                             \
+    } while (0)
+
+class RenderCli : public ::testing::Test {
+protected:
+    void SetUp() override {
+        dir_ = fs::temp_directory_path() /
+               ("metariver_render_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+        fs::remove_all(dir_);
+        fs::create_directories(dir_);
+    }
+    void TearDown() override { fs::remove_all(dir_); }
+
+    CliResult run(const std::string& args, const std::string& env = "") {
+        const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
+        const std::string cmd = env + " " + std::string(METARIVER_EXE) + " " + args + " >" + out.string() + " 2>" + err.string();
+        const int status = std::system(cmd.c_str());
+        CliResult r;
+        r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+        r.out = slurp(out);
+        r.err = slurp(err);
+        fs::remove(out);
+        fs::remove(err);
+        return r;
+    }
+    size_t entries(const fs::path& p) {
+        size_t n = 0;
+        for (auto it = fs::directory_iterator(p); it != fs::directory_iterator(); ++it) ++n;
+        return n;
+    }
+
+    fs::path dir_;
+};
+
+int count_lines(const std::string& s) {
+    int n = 0;
+    for (char c : s) n += c == '\n';
+    return n;
+}
+
+}  // namespace
+
+TEST_F(RenderCli, PngSequenceHasCountAndSizeAndFramesDiffer) {
+    REQUIRE_GL();
+    const fs::path out = dir_ / "frames";
+    const CliResult r = run("render --frames 4 --size 80x48 --steps 6 --warmup 30 --out " + out.string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("wrote 4 PNG frames"), std::string::npos) << r.out;
+    std::vector<mr::render::Image> frames;
+    for (int i = 0; i < 4; ++i) {
+        const fs::path p = out / ("frame_0000" + std::to_string(i) + ".png");
+        auto img = mr::render::load_image(p.string(), 3);
+        ASSERT_TRUE(img.ok()) << img.error().message;
+        EXPECT_EQ(img->width, 80);
+        EXPECT_EQ(img->height, 48);
+        frames.push_back(std::move(img.value()));
+    }
+    EXPECT_EQ(entries(out), 4u) << "exactly the requested frames, no temporaries left";
+    for (int i = 1; i < 4; ++i) {
+        size_t changed = 0;
+        for (size_t k = 0; k < frames[0].pixels.size(); ++k) changed += frames[i].pixels[k] != frames[i - 1].pixels[k];
+        EXPECT_GT(changed, 10u) << "frame " << i << " equals frame " << i - 1 << ": the water did not move";
+    }
+}
+
+TEST_F(RenderCli, Mp4WhenFfmpegIsThere) {
+    REQUIRE_GL();
+    if (std::system("command -v ffmpeg >/dev/null 2>&1") != 0) GTEST_SKIP() << "ffmpeg is not installed";
+    const fs::path out = dir_ / "river.mp4";
+    const CliResult r = run("render --frames 6 --size 64x40 --out " + out.string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    ASSERT_TRUE(fs::exists(out));
+    const std::string bytes = slurp(out);
+    EXPECT_GT(bytes.size(), 100u);
+    EXPECT_EQ(bytes.substr(4, 4), "ftyp") << "an MP4 file starts with an ftyp box";
+    EXPECT_EQ(entries(dir_), 1u) << "no partial file left beside the video";
+}
+
+TEST_F(RenderCli, BadSizeFailsWithExitCode2AndWritesNothing) {
+    const fs::path out = dir_ / "frames";
+    for (const std::string size : {"0x10", "100", "abcxdef", "100x-5", "20000x100", "100x8"}) {
+        const CliResult r = run("render --frames 2 --size " + size + " --out " + out.string());
+        EXPECT_EQ(r.code, 2) << size << ": " << r.err;
+        EXPECT_EQ(count_lines(r.err), 1) << r.err;
+        EXPECT_NE(r.err.find("--size"), std::string::npos) << r.err;
+        EXPECT_FALSE(fs::exists(out)) << size;
+    }
+}
+
+TEST_F(RenderCli, UnwritableOutFailsWithExitCode2AndWritesNothing) {
+    // A path under a regular file cannot be created, whoever runs the test (root too).
+    const fs::path file = dir_ / "a_file";
+    std::ofstream(file) << "x";
+    const fs::path out = file / "frames";
+    CliResult r = run("render --frames 2 --size 32x32 --out " + out.string());
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("--out"), std::string::npos) << r.err;
+    // --out naming an existing file.
+    r = run("render --frames 2 --size 32x32 --out " + file.string());
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_NE(r.err.find("not a folder"), std::string::npos) << r.err;
+    // An MP4 in a folder that does not exist.
+    r = run("render --frames 2 --size 32x32 --out " + (dir_ / "missing" / "v.mp4").string());
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << r.err;
+    EXPECT_EQ(entries(dir_), 1u) << "only the test's own file";
+}
+
+TEST_F(RenderCli, Mp4WithoutFfmpegIsAClearError) {
+    const fs::path out = dir_ / "v.mp4";
+    const CliResult r = run("render --frames 2 --size 32x32 --out " + out.string(), "PATH=/nonexistent");
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("ffmpeg"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+}
+
+TEST_F(RenderCli, OtherBadOptionsFailWithExitCode2) {
+    for (const std::string args : {"--frames 0", "--camera 1,2", "--water glossy", "--preset nope", "--texture /nonexistent.png"}) {
+        const CliResult r = run("render --size 32x32 --out " + (dir_ / "o").string() + " " + args);
+        EXPECT_EQ(r.code, 2) << args << ": " << r.err;
+        EXPECT_EQ(count_lines(r.err), 1) << r.err;
+        EXPECT_FALSE(fs::exists(dir_ / "o")) << args;
+    }
+}
+
+TEST_F(RenderCli, ViewWithoutDisplaySaysSoAndSuggestsRender) {
+    const CliResult r = run("view", "env -u DISPLAY -u WAYLAND_DISPLAY");
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("no display"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("metariver render"), std::string::npos) << r.err;
+}

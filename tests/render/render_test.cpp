@@ -1,0 +1,254 @@
+// Renderer tests, headless (EGL surfaceless): golden images of small fixed scenes,
+// the "no GL object per frame / upload only what changed" contract, and the camera's
+// picking ray. Every test skips (with the reason) when no EGL device can be created,
+// so the suite passes on a machine without Mesa; on a machine with Mesa they run.
+//
+// Golden images live in tests/render/golden/. To re-record them after an intended
+// change of the look: METARIVER_UPDATE_GOLDEN=1 ctest -R Golden (then look at them).
+#include <metariver/render.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+
+namespace fs = std::filesystem;
+using namespace mr;
+
+namespace {
+
+/// One context for the whole test program (creating one costs ~50 ms on llvmpipe).
+render::HeadlessContext* context() {
+    static std::unique_ptr<render::HeadlessContext> ctx;
+    static std::string error;
+    static bool tried = false;
+    if (!tried) {
+        tried = true;
+        auto r = render::HeadlessContext::create();
+        if (r) ctx = std::move(r.value());
+        else error = r.error().message;
+    }
+    return ctx.get();
+}
+
+std::string context_error() {
+    auto r = render::HeadlessContext::create();
+    return r ? std::string() : r.error().message;
+}
+
+#define REQUIRE_GL()                                                                   \
+    do {                                                                               \
+        if (!context()) {                                                              \
+            GTEST_SKIP() << "no headless OpenGL 4.5 (EGL surfaceless): " << context_error(); \
+        }                                                                              \
+    } while (0)
+
+/// A small deterministic scene: the default valley, reduced.
+SceneDef small_valley() {
+    SceneDef d = default_scene();
+    d.source.width = 33;
+    d.source.height = 49;
+    d.terrain.height_scale = 12.0f;
+    d.spawn.count = 120;
+    d.spawn.interval = 1;
+    return d;
+}
+
+struct Rendered {
+    int width = 0, height = 0;
+    std::vector<uint8_t> rgb;
+};
+
+Rendered render_scene(const SceneDef& def, int frames, int width, int height, const render::RenderSettings& settings,
+                      const std::optional<std::string>& camera = std::nullopt) {
+    auto sim = Simulation::create(def);
+    EXPECT_TRUE(sim.ok()) << (sim.ok() ? "" : sim.error().message);
+    auto renderer = render::Renderer::create();
+    EXPECT_TRUE(renderer.ok()) << (renderer.ok() ? "" : renderer.error().message);
+    Rendered out;
+    if (!sim.ok() || !renderer.ok()) return out;
+    for (int i = 0; i < frames; ++i) sim.value()->step(1.0f / 60.0f);
+    render::Camera cam = render::frame_terrain(sim.value()->terrain());
+    if (camera) {
+        EXPECT_TRUE(render::parse_camera(*camera, cam).ok());
+    }
+    render::fit_clip_planes(cam, sim.value()->terrain());
+    renderer.value()->set_scene(*sim.value());
+    renderer.value()->draw(cam, width, height, settings);
+    renderer.value()->read_rgb(out.rgb);
+    out.width = width;
+    out.height = height;
+    return out;
+}
+
+/// Compares with the stored golden image: per-channel max and mean absolute difference.
+/// On failure writes NAME.actual.png and NAME.diff.png (difference x4) next to the
+/// build output and prints their paths.
+void expect_matches_golden(const std::string& name, const Rendered& img, int max_tolerance, double mean_tolerance) {
+    const fs::path golden = fs::path(METARIVER_SOURCE_DIR) / "tests/render/golden" / (name + ".png");
+    const fs::path out_dir = fs::path(METARIVER_TEST_OUTPUT_DIR);
+    if (const char* u = std::getenv("METARIVER_UPDATE_GOLDEN"); u && std::string(u) == "1") {
+        ASSERT_TRUE(render::write_png(golden.string(), img.rgb, img.width, img.height, 3).ok());
+        GTEST_SKIP() << "re-recorded " << golden;
+    }
+    auto ref = render::load_image(golden.string(), 3);
+    ASSERT_TRUE(ref.ok()) << ref.error().message << " (record it with METARIVER_UPDATE_GOLDEN=1)";
+    if (ref->width != img.width || ref->height != img.height) {
+        fs::create_directories(out_dir);
+        const fs::path actual = out_dir / (name + ".actual.png");
+        (void)render::write_png(actual.string(), img.rgb, img.width, img.height, 3);
+        FAIL() << name << ": size " << img.width << "x" << img.height << ", golden " << ref->width << "x"
+               << ref->height << "\n  golden: " << golden << "\n  actual: " << actual;
+    }
+    int max_diff = 0;
+    double sum = 0.0;
+    std::vector<uint8_t> diff(img.rgb.size());
+    for (size_t i = 0; i < img.rgb.size(); ++i) {
+        const int d = std::abs(static_cast<int>(img.rgb[i]) - static_cast<int>(ref->pixels[i]));
+        max_diff = std::max(max_diff, d);
+        sum += d;
+        diff[i] = static_cast<uint8_t>(std::min(255, d * 4));
+    }
+    const double mean = sum / static_cast<double>(img.rgb.size());
+    const bool ok = max_diff <= max_tolerance && mean <= mean_tolerance;
+    if (!ok) {
+        fs::create_directories(out_dir);
+        const fs::path actual = out_dir / (name + ".actual.png"), diff_path = out_dir / (name + ".diff.png");
+        (void)render::write_png(actual.string(), img.rgb, img.width, img.height, 3);
+        (void)render::write_png(diff_path.string(), diff, img.width, img.height, 3);
+        ADD_FAILURE() << name << ": max difference " << max_diff << " (allowed " << max_tolerance << "), mean "
+                      << mean << " (allowed " << mean_tolerance << ")\n  golden: " << golden
+                      << "\n  actual: " << actual << "\n  diff:   " << diff_path;
+    }
+}
+
+// Tolerances. The images are rendered by the same shaders on Mesa's llvmpipe, which is
+// deterministic on one machine (the same run gives identical bytes). They must still
+// pass on another Mesa version or CPU (different LLVM code generation, SIMD width and
+// rasteriser rounding): those move a triangle edge by a pixel or shift a colour by a
+// few steps.
+// - max 128 per channel: a pixel flipping between two neighbouring surfaces at an edge
+//   (water and bank, terrain and its skirt) changes by less; a missing or extra layer
+//   (sky, a particle, a box, the water) or a wrong colour moves pixels by more.
+// - mean 1.5 per channel: edge flips touch a few percent of the pixels; any real change
+//   of the look (lighting, tint, the camera) moves the mean by 5 or more.
+constexpr int kMaxDiff = 128;
+constexpr double kMeanDiff = 1.5;
+
+}  // namespace
+
+TEST(RenderGolden, ValleyRealisticWater) {
+    REQUIRE_GL();
+    render::RenderSettings s;
+    const Rendered img = render_scene(small_valley(), 90, 160, 120, s);
+    expect_matches_golden("valley_realistic", img, kMaxDiff, kMeanDiff);
+}
+
+TEST(RenderGolden, BowlGouraudParticlesTree) {
+    REQUIRE_GL();
+    auto def = preset("paper-bowl");
+    ASSERT_TRUE(def.ok());
+    render::RenderSettings s;
+    s.shading = render::WaterShading::Gouraud;
+    s.particles = true;
+    s.bvh = true;
+    s.bvh_level = 1;
+    s.particle_radius = 0.5f;
+    const Rendered img = render_scene(def.value(), 120, 160, 120, s, std::string("35,50,22"));
+    expect_matches_golden("bowl_gouraud_debug", img, kMaxDiff, kMeanDiff);
+}
+
+TEST(RenderGolden, StrictTerrainOnlyFromAbove) {
+    REQUIRE_GL();
+    SceneDef d = default_scene();
+    d.source.kind = TerrainSource::Strict;
+    d.source.width = 17;
+    d.source.height = 17;
+    d.terrain.height_scale = 7.0f;
+    d.spawn.count = 1;
+    render::RenderSettings s;
+    s.water = false;
+    const Rendered img = render_scene(d, 1, 128, 96, s, std::string("20,60,30"));
+    expect_matches_golden("strict_terrain", img, kMaxDiff, kMeanDiff);
+}
+
+TEST(Renderer, NoGlObjectsPerFrameAndUploadsOnlyWhatChanged) {
+    REQUIRE_GL();
+    auto sim = Simulation::create(small_valley());
+    ASSERT_TRUE(sim.ok());
+    auto r = render::Renderer::create();
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    render::Renderer& renderer = *r.value();
+    for (int i = 0; i < 30; ++i) sim.value()->step(1.0f / 60.0f);
+    renderer.set_scene(*sim.value());
+    const render::Camera cam = render::frame_terrain(sim.value()->terrain());
+    render::RenderSettings s;
+    s.particles = true;
+    s.bvh = true;
+    renderer.draw(cam, 96, 64, s);
+    const uint64_t objects = renderer.stats().gl_objects_created;
+    for (int i = 0; i < 20; ++i) {
+        sim.value()->step(1.0f / 60.0f);
+        renderer.update(*sim.value());
+        EXPECT_GT(renderer.stats().last_upload_bytes, 0u) << "the water moved: it must be sent";
+        renderer.draw(cam, 96, 64, s);
+    }
+    EXPECT_EQ(renderer.stats().gl_objects_created, objects) << "draw()/update() must reuse GL objects";
+    // Nothing moved: nothing is sent.
+    renderer.update(*sim.value());
+    EXPECT_EQ(renderer.stats().last_upload_bytes, 0u);
+    // A resize re-specifies the textures, still without new objects.
+    renderer.draw(cam, 128, 80, s);
+    EXPECT_EQ(renderer.stats().gl_objects_created, objects);
+    std::vector<uint8_t> rgb;
+    renderer.read_rgb(rgb);
+    EXPECT_EQ(rgb.size(), 128u * 80u * 3u);
+    EXPECT_GT(renderer.stats().water_triangles, 0u);
+}
+
+TEST(Renderer, ReportsGlVersion) {
+    REQUIRE_GL();
+    auto r = render::Renderer::create();
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    EXPECT_NE(r.value()->gl_description().find("4."), std::string::npos) << r.value()->gl_description();
+}
+
+// ---- camera and picking (no GL needed) ----
+
+TEST(Camera, PickingRayHitsTheTerrainUnderTheScreenCentre) {
+    auto sim = Simulation::create(small_valley());
+    ASSERT_TRUE(sim.ok());
+    const Terrain& t = sim.value()->terrain();
+    render::Camera cam = render::frame_terrain(t);
+    // Aim at a point on the ground; the centre pixel's ray must come back to it.
+    const float x = 10.0f, z = 20.0f;
+    cam.target = Vec3(x, t.height_mesh(x, z), z);
+    cam.distance = 30.0f;
+    render::fit_clip_planes(cam, t);
+    auto hit = render::pick_terrain(cam, 320.0f, 240.0f, 640, 480, t, sim.value()->bvh());
+    ASSERT_TRUE(hit.has_value());
+    // Tolerance: float rounding of the unprojection over ~30 m (about 1e-5 relative).
+    EXPECT_NEAR(hit->x, x, 1e-2f);
+    EXPECT_NEAR(hit->z, z, 1e-2f);
+    EXPECT_NEAR(hit->y, t.height_mesh(x, z), 1e-2f);
+    // A ray into the sky misses.
+    cam.pitch_deg = -30.0f;  // eye below the target, looking up
+    cam.target.y += 200.0f;
+    EXPECT_FALSE(render::pick_terrain(cam, 320.0f, 240.0f, 640, 480, t, sim.value()->bvh()).has_value());
+}
+
+TEST(Camera, ParseCameraChecksItsInput) {
+    render::Camera c;
+    EXPECT_TRUE(render::parse_camera("30,40,50", c).ok());
+    EXPECT_FLOAT_EQ(c.yaw_deg, 30.0f);
+    EXPECT_FLOAT_EQ(c.distance, 50.0f);
+    EXPECT_TRUE(render::parse_camera("0,10,5,1,2,3", c).ok());
+    EXPECT_FLOAT_EQ(c.target.z, 3.0f);
+    EXPECT_FALSE(render::parse_camera("30,40", c).ok());
+    EXPECT_FALSE(render::parse_camera("a,b,c", c).ok());
+    EXPECT_FALSE(render::parse_camera("0,95,10", c).ok());
+    EXPECT_FALSE(render::parse_camera("0,10,-1", c).ok());
+}
