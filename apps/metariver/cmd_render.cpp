@@ -337,6 +337,8 @@ int render(const RenderOptions& o) {
 void register_render(CLI::App& app, std::function<int()>& action) {
     auto opts = std::make_shared<RenderOptions>();
     CLI::App* cmd = app.add_subcommand("render", "render a scene headless (EGL, no display) to PNG frames or an MP4");
+    // A later option wins (scripts pass defaults, users append overrides: run.sh "$@").
+    cmd->option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
     opts->scene.add_to(*cmd);
     cmd->add_option("--frames", opts->frames, "images to render (default 60)");
     cmd->add_option("--size", opts->size, "image size WIDTHxHEIGHT, each in [16, 8192] (default 1280x720)");

@@ -54,23 +54,14 @@ int fail(int code, const std::string& message) {
 }
 
 /// State shared with GLFW's callbacks (through the window's user pointer).
+/// Events are queued by callbacks, not read from the button/key state once per frame:
+/// at a few frames per second a click (press and release) fits between two frames.
 struct Input {
     float scroll = 0.0f;
     std::vector<std::string> dropped;
-};
-
-/// Key presses (edges) from GLFW's key state; Dear ImGui 1.86 names only a few keys.
-class KeyEdges {
-public:
-    bool pressed(GLFWwindow* w, int key) {
-        const bool down = glfwGetKey(w, key) == GLFW_PRESS;
-        const bool was = down_[static_cast<size_t>(key)];
-        down_[static_cast<size_t>(key)] = down;
-        return down && !was;
-    }
-
-private:
-    std::array<bool, GLFW_KEY_LAST + 1> down_{};
+    std::vector<int> keys;           ///< keys pressed since the last frame
+    double press_x = 0.0, press_y = 0.0;
+    std::vector<std::array<double, 2>> clicks;  ///< left press+release without moving, window coordinates
 };
 
 /// What decides whether a scene edit needs the terrain (and tree) rebuilt and uploaded.
@@ -122,7 +113,7 @@ bool drag_u32(const char* label, uint32_t& v) {
 bool scene_editor(SceneDef& d) {
     bool commit = false;
     if (ImGui::CollapsingHeader("Scene", ImGuiTreeNodeFlags_DefaultOpen)) {
-        commit |= enum_combo("solver", d.solver, std::array{SolverKind::Springs, SolverKind::Bullet});
+        commit |= enum_combo("solver", d.solver, std::array{SolverKind::Springs, SolverKind::Bullet, SolverKind::Pbf});
         commit |= drag_u32("spawn seed", d.seed);
         commit |= ImGui::Checkbox("build surface", &d.surface);
     }
@@ -272,6 +263,21 @@ int view(const ViewOptions& o) {
     glfwSetScrollCallback(window, [](GLFWwindow* w, double, double dy) {
         static_cast<Input*>(glfwGetWindowUserPointer(w))->scroll += static_cast<float>(dy);
     });
+    glfwSetKeyCallback(window, [](GLFWwindow* w, int key, int, int action, int) {
+        if (action == GLFW_PRESS) static_cast<Input*>(glfwGetWindowUserPointer(w))->keys.push_back(key);
+    });
+    glfwSetMouseButtonCallback(window, [](GLFWwindow* w, int button, int action, int) {
+        if (button != GLFW_MOUSE_BUTTON_LEFT) return;
+        auto* in = static_cast<Input*>(glfwGetWindowUserPointer(w));
+        double x = 0, y = 0;
+        glfwGetCursorPos(w, &x, &y);
+        if (action == GLFW_PRESS) {
+            in->press_x = x;
+            in->press_y = y;
+        } else if (action == GLFW_RELEASE && std::abs(x - in->press_x) + std::abs(y - in->press_y) <= 4.0) {
+            in->clicks.push_back({x, y});
+        }
+    });
     glfwSetDropCallback(window, [](GLFWwindow* w, int count, const char** paths) {
         auto* in = static_cast<Input*>(glfwGetWindowUserPointer(w));
         for (int i = 0; i < count; ++i) in->dropped.emplace_back(paths[i]);
@@ -314,7 +320,6 @@ int view(const ViewOptions& o) {
             uint64_t steps_total = 0, steps_dropped = 0;
             int steps_this_frame = 0;
             bool want_screenshot = false;
-            KeyEdges keys;
             std::deque<double> recent_ms;   // for the fps readout
             std::vector<double> frame_ms;   // every frame, for the summary
             double press_x = 0, press_y = 0;
@@ -405,14 +410,16 @@ int view(const ViewOptions& o) {
                     } else if (left && left_down) {
                         if (std::abs(mx - press_x) + std::abs(my - press_y) > 4.0) dragged = true;
                         if (dragged) camera.orbit(-0.3f * dx, 0.3f * dy);
-                    } else if (!left && left_down) {
+                    } else if (!left) {
                         left_down = false;
-                        if (!dragged && win_w > 0 && win_h > 0) {
-                            if (auto hit = render::pick_terrain(camera, static_cast<float>(mx), static_cast<float>(my),
-                                                                win_w, win_h, sim->terrain(), sim->bvh())) {
-                                sim->pour(*hit + Vec3(0.0f, pour_height, 0.0f), pour_count);
-                                status = fmt::format("poured {} at ({:.1f}, {:.1f}, {:.1f})", pour_count, hit->x, hit->y, hit->z);
-                            }
+                    }
+                    for (const auto& click : input.clicks) {
+                        if (win_w <= 0 || win_h <= 0) break;
+                        if (auto hit = render::pick_terrain(camera, static_cast<float>(click[0]), static_cast<float>(click[1]),
+                                                            win_w, win_h, sim->terrain(), sim->bvh())) {
+                            sim->pour(*hit + Vec3(0.0f, pour_height, 0.0f), pour_count);
+                            status = fmt::format("poured {} at ({:.1f}, {:.1f}, {:.1f})", pour_count, hit->x, hit->y, hit->z);
+                            fmt::print("{}\n", status);
                         }
                     }
                     if (right) camera.pan(dx / static_cast<float>(std::max(win_h, 1)), dy / static_cast<float>(std::max(win_h, 1)));
@@ -421,35 +428,37 @@ int view(const ViewOptions& o) {
                     left_down = false;
                 }
                 input.scroll = 0.0f;
+                input.clicks.clear();
                 last_x = mx;
                 last_y = my;
 
                 // ---- keys ----
-                {
-                    // Poll every key each frame (edges stay right), act only when the UI
-                    // does not own the keyboard.
-                    const bool k = !io.WantCaptureKeyboard;
-                    const bool space = keys.pressed(window, GLFW_KEY_SPACE), n = keys.pressed(window, GLFW_KEY_N),
-                               right = keys.pressed(window, GLFW_KEY_RIGHT), r = keys.pressed(window, GLFW_KEY_R),
-                               f12 = keys.pressed(window, GLFW_KEY_F12), p = keys.pressed(window, GLFW_KEY_P),
-                               f = keys.pressed(window, GLFW_KEY_F), g = keys.pressed(window, GLFW_KEY_G),
-                               b = keys.pressed(window, GLFW_KEY_B), v = keys.pressed(window, GLFW_KEY_V),
-                               esc = keys.pressed(window, GLFW_KEY_ESCAPE);
-                    if (k && space) paused = !paused;
-                    if (k && (n || right)) {
-                        paused = true;
-                        step_once = true;
+                if (!io.WantCaptureKeyboard) {
+                    for (int key : input.keys) {
+                        switch (key) {
+                            case GLFW_KEY_SPACE: paused = !paused; break;
+                            case GLFW_KEY_N:
+                            case GLFW_KEY_RIGHT:
+                                paused = true;
+                                step_once = true;
+                                break;
+                            case GLFW_KEY_R: apply(def); break;
+                            case GLFW_KEY_F12:
+                            case GLFW_KEY_P: want_screenshot = true; break;
+                            case GLFW_KEY_F: camera = render::frame_terrain(sim->terrain()); break;
+                            case GLFW_KEY_G:
+                                settings.shading = settings.shading == render::WaterShading::Gouraud
+                                                       ? render::WaterShading::Realistic
+                                                       : render::WaterShading::Gouraud;
+                                break;
+                            case GLFW_KEY_B: settings.bvh = !settings.bvh; break;
+                            case GLFW_KEY_V: settings.particles = !settings.particles; break;
+                            case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(window, GLFW_TRUE); break;
+                            default: break;
+                        }
                     }
-                    if (k && r) apply(def);
-                    if (k && (f12 || p)) want_screenshot = true;
-                    if (k && f) camera = render::frame_terrain(sim->terrain());
-                    if (k && g)
-                        settings.shading = settings.shading == render::WaterShading::Gouraud ? render::WaterShading::Realistic
-                                                                                            : render::WaterShading::Gouraud;
-                    if (k && b) settings.bvh = !settings.bvh;
-                    if (k && v) settings.particles = !settings.particles;
-                    if (k && esc) glfwSetWindowShouldClose(window, GLFW_TRUE);
                 }
+                input.keys.clear();
 
                 // ---- a dropped heightmap replaces the terrain ----
                 if (!input.dropped.empty()) {
@@ -586,6 +595,7 @@ int view(const ViewOptions& o) {
 void register_view(CLI::App& app, std::function<int()>& action) {
     auto opts = std::make_shared<ViewOptions>();
     CLI::App* cmd = app.add_subcommand("view", "interactive viewer (needs a display; see `render` for headless)");
+    cmd->option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
     opts->scene.add_to(*cmd);
     cmd->add_option("--size", opts->size, "window size WIDTHxHEIGHT (default 1280x720)");
     cmd->add_option("--dt", opts->dt, "fixed simulation step in seconds (default 1/60)");

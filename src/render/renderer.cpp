@@ -427,7 +427,8 @@ Result<std::unique_ptr<Renderer>> Renderer::create() {
 }
 
 void Renderer::set_scene(const Simulation& sim, bool terrain_changed) {
-    if (terrain_changed || impl_->terrain_index_count == 0) impl_->upload_terrain(sim.terrain(), sim.bvh(), sim.def().terrain.paper_row_orientation);
+    if (terrain_changed || impl_->terrain_index_count == 0)
+        impl_->upload_terrain(sim.terrain(), sim.bvh(), sim.def().terrain.paper_row_orientation);
     impl_->upload_dynamic(sim);
 }
 
