@@ -61,6 +61,7 @@ int run(const RunOptions& o) {
     auto sim_result = Simulation::create(def.value());
     if (!sim_result) return fail(kExitBadInput, sim_result.error().message);
     Simulation& sim = *sim_result.value();
+    for (const std::string& w : scene_warnings(sim.def())) fmt::print(stderr, "metariver run: warning: {}\n", w);
 
     // The OBJ folder: created if missing; everything this run writes there is recorded
     // so a failure can take it back.
@@ -100,8 +101,22 @@ int run(const RunOptions& o) {
     surface_ms.reserve(static_cast<size_t>(o.frames));
     total_ms.reserve(static_cast<size_t>(o.frames));
     const int digits = std::max(5, static_cast<int>(std::to_string(o.frames - 1).size()));
+    // Plausibility: outflow at the sinks, wet-channel fraction (sampled every 10 frames
+    // over the second half), largest speed and density error seen.
+    FlowMeter flow;
+    double wet_sum = 0.0, density_mean_sum = 0.0;
+    long long wet_n = 0;
+    float max_speed = 0.0f, density_max = 0.0f;
     for (long long f = 0; f < o.frames; ++f) {
         sim.step(static_cast<float>(o.dt));
+        flow.record(double(f + 1) * o.dt, sim.counters().sunk);
+        max_speed = std::max(max_speed, sim.counters().max_speed);
+        density_max = std::max(density_max, sim.counters().density_error_max);
+        if (2 * f >= o.frames && f % 10 == 0) {
+            wet_sum += sim.wet_fraction();
+            density_mean_sum += sim.counters().density_error_mean;
+            ++wet_n;
+        }
         const FrameTimings& t = sim.last_timings();
         sim_ms.push_back(t.simulate_ms);
         field_ms.push_back(t.field_ms);
@@ -142,6 +157,20 @@ int run(const RunOptions& o) {
         j["tunneled"] = c.tunneled;
         j["respawned"] = c.respawned;
         j["guarded"] = c.guarded;
+        const FlowMeter::Summary fs = flow.summary();
+        j["plausibility"] = {
+            {"tunneled", c.tunneled},
+            {"respawned", c.respawned},
+            {"emitted", c.emitted},
+            {"sunk", c.sunk},
+            {"outflow_per_s", fs.rate},
+            {"outflow_windows_per_s", {fs.windows[0], fs.windows[1], fs.windows[2], fs.windows[3]}},
+            {"first_outflow_s", fs.first_outflow_s},
+            {"outflow_steady", fs.steady},
+            {"wet_channel_fraction", wet_n ? wet_sum / double(wet_n) : 0.0},
+            {"density_error_mean", wet_n ? density_mean_sum / double(wet_n) : 0.0},
+            {"density_error_max", density_max},
+            {"max_speed", max_speed}};
         j["state_hash"] = fmt::format("{:016x}", sim.state_hash());
         j["stage_ms"] = {{"simulate", stage_json(sim_ms)},
                          {"field", stage_json(field_ms)},
@@ -154,10 +183,11 @@ int run(const RunOptions& o) {
     }
     const Percentiles tot = percentiles(total_ms);
     fmt::print("{}: {} frames, {}/{} particles active, surface {} triangles / {} vertices, "
-               "tunneled {}, respawned {}, frame median {:.3f} ms (p95 {:.3f})\n",
+               "tunneled {}, respawned {}, outflow {:.1f}/s ({}), wet {:.0f} %, frame median {:.3f} ms (p95 {:.3f})\n",
                d.name, o.frames, sim.particles().active_count(), sim.particles().size(),
                sim.surface().triangle_count(), sim.surface().vertex_count(), c.tunneled, c.respawned,
-               tot.median, tot.p95);
+               flow.summary().rate, flow.summary().steady ? "steady" : "not steady",
+               100.0 * (wet_n ? wet_sum / double(wet_n) : 0.0), tot.median, tot.p95);
     if (!o.obj_dir.empty()) fmt::print("wrote {} OBJ files to {}\n", written.size(), o.obj_dir);
     if (!o.stats.empty()) fmt::print("wrote stats to {}\n", o.stats);
     return kExitOk;

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <metariver/core.h>
+#include <metariver/emitters.h>
 #include <metariver/neighbor_grid.h>
 #include <metariver/terrain.h>
 
@@ -54,6 +55,34 @@ struct SpawnDef {
     /// with the highest z): the head of the valley for the procedural river.
     bool auto_center = false;
     float auto_height = 2.0f;                ///< metres above the ground for auto_center, [0, 1e4]
+    /// With auto_center: place the source at the head of the terrain's main channel
+    /// (ChannelMap::main_head) instead of the upstream band's lowest sample.
+    bool auto_channel = false;
+    SourceShape shape = SourceShape::Box;    ///< shape of the spawn volume
+    /// Emission rate, particles per second, [0, 1e7]; 0 = the paper's activation of one
+    /// particle every `interval` frames. With a rate, particles recycled by a sink wait
+    /// in the pool until the source emits them again.
+    float flow_rate = 0.0f;
+    /// > 0: `flow_rate` is given in litres per second and each particle carries this
+    /// many litres; 0: `flow_rate` is in particles per second.
+    float litres_per_particle = 0.0f;
+    /// Particles per second the source emits.
+    float particles_per_second() const { return litres_per_particle > 0.0f ? flow_rate / litres_per_particle : flow_rate; }
+};
+
+/// Position Based Fluids (Macklin and Mueller 2013). The rest density is the kernel
+/// sum of a cubic lattice of `spacing` (so a perfect lattice has zero error); every
+/// quantity below is in units of that number density.
+struct PbfDef {
+    float spacing = 0.5f;        ///< rest particle spacing d, metres, (0, 1e3]
+    float kernel_radius = 1.0f;  ///< smoothing length h, metres, (spacing, 4 spacing]
+    int iterations = 3;          ///< density-constraint iterations per step, [1, 100]
+    float relaxation = 0.05f;    ///< constraint force mixing eps, relative to a lattice particle's sum |grad C|^2, (0, 1e3]
+    float scorr_k = 0.01f;       ///< tensile correction strength k (relative to a lattice particle's lambda at C = 1), [0, 1]
+    int scorr_n = 4;             ///< tensile correction exponent n, [1, 8]
+    float scorr_dq = 0.3f;       ///< tensile correction reference distance, fraction of h, (0, 1)
+    float xsph = 0.05f;          ///< XSPH viscosity c, [0, 1]
+    float vorticity = 0.0f;      ///< vorticity confinement epsilon, m/s^2 scale, [0, 100]; 0 = off
 };
 
 enum class SpringMode {
@@ -110,6 +139,12 @@ struct SolverCounters {
     uint64_t tunneled = 0;        ///< particle-steps ending below the terrain mesh after collision handling
     uint64_t respawned = 0;       ///< particles re-spawned after leaving the terrain bounds
     uint64_t guarded = 0;         ///< robust mode: particles lifted by the heightfield guard
+    uint64_t emitted = 0;         ///< particles emitted by a flow-rate source (activations and recycles)
+    uint64_t sunk = 0;            ///< particles taken out by a sink (recycled to the source)
+    // Latest step's state (not cumulative):
+    float density_error_mean = 0.0f;  ///< PBF: mean over active particles of max(rho/rho0 - 1, 0)
+    float density_error_max = 0.0f;   ///< PBF: max of rho/rho0 - 1
+    float max_speed = 0.0f;           ///< fastest active particle, m/s
 };
 
 /// Depth below the mesh surface (metres) a particle must reach to count as tunneled:
@@ -149,6 +184,10 @@ class ParticleSolver final : public Solver {
 public:
     ParticleSolver(const Terrain& terrain, const Bvh& bvh, SpawnDef spawn, SpringDef springs,
                    CollisionDef collision, IntegratorDef integrator, uint32_t seed);
+    /// The same with the PBF fluid model (`pbf` set: solver = "pbf"; springs unused) and a sink.
+    ParticleSolver(const Terrain& terrain, const Bvh& bvh, SpawnDef spawn, SpringDef springs,
+                   CollisionDef collision, IntegratorDef integrator, uint32_t seed, std::optional<PbfDef> pbf,
+                   SinkDef sink);
 
     /// Advances one rendered frame: activates a particle when due, then runs
     /// `substeps` steps of dt/substeps (dt = fixed_dt when set, else frame_dt).
@@ -173,8 +212,16 @@ public:
     /// Depth of p below the terrain mesh (> 0 below), or 0 outside the rectangle.
     float depth_below_surface(const Vec3& p) const;
 
-    /// The neighbour grid of the latest step (grid spring mode).
+    /// The neighbour grid of the latest step (grid spring mode, PBF).
     const NeighborGrid& grid() const { return grid_; }
+    /// PBF number density of every particle through the grid (after sort_by_cell) and
+    /// by brute force over all active pairs: the twin tests compare them.
+    void pbf_densities(std::vector<float>& out);
+    void pbf_densities_brute_force(std::vector<float>& out) const;
+    /// PBF rest number density (lattice sum of the poly6 kernel).
+    float pbf_rest_density() const { return rest_density_; }
+    /// Takes active particle i out (it joins the inactive pool; arrays stay a prefix).
+    void deactivate(size_t i);
 
 private:
     struct StepCounts {
@@ -186,10 +233,19 @@ private:
     void collide(size_t i, float dt, StepCounts& c);
     void collide_paper(size_t i, float dt, StepCounts& c);
     void collide_robust(size_t i, float dt, StepCounts& c);
+    /// Fluid response (PBF): the swept robust query on last -> p, the particle slides
+    /// along the ground (normal motion removed, damped), heightfield guard.
+    void collide_fluid(size_t i, StepCounts& c);
+    void step_pbf(float dt);
+    void init_pbf();
+    void emit(float dt);
+    /// Flags particles for respawn (1) or the sink (2) after a step.
+    uint8_t exit_flag(const Vec3& p) const;
+    void finish_step(uint64_t steps, const StepCounts& c);
     std::optional<RayHit> robust_hit(const Vec3& from, const Vec3& to) const;
     bool out_of_bounds(const Vec3& p) const;
     /// Bins active particles and reorders every array by cell (grid mode).
-    void sort_by_cell();
+    void sort_by_cell(float cell);
     size_t slot_of_id(uint32_t id) const;
 
     const Terrain& terrain_;
@@ -206,6 +262,13 @@ private:
     uint32_t next_to_pour_ = 0;    ///< round-robin cursor over particle ids for pour()
     NeighborGrid grid_;
     std::vector<uint8_t> respawn_flag_;
+    std::optional<PbfDef> pbf_;
+    SinkDef sink_;
+    double emit_credit_ = 0.0;  ///< fractional particles the source owes
+    float rest_density_ = 1.0f;
+    float lattice_grad_sum_ = 1.0f;
+    std::vector<float> lambda_, density_;
+    std::vector<Vec3> delta_, omega_;
     // Reorder scratch (reused; no allocation once warm).
     std::vector<uint32_t> perm_;
     std::vector<Vec3> scratch_vec_;

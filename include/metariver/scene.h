@@ -40,6 +40,7 @@ struct TerrainSourceDef {
 enum class SolverKind {
     Springs,  ///< the paper's own physics: gravity, springs, terrain collision
     Bullet,   ///< the paper's engine physics (2.4) on Bullet: rigid spheres vs the terrain
+    Pbf,      ///< Position Based Fluids (Macklin and Mueller 2013) with the robust terrain collision
 };
 std::string_view to_string(SolverKind s);
 
@@ -54,12 +55,18 @@ struct SceneDef {
     CollisionDef collision;
     IntegratorDef integrator;
     BulletDef bullet;  ///< solver = bullet only
+    PbfDef pbf;        ///< solver = pbf only
+    SinkDef sink;      ///< where water leaves (recycled to the source)
     FieldDef field;
     bool surface = true;  ///< build the field and the surface every frame
 };
 
-/// The built-in default scene: a river on the procedural valley.
+/// The built-in default scene: a PBF river on the procedural valley (source at the head
+/// of its main channel, outlet edges recycled to the source).
 SceneDef default_scene();
+/// The default scene before the fluid solver: the paper's springs on the valley
+/// (preset "springs-valley"; river_scene(n) builds on it).
+SceneDef springs_valley_scene();
 /// Names of the built-in presets ("default", "paper-full", "paper-nile", "paper-bowl", ...).
 std::vector<std::string> preset_names();
 /// A preset by name; an unknown name is an error listing the known ones. Presets whose
@@ -78,6 +85,13 @@ Result<SceneDef> parse_scene_toml(std::string_view text, const std::string& orig
                                   const SceneDef& base);
 /// Reads and parses a scene file.
 Result<SceneDef> load_scene_file(const std::string& path);
+
+/// Checks a scene against its terrain (source inside the terrain's rectangle, sinks
+/// that do not swallow the source); the message names the field.
+Status validate_on_terrain(const SceneDef& def, const Terrain& terrain);
+/// Non-fatal advice about a valid scene (e.g. a flow rate the particle budget cannot
+/// sustain for long), one line each, naming the field.
+std::vector<std::string> scene_warnings(const SceneDef& def);
 
 /// Loads or generates the heightmap a scene describes.
 Result<Heightmap> load_scene_heightmap(const SceneDef& def);
@@ -121,6 +135,11 @@ public:
     uint64_t field_overflows() const { return field_overflows_; }
     /// FNV-1a hash of the particles' positions and velocities (determinism checks).
     uint64_t state_hash() const;
+    /// The terrain's drainage network (automatic source, wet-channel measure).
+    const ChannelMap& channel() const { return channel_; }
+    /// Fraction of the active particles inside the wet channel (WetChannelDef defaults
+    /// scaled to the terrain: width max(3 m, 3 samples), depth 3 m).
+    float wet_fraction() const;
 
 private:
     Simulation(const SceneDef& def, Terrain terrain, Bvh bvh);
@@ -137,6 +156,7 @@ private:
     SurfaceMesh surface_;
     FrameTimings timings_;
     uint64_t field_overflows_ = 0;
+    ChannelMap channel_;
 };
 
 }  // namespace mr

@@ -50,8 +50,10 @@ void NeighborGrid::build(std::span<const Vec3> positions, std::span<const uint8_
         run_start_.push_back(0);
         return;
     }
-    // Dense cells over the box when there are at most ~4 cells per particle (and the
-    // box is finite), else a hash table of the next power of two >= 2 binned.
+    // Dense cells over the box when there are at most ~32 cells per particle and the box
+    // is finite (clearing and prefix-summing 32 counters per particle is far cheaper
+    // than 27 hash lookups per cell run), else a hash table of the next power of two
+    // >= 2 binned.
     origin_ = box.min;
     // Same float arithmetic as cell_coord(), so the box's far corner lands in the last cell.
     const auto cells = [&](float hi, float lo) {
@@ -62,7 +64,7 @@ void NeighborGrid::build(std::span<const Vec3> positions, std::span<const uint8_
     const double cells_y = cells(box.max.y, origin_.y);
     const double cells_z = cells(box.max.z, origin_.z);
     const double dense_cells = cells_x * cells_y * cells_z;
-    const double dense_limit = std::max(4.0 * double(binned), 4096.0);
+    const double dense_limit = std::max(32.0 * double(binned), 4096.0);
     if (std::isfinite(dense_cells) && dense_cells <= dense_limit && cells_x <= 0x1FFFFF && cells_y <= 0x1FFFFF &&
         cells_z <= 0x1FFFFF) {
         hashed_ = false;

@@ -46,13 +46,20 @@ std::string_view to_string(CollisionQuery q) {
 
 ParticleSolver::ParticleSolver(const Terrain& terrain, const Bvh& bvh, SpawnDef spawn, SpringDef springs,
                                CollisionDef collision, IntegratorDef integrator, uint32_t seed)
+    : ParticleSolver(terrain, bvh, spawn, springs, collision, integrator, seed, std::nullopt, SinkDef{}) {}
+
+ParticleSolver::ParticleSolver(const Terrain& terrain, const Bvh& bvh, SpawnDef spawn, SpringDef springs,
+                               CollisionDef collision, IntegratorDef integrator, uint32_t seed,
+                               std::optional<PbfDef> pbf, SinkDef sink)
     : terrain_(terrain),
       bvh_(bvh),
       spawn_(spawn),
       springs_(springs),
       collision_(collision),
       integrator_(integrator),
-      rng_(seed) {
+      rng_(seed),
+      pbf_(pbf),
+      sink_(sink) {
     const size_t n = static_cast<size_t>(std::max(spawn_.count, 0));
     particles_.resize(n);
     for (size_t i = 0; i < n; ++i) {
@@ -61,15 +68,25 @@ ParticleSolver::ParticleSolver(const Terrain& terrain, const Bvh& bvh, SpawnDef 
         particles_.id[i] = static_cast<uint32_t>(i);
     }
     respawn_flag_.assign(n, 0);
+    if (pbf_) init_pbf();
 }
 
 void ParticleSolver::spawn(size_t i) {
     const Vec3 lo = spawn_.center - spawn_.half_extent;
     const Vec3 hi = spawn_.center + spawn_.half_extent;
-    Vec3 p;
-    p.x = rng_.uniform(lo.x, hi.x);
-    p.y = rng_.uniform(lo.y, hi.y);
-    p.z = rng_.uniform(lo.z, hi.z);
+    Vec3 p = spawn_.center;
+    if (spawn_.shape == SourceShape::Box) {
+        p.x = rng_.uniform(lo.x, hi.x);
+        p.y = rng_.uniform(lo.y, hi.y);
+        p.z = rng_.uniform(lo.z, hi.z);
+    } else if (spawn_.shape == SourceShape::Disc) {
+        // Uniform in the disc: radius sqrt(u) R, angle 2 pi v.
+        const float r = std::sqrt(rng_.uniform(0.0f, 1.0f)) * spawn_.half_extent.x;
+        const float a = rng_.uniform(0.0f, 6.2831853f);
+        p.x += r * std::cos(a);
+        p.z += r * std::sin(a);
+        p.y = rng_.uniform(lo.y, hi.y);
+    }
     particles_.position[i] = p;
     particles_.last_position[i] = p;
     particles_.velocity[i] = spawn_.initial_velocity;
@@ -107,15 +124,50 @@ void ParticleSolver::pour(const Vec3& center, int count) {
     }
 }
 
+void ParticleSolver::deactivate(size_t i) {
+    Particles& p = particles_;
+    const size_t j = --next_to_activate_;  // the last active particle takes slot i
+    if (i != j) {
+        std::swap(p.position[i], p.position[j]);
+        std::swap(p.last_position[i], p.last_position[j]);
+        std::swap(p.velocity[i], p.velocity[j]);
+        std::swap(p.force[i], p.force[j]);
+        std::swap(p.id[i], p.id[j]);
+    }
+    p.active[j] = 0;
+}
+
+void ParticleSolver::emit(float dt) {
+    // The source owes rate * dt particles; whole ones come from the inactive pool
+    // (never-spawned or recycled by a sink). An empty pool drops the debt: the budget
+    // caps the flow.
+    emit_credit_ += double(spawn_.particles_per_second()) * dt;
+    while (emit_credit_ >= 1.0) {
+        emit_credit_ -= 1.0;
+        if (next_to_activate_ >= particles_.size()) {
+            emit_credit_ = std::min(emit_credit_, 1.0);
+            break;
+        }
+        spawn(next_to_activate_++);
+        ++counters_.emitted;
+    }
+}
+
 void ParticleSolver::step_frame(float frame_dt) {
+    const bool by_rate = spawn_.particles_per_second() > 0.0f;
     const bool due = spawn_.interval == 0 || frame_ % static_cast<uint64_t>(spawn_.interval) == 0;
-    if (due) {
+    if (due && !by_rate) {
         const size_t n = spawn_.interval == 0 ? particles_.size() : 1;
         for (size_t k = 0; k < n && next_to_activate_ < particles_.size(); ++k) spawn(next_to_activate_++);
     }
     const float dt = integrator_.fixed_dt > 0.0f ? integrator_.fixed_dt : frame_dt;
     const int sub = std::max(integrator_.substeps, 1);
-    for (int s = 0; s < sub; ++s) step(dt / static_cast<float>(sub));
+    for (int s = 0; s < sub; ++s) {
+        // Emit after the step: particles a sink took out this step are back at once
+        // when the rate allows, so the budget stays in the river.
+        step(dt / static_cast<float>(sub));
+        if (by_rate) emit(dt / static_cast<float>(sub));
+    }
     ++frame_;
 }
 
@@ -128,10 +180,51 @@ bool ParticleSolver::out_of_bounds(const Vec3& p) const {
     return p.y < terrain_.bounds().min.y || !terrain_.contains_xz(p.x, p.z) || !std::isfinite(p.y);
 }
 
-void ParticleSolver::sort_by_cell() {
+uint8_t ParticleSolver::exit_flag(const Vec3& p) const {
+    if (sink_.kind == SinkKind::Box && p.x >= sink_.min.x && p.y >= sink_.min.y && p.z >= sink_.min.z &&
+        p.x <= sink_.max.x && p.y <= sink_.max.y && p.z <= sink_.max.z)
+        return 2;
+    if (!out_of_bounds(p)) return 0;
+    // Over an edge (not through the bottom): an outlet.
+    if (sink_.kind == SinkKind::Edges && std::isfinite(p.y) && p.y >= terrain_.bounds().min.y &&
+        std::isfinite(p.x) && std::isfinite(p.z))
+        return 2;
+    return 1;
+}
+
+void ParticleSolver::finish_step(uint64_t steps, const StepCounts& c) {
+    counters_.particle_steps += steps;
+    counters_.collisions += c.collisions;
+    counters_.guarded += c.guarded;
+    counters_.tunneled += c.tunneled;
+    const size_t n = particles_.size();
+    const bool pool = spawn_.particles_per_second() > 0.0f;
+    // Serial, in index order: the RNG sequence does not depend on the thread count.
+    for (size_t i = 0; i < n; ++i) {
+        if (respawn_flag_[i] == 1) {
+            ++counters_.respawned;
+            spawn(i);
+        } else if (respawn_flag_[i] == 2 && !pool) {
+            ++counters_.sunk;  // no flow rate: straight back to the source
+            spawn(i);
+        }
+    }
+    if (pool) {  // recycled into the pool, highest index first (swaps only move processed slots)
+        for (size_t i = n; i-- > 0;)
+            if (respawn_flag_[i] == 2) {
+                ++counters_.sunk;
+                deactivate(i);
+            }
+    }
+    float vmax = 0.0f;
+    for (size_t i = 0; i < next_to_activate_; ++i) vmax = std::max(vmax, glm::length(particles_.velocity[i]));
+    counters_.max_speed = vmax;
+}
+
+void ParticleSolver::sort_by_cell(float cell) {
     Particles& p = particles_;
     const size_t n = p.size();
-    grid_.build(p.position, p.active, std::max(spring_reach(springs_), 1e-3f));
+    grid_.build(p.position, p.active, std::max(cell, 1e-3f));
     // New order: binned (active) particles by cell, then the inactive suffix unchanged.
     const auto order = grid_.order();
     perm_.assign(order.begin(), order.end());
@@ -144,6 +237,7 @@ void ParticleSolver::sort_by_cell() {
     permute(p.position);
     permute(p.last_position);
     permute(p.velocity);
+    permute(p.force);
     scratch_id_.resize(n);
     for (size_t k = 0; k < n; ++k) scratch_id_[k] = p.id[perm_[k]];
     p.id.swap(scratch_id_);
@@ -154,8 +248,12 @@ void ParticleSolver::sort_by_cell() {
 void ParticleSolver::step(float dt) {
     Particles& p = particles_;
     const size_t n = p.size();
+    if (pbf_) {
+        step_pbf(dt);
+        return;
+    }
     const bool grid_springs = springs_.mode == SpringMode::Grid;
-    if (grid_springs) sort_by_cell();
+    if (grid_springs) sort_by_cell(spring_reach(springs_));
 
     const Vec3 g(0.0f, -integrator_.gravity, 0.0f);
     std::fill(p.force.begin(), p.force.end(), g);
@@ -178,8 +276,8 @@ void ParticleSolver::step(float dt) {
             p.position[i] += p.velocity[i] * dt;
             ++local_steps;
             collide(i, dt, c);
-            if (out_of_bounds(p.position[i])) {
-                respawn_flag_[i] = 1;
+            if (const uint8_t flag = exit_flag(p.position[i])) {
+                respawn_flag_[i] = flag;
                 continue;
             }
             if (depth_below_surface(p.position[i]) > kTunnelEpsilon) ++c.tunneled;
@@ -189,17 +287,7 @@ void ParticleSolver::step(float dt) {
         guarded += c.guarded;
         tunneled += c.tunneled;
     });
-    counters_.particle_steps += steps;
-    counters_.collisions += collisions;
-    counters_.guarded += guarded;
-    counters_.tunneled += tunneled;
-    // Serial, in index order: the RNG sequence does not depend on the thread count.
-    for (size_t i = 0; i < n; ++i) {
-        if (respawn_flag_[i]) {
-            ++counters_.respawned;
-            spawn(i);
-        }
-    }
+    finish_step(steps, StepCounts{.collisions = collisions, .guarded = guarded, .tunneled = tunneled});
 }
 
 void ParticleSolver::collide(size_t i, float dt, StepCounts& c) {

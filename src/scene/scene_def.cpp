@@ -26,16 +26,48 @@ std::string_view to_string(SolverKind s) {
     switch (s) {
         case SolverKind::Springs: return "springs";
         case SolverKind::Bullet: return "bullet";
+        case SolverKind::Pbf: return "pbf";
     }
     return "?";
 }
 
 SceneDef default_scene() {
+    // A PBF river down the procedural valley: a disc source at the head of the valley's
+    // main channel emits 4000 particles (spacing 0.5 m, 125 litres each) at 420 per
+    // second (all active within 10 s); particles leaving over the terrain's edges return to the source. Two
+    // substeps of 1/120 s with 3 density iterations; the sparse poly6 field wraps them.
+    SceneDef d = springs_valley_scene();
+    d.solver = SolverKind::Pbf;
+    d.spawn = {.count = 4000,
+               .center = Vec3(0.0f),
+               .half_extent = Vec3(1.5f, 0.5f, 1.5f),
+               .interval = 0,
+               .initial_velocity = Vec3(0.0f, -1.0f, 0.0f),
+               .auto_center = true,
+               .auto_height = 1.0f,
+               .auto_channel = true,
+               .shape = SourceShape::Disc,
+               .flow_rate = 420.0f,
+               .litres_per_particle = 0.0f};
+    d.pbf = PbfDef{};
+    d.sink = SinkDef{.kind = SinkKind::Edges};
+    d.collision = {.mode = CollisionMode::Robust, .damping = 0.02f, .offset = 0.005f, .leaf_triangles = 8,
+                   .radius = 0.1f, .query = CollisionQuery::Heightfield};
+    d.integrator = {.gravity = 9.82f, .fixed_dt = 0.0f, .substeps = 2};
+    d.field = {.kernel = FieldKernel::Poly6,
+               .radius = 1.0f,
+               .resolution = 3.0f,
+               .bounds_offset = 1.0f,
+               .threshold = 0.4f};
+    return d;
+}
+
+SceneDef springs_valley_scene() {
     // A stream down the procedural valley with the paper's own physics: low damping so
     // particles slide along the channel instead of sticking, soft springs so they keep
     // apart, and a field threshold that wraps small groups of balls.
     SceneDef d;
-    d.name = "default";
+    d.name = "default";  // the default scene before issue 5: preset "springs-valley"
     d.seed = 1;
     d.source = {.kind = TerrainSource::Valley, .heightmap = {}, .width = 65, .height = 97, .seed = 7};
     d.terrain = {.area_scale = 1.0f, .height_scale = 24.0f, .paper_row_orientation = true};
@@ -141,11 +173,16 @@ SceneDef paper_nile_engine() {
 }  // namespace
 
 std::vector<std::string> preset_names() {
-    return {"default", "paper-full", "paper-nile", "paper-bowl", "paper-engine", "paper-nile-engine"};
+    return {"default", "springs-valley", "paper-full", "paper-nile", "paper-bowl", "paper-engine", "paper-nile-engine"};
 }
 
 Result<SceneDef> preset(std::string_view name) {
     if (name == "default") return default_scene();
+    if (name == "springs-valley") {
+        SceneDef d = springs_valley_scene();
+        d.name = "springs-valley";
+        return d;
+    }
     if (name == "paper-full") return paper_full();
     if (name == "paper-nile") return paper_nile();
     if (name == "paper-bowl") return paper_bowl();
@@ -223,8 +260,72 @@ Status validate(const SceneDef& d) {
     c.positive("bullet.dt", d.bullet.fixed_dt, 1.0);
     c.range("bullet.max_substeps", d.bullet.max_substeps, 0, 1000);
     c.range("bullet.solver_iterations", d.bullet.solver_iterations, 1, 1000);
+    c.range("particles.flow_rate", d.spawn.flow_rate, 0.0, 1e7);
+    c.range("particles.litres_per_particle", d.spawn.litres_per_particle, 0.0, 1e9);
+    if (d.solver == SolverKind::Pbf) {
+        c.positive("pbf.spacing", d.pbf.spacing, 1e3);
+        if (c.error.empty() && !(d.pbf.kernel_radius > d.pbf.spacing && d.pbf.kernel_radius <= 4.0f * d.pbf.spacing))
+            c.error = fmt::format("pbf.kernel_radius: must be in (pbf.spacing, 4 pbf.spacing] = ({}, {}] (got {})",
+                                  d.pbf.spacing, 4.0f * d.pbf.spacing, d.pbf.kernel_radius);
+        c.range("pbf.iterations", d.pbf.iterations, 1, 100);
+        c.positive("pbf.relaxation", d.pbf.relaxation, 1e3);
+        c.range("pbf.scorr_k", d.pbf.scorr_k, 0.0, 1.0);
+        c.range("pbf.scorr_n", d.pbf.scorr_n, 1, 8);
+        c.range("pbf.scorr_dq", d.pbf.scorr_dq, 1e-3, 0.999);
+        c.range("pbf.xsph", d.pbf.xsph, 0.0, 1.0);
+        c.range("pbf.vorticity", d.pbf.vorticity, 0.0, 100.0);
+    }
+    if (d.sink.kind == SinkKind::Box) {
+        c.vec("sink.min", d.sink.min, -kBig, kBig);
+        c.vec("sink.max", d.sink.max, -kBig, kBig);
+        if (c.error.empty() && (d.sink.min.x > d.sink.max.x || d.sink.min.y > d.sink.max.y || d.sink.min.z > d.sink.max.z))
+            c.error = "sink.max: every component must be >= sink.min's";
+    }
     if (!c.error.empty()) return Error{c.error};
     return Ok{};
+}
+
+Status validate_on_terrain(const SceneDef& d, const Terrain& t) {
+    const Vec3 c = d.spawn.center;
+    const Aabb b = t.bounds();
+    if (!t.contains_xz(c.x, c.z))
+        return Error{fmt::format("particles.spawn_center: the source at [{}, {}, {}] is outside the terrain's rectangle "
+                                 "x in [0, {}], z in [0, {}]",
+                                 c.x, c.y, c.z, b.max.x, b.max.z)};
+    if (d.sink.kind == SinkKind::Box) {
+        const Vec3 lo = c - d.spawn.half_extent, hi = c + d.spawn.half_extent;
+        if (lo.x <= d.sink.max.x && hi.x >= d.sink.min.x && lo.y <= d.sink.max.y && hi.y >= d.sink.min.y &&
+            lo.z <= d.sink.max.z && hi.z >= d.sink.min.z)
+            return Error{fmt::format("sink.min/sink.max: the sink box overlaps the source volume around [{}, {}, {}] "
+                                     "(particles.spawn_center): particles would be recycled as they are born",
+                                     c.x, c.y, c.z)};
+    }
+    if (d.sink.kind == SinkKind::Edges) {
+        const Vec3 lo = c - d.spawn.half_extent, hi = c + d.spawn.half_extent;
+        if (!t.contains_xz(lo.x, lo.z) || !t.contains_xz(hi.x, hi.z))
+            return Error{fmt::format("particles.spawn_half_extent: the source volume around [{}, {}, {}] crosses the "
+                                     "terrain's edge, which is the sink (sink.kind = \"edges\")",
+                                     c.x, c.y, c.z)};
+    }
+    return Ok{};
+}
+
+std::vector<std::string> scene_warnings(const SceneDef& d) {
+    std::vector<std::string> w;
+    const float rate = d.spawn.particles_per_second();
+    if (rate > float(d.spawn.count))
+        w.push_back(fmt::format("particles.flow_rate: {} particles per second is more than the whole particle "
+                                "budget (particles.count = {}) every second: the source runs dry and the flow is "
+                                "capped by the budget; lower the rate or raise particles.count",
+                                rate, d.spawn.count));
+    else if (rate > 0.0f && rate * 5.0f > float(d.spawn.count))
+        w.push_back(fmt::format("particles.flow_rate: {} particles per second empties the budget of {} "
+                                "(particles.count) in {:.1f} s; a river longer than that runs with gaps",
+                                rate, d.spawn.count, float(d.spawn.count) / rate));
+    if (rate > 0.0f && d.sink.kind == SinkKind::None)
+        w.push_back("sink.kind: none with a particles.flow_rate: particles are only recycled when they leave the "
+                    "terrain's box; set sink.kind = \"edges\" for a river");
+    return w;
 }
 
 }  // namespace mr

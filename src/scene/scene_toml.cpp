@@ -167,11 +167,11 @@ Result<SceneDef> parse_scene_toml(std::string_view text, const std::string& orig
     SceneDef d = base;
     Reader r(origin);
     r.allow(root, "", {"name", "seed", "solver", "surface", "terrain", "particles", "forces", "springs", "collision",
-                       "integrator", "field", "bullet"});
+                       "integrator", "field", "bullet", "pbf", "sink"});
     r.string(root, "", "name", d.name);
     r.seed(root, "", "seed", d.seed);
     r.boolean(root, "", "surface", d.surface);
-    r.choice(root, "", "solver", d.solver, {{"springs", SolverKind::Springs}, {"bullet", SolverKind::Bullet}});
+    r.choice(root, "", "solver", d.solver, {{"springs", SolverKind::Springs}, {"bullet", SolverKind::Bullet}, {"pbf", SolverKind::Pbf}});
 
     if (const toml::table* t = r.table(root, "terrain")) {
         const std::string p = "terrain.";
@@ -201,13 +201,18 @@ Result<SceneDef> parse_scene_toml(std::string_view text, const std::string& orig
     if (const toml::table* t = r.table(root, "particles")) {
         const std::string p = "particles.";
         r.allow(*t, p, {"count", "spawn_center", "spawn_half_extent", "spawn_interval", "initial_velocity",
-                        "auto_height"});
+                        "auto_height", "source_shape", "flow_rate", "litres_per_particle"});
         r.integer(*t, p, "count", d.spawn.count, 1, kMaxParticles);
         if (const toml::node* n = t->get("spawn_center"); n && n->is_string()) {
-            if (n->value<std::string>() == "auto")
+            if (n->value<std::string>() == "auto") {
                 d.spawn.auto_center = true;
-            else
-                r.fail(p + "spawn_center", "must be \"auto\" or an array of 3 numbers [x, y, z]");
+                d.spawn.auto_channel = false;
+            } else if (n->value<std::string>() == "channel") {
+                d.spawn.auto_center = true;
+                d.spawn.auto_channel = true;
+            } else {
+                r.fail(p + "spawn_center", "must be \"auto\", \"channel\" or an array of 3 numbers [x, y, z]");
+            }
         } else if (n) {
             r.vec3(*t, p, "spawn_center", d.spawn.center);
             d.spawn.auto_center = false;
@@ -216,6 +221,31 @@ Result<SceneDef> parse_scene_toml(std::string_view text, const std::string& orig
         r.integer(*t, p, "spawn_interval", d.spawn.interval, 0, 1000000);
         r.vec3(*t, p, "initial_velocity", d.spawn.initial_velocity);
         r.number(*t, p, "auto_height", d.spawn.auto_height);
+        r.choice(*t, p, "source_shape", d.spawn.shape,
+                 {{"box", SourceShape::Box}, {"disc", SourceShape::Disc}, {"point", SourceShape::Point}});
+        r.number(*t, p, "flow_rate", d.spawn.flow_rate);
+        r.number(*t, p, "litres_per_particle", d.spawn.litres_per_particle);
+    }
+    if (const toml::table* t = r.table(root, "pbf")) {
+        const std::string p = "pbf.";
+        r.allow(*t, p, {"spacing", "kernel_radius", "iterations", "relaxation", "scorr_k", "scorr_n", "scorr_dq", "xsph",
+                        "vorticity"});
+        r.number(*t, p, "spacing", d.pbf.spacing);
+        r.number(*t, p, "kernel_radius", d.pbf.kernel_radius);
+        r.integer(*t, p, "iterations", d.pbf.iterations, 1, 100);
+        r.number(*t, p, "relaxation", d.pbf.relaxation);
+        r.number(*t, p, "scorr_k", d.pbf.scorr_k);
+        r.integer(*t, p, "scorr_n", d.pbf.scorr_n, 1, 8);
+        r.number(*t, p, "scorr_dq", d.pbf.scorr_dq);
+        r.number(*t, p, "xsph", d.pbf.xsph);
+        r.number(*t, p, "vorticity", d.pbf.vorticity);
+    }
+    if (const toml::table* t = r.table(root, "sink")) {
+        const std::string p = "sink.";
+        r.allow(*t, p, {"kind", "min", "max"});
+        r.choice(*t, p, "kind", d.sink.kind, {{"none", SinkKind::None}, {"box", SinkKind::Box}, {"edges", SinkKind::Edges}});
+        r.vec3(*t, p, "min", d.sink.min);
+        r.vec3(*t, p, "max", d.sink.max);
     }
     if (const toml::table* t = r.table(root, "forces")) {
         r.allow(*t, "forces.", {"gravity"});

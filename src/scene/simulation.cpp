@@ -39,13 +39,25 @@ Vec3 auto_spawn_center(const Terrain& t, float auto_height) {
     return Vec3(x, t.height_mesh(x, z) + auto_height, z);
 }
 
+/// The head of the terrain's main channel (ChannelMap::main_head), one sample in from
+/// the edges, auto_height above the ground.
+Vec3 channel_spawn_center(const Terrain& t, const ChannelMap& m, float auto_height) {
+    auto [i, j] = m.main_head();
+    i = std::clamp(i, 1, std::max(1, t.rows() - 2));
+    j = std::clamp(j, 1, std::max(1, t.columns() - 2));
+    const float s = t.area_scale();
+    const float x = static_cast<float>(j) * s, z = static_cast<float>(i) * s;
+    return Vec3(x, t.height_mesh(x, z) + auto_height, z);
+}
+
 }  // namespace
 
 Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh)
-    : def_(def), terrain_(std::move(terrain)), bvh_(std::move(bvh)) {
+    : def_(def), terrain_(std::move(terrain)), bvh_(std::move(bvh)), channel_(ChannelMap::build(terrain_)) {
     SpawnDef spawn = def_.spawn;
     if (spawn.auto_center) {
-        spawn.center = auto_spawn_center(terrain_, spawn.auto_height);
+        spawn.center = spawn.auto_channel ? channel_spawn_center(terrain_, channel_, spawn.auto_height)
+                                          : auto_spawn_center(terrain_, spawn.auto_height);
         spawn.auto_center = false;
         def_.spawn = spawn;
     }
@@ -67,7 +79,11 @@ Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh)
     switch (def_.solver) {
         case SolverKind::Springs:
             solver_ = std::make_unique<ParticleSolver>(terrain_, bvh_, spawn, def_.springs, def_.collision,
-                                                       def_.integrator, def_.seed);
+                                                       def_.integrator, def_.seed, std::nullopt, def_.sink);
+            break;
+        case SolverKind::Pbf:
+            solver_ = std::make_unique<ParticleSolver>(terrain_, bvh_, spawn, def_.springs, def_.collision,
+                                                       def_.integrator, def_.seed, def_.pbf, def_.sink);
             break;
         case SolverKind::Bullet:
             solver_ = std::make_unique<BulletSolver>(terrain_, spawn, def_.springs, def_.integrator, def_.bullet,
@@ -89,7 +105,9 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, cons
     if (!terrain) return terrain.error();
     auto bvh = Bvh::build(terrain.value(), BvhDef{.leaf_triangles = def.collision.leaf_triangles});
     if (!bvh) return bvh.error();
-    return std::unique_ptr<Simulation>(new Simulation(def, std::move(terrain.value()), std::move(bvh.value())));
+    std::unique_ptr<Simulation> sim(new Simulation(def, std::move(terrain.value()), std::move(bvh.value())));
+    if (auto v = validate_on_terrain(sim->def(), sim->terrain()); !v) return v.error();  // resolved source
+    return sim;
 }
 
 void Simulation::step(float frame_dt) {
@@ -125,6 +143,12 @@ std::array<int, 3> Simulation::field_dims() const {
         return {g.nx, g.ny, g.nz};
     }
     return {field_.nx, field_.ny, field_.nz};
+}
+
+float Simulation::wet_fraction() const {
+    const Particles& p = particles();
+    const WetChannelDef wet{.width = std::max(3.0f, 3.0f * terrain_.area_scale()), .depth = 3.0f};
+    return wet_channel_fraction(terrain_, channel_, p.position, p.active, wet);
 }
 
 uint64_t Simulation::state_hash() const {

@@ -45,7 +45,7 @@ std::vector<Vec3> w2_spheres(int n, uint32_t seed) {
 }
 
 SceneDef river_scene(int n) {
-    SceneDef d = default_scene();
+    SceneDef d = springs_valley_scene();
     d.name = "river-" + std::to_string(n);
     d.spawn.count = n;
     d.spawn.interval = 0;

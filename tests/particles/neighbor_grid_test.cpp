@@ -27,7 +27,7 @@ TEST(NeighborGrid, CandidatesContainEveryParticleWithinOneCellDenseAndHashed) {
         Vec3 extent;
         float cell;
     };
-    // Compact clouds give a dense grid; a cloud spread far relative to its cell size
+    // Compact clouds give a dense grid; a cloud spread far (> 32 cells per particle)
     // forces the hash table.
     for (const Case& c : {Case{500, Vec3(5, 5, 5), 0.7f}, Case{2000, Vec3(300, 2, 300), 0.5f},
                           Case{300, Vec3(1e4f, 1e4f, 1e4f), 50.0f}}) {

@@ -1,0 +1,100 @@
+// metariver emitters and sinks: where a river's water comes from and where it leaves.
+//
+// A source (box, disc or point) emits at a flow rate; sinks (a box, or the terrain's
+// outlet edges) take particles out and hand them back to the source, so a river runs
+// at a fixed particle budget. ChannelMap finds the terrain's drainage network (priority
+// flood + D8 flow accumulation) to place an automatic source at the head of the main
+// channel and to measure how much of the water stays in the wet channel. FlowMeter
+// turns the sink counter into an outflow rate and a steady-state verdict.
+#pragma once
+
+#include <metariver/core.h>
+#include <metariver/terrain.h>
+
+#include <cstdint>
+#include <span>
+#include <string_view>
+#include <vector>
+
+namespace mr {
+
+enum class SourceShape {
+    Box,    ///< uniform in center +- half_extent
+    Disc,   ///< uniform in the horizontal disc of radius half_extent.x, height +- half_extent.y
+    Point,  ///< exactly at center
+};
+std::string_view to_string(SourceShape s);
+
+enum class SinkKind {
+    None,   ///< particles leaving the terrain are re-spawned (the paper)
+    Box,    ///< particles entering [min, max] are recycled to the source
+    Edges,  ///< particles leaving the terrain's rectangle over an edge (its outlets) are recycled
+};
+std::string_view to_string(SinkKind s);
+
+struct SinkDef {
+    SinkKind kind = SinkKind::None;
+    Vec3 min{0.0f};  ///< box sink corner, metres
+    Vec3 max{0.0f};  ///< box sink corner, metres
+};
+
+/// The terrain's drainage network, on its grid. Depressions are filled (priority flood,
+/// Barnes et al. 2014, with a tiny epsilon gradient), every cell drains to its steepest
+/// of 8 neighbours (D8), and accumulation counts the cells upstream of each (itself
+/// included). Channel cells have accumulation >= channel_threshold().
+class ChannelMap {
+public:
+    static ChannelMap build(const Terrain& t);
+
+    int rows() const { return rows_; }
+    int columns() const { return columns_; }
+    uint32_t accumulation(int i, int j) const { return acc_[size_t(i) * columns_ + j]; }
+    uint32_t channel_threshold() const { return threshold_; }
+    bool is_channel(int i, int j) const { return accumulation(i, j) >= threshold_; }
+    /// Horizontal distance (metres) from cell (i, j) to the nearest channel cell.
+    float distance_to_channel(int i, int j) const { return dist_[size_t(i) * columns_ + j]; }
+    /// Head of the main channel: from the cell with the largest accumulation, walk
+    /// upstream along the largest contributing neighbour while it is a channel cell.
+    /// Returns (row, column).
+    std::pair<int, int> main_head() const { return head_; }
+    /// Downhill direction (x, z unit vector) of the flow at cell (i, j).
+    Vec3 flow_direction(int i, int j) const;
+
+private:
+    int rows_ = 0, columns_ = 0;
+    float area_scale_ = 1.0f;
+    uint32_t threshold_ = 1;
+    std::vector<uint32_t> acc_;
+    std::vector<int32_t> receiver_;  ///< D8 receiver cell index, -1 at outlets
+    std::vector<float> dist_;
+    std::pair<int, int> head_{0, 0};
+};
+
+/// Wet channel: a particle is in it when it lies within `width` metres (horizontally)
+/// of a channel cell and at most `depth` metres above the terrain there.
+struct WetChannelDef {
+    float width = 3.0f;  ///< metres
+    float depth = 3.0f;  ///< metres
+};
+/// Fraction of the active particles inside the wet channel (0 when none is active).
+float wet_channel_fraction(const Terrain& t, const ChannelMap& m, std::span<const Vec3> positions,
+                           std::span<const uint8_t> active, const WetChannelDef& def = {});
+
+/// Outflow measurement: feed the cumulative sink count after every frame.
+class FlowMeter {
+public:
+    void record(double time_s, uint64_t sunk_total);
+    struct Summary {
+        double rate = 0.0;              ///< particles per second over the second half of the run
+        double windows[4] = {0, 0, 0, 0};  ///< rates over the four quarters of the second half
+        double first_outflow_s = -1.0;  ///< time of the first particle at a sink, seconds (-1: none)
+        bool steady = false;            ///< rate > 0 and every window within +-25 % of the rate
+    };
+    Summary summary() const;
+
+private:
+    std::vector<double> t_;
+    std::vector<uint64_t> n_;
+};
+
+}  // namespace mr

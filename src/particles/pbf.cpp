@@ -1,0 +1,347 @@
+// Position Based Fluids: M. Macklin and M. Mueller, "Position Based Fluids", ACM
+// Transactions on Graphics 32(4), SIGGRAPH 2013.
+//
+// One step of dt (algorithm 1 of the paper):
+//   v += g dt; x* = x + v dt                                   (predict)
+//   bin x* in the neighbour grid (cell = h), arrays reordered by cell
+//   repeat `iterations` times:
+//     rho_i = sum_j W_poly6(x*_i - x*_j)                        (number density)
+//     C_i = max(rho_i / rho_0 - 1, 0)                          (eq. 1; unilateral: a free
+//                                                               surface is not pulled together)
+//     lambda_i = -C_i / (sum_k |grad_k C_i|^2 + eps)            (eq. 11)
+//     dx_i = 1/rho_0 sum_j (lambda_i + lambda_j + s_corr) grad W_spiky(x*_i - x*_j)   (eq. 14)
+//     s_corr = -k (W(r) / W(dq))^n                             (eq. 13, tensile instability)
+//     x*_i += dx_i, kept above the terrain (heightfield, + radius)
+//   v = (x* - x) / dt; swept robust terrain collision on x -> x* (the particle slides)
+//   XSPH viscosity v_i += c sum_j (v_j - v_i) W(x_i - x_j) / rho_0 (eq. 17), optional
+//   vorticity confinement (eq. 15, 16)
+//
+// rho_0 is the kernel sum of a cubic lattice of the rest spacing, so "number density"
+// (no mass) and a perfect lattice has C = 0. eps and s_corr are scaled by a lattice
+// particle's sum |grad C|^2 so they mean the same at any spacing.
+//
+// Every pass is a per-particle gather over the 27 cells around the particle's cell
+// (the arrays are sorted by cell, so each neighbour cell row is one contiguous index
+// range), written only to the particle's own slot: parallel, no atomics, and the same
+// result for any thread count (each particle's sum runs in a fixed order).
+#include <metariver/particles.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+
+namespace mr {
+
+namespace {
+
+constexpr float kPi = 3.14159265358979f;
+
+struct Kernels {
+    float h, h2, poly6, spiky;
+    explicit Kernels(float radius)
+        : h(radius),
+          h2(radius * radius),
+          poly6(315.0f / (64.0f * kPi * std::pow(radius, 9.0f))),
+          spiky(-45.0f / (kPi * std::pow(radius, 6.0f))) {}
+    float W(float r2) const {
+        if (r2 >= h2) return 0.0f;
+        const float d = h2 - r2;
+        return poly6 * d * d * d;
+    }
+    /// grad W_spiky at d = x_i - x_j (w.r.t. x_i).
+    Vec3 grad(const Vec3& d, float r) const {
+        if (r >= h || r <= 1e-9f) return Vec3(0.0f);
+        const float a = h - r;
+        return (spiky * a * a / r) * d;
+    }
+};
+
+/// Collects the index ranges of the 27 cells around cell run r (at most 27).
+struct Ranges {
+    uint32_t s[27], e[27];
+    int n = 0;
+};
+Ranges ranges_of(const NeighborGrid& g, size_t run) {
+    Ranges rg;
+    g.for_each_neighbor_range(run, [&](uint32_t s, uint32_t e) {
+        rg.s[rg.n] = s;
+        rg.e[rg.n] = e;
+        ++rg.n;
+    });
+    return rg;
+}
+
+template <class F>
+void for_each_run(const NeighborGrid& g, F&& f) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, g.run_count(), 8), [&](const tbb::blocked_range<size_t>& range) {
+        for (size_t run = range.begin(); run != range.end(); ++run) {
+            const Ranges rg = ranges_of(g, run);
+            for (uint32_t i = g.run_start(run); i < g.run_start(run + 1); ++i) f(i, rg);
+        }
+    });
+}
+
+}  // namespace
+
+void ParticleSolver::init_pbf() {
+    const PbfDef& d = *pbf_;
+    const Kernels k(d.kernel_radius);
+    // Lattice sums: rest density and a lattice particle's sum |grad C|^2.
+    const int m = int(std::ceil(d.kernel_radius / d.spacing)) + 1;
+    double rho = 0.0;
+    Vec3 gsum(0.0f);
+    double g2 = 0.0;
+    for (int a = -m; a <= m; ++a)
+        for (int b = -m; b <= m; ++b)
+            for (int c = -m; c <= m; ++c) {
+                const Vec3 x = d.spacing * Vec3(float(a), float(b), float(c));
+                const float r = glm::length(x);
+                rho += k.W(r * r);
+                const Vec3 gr = k.grad(x, r);
+                gsum += gr;
+                g2 += double(glm::dot(gr, gr));
+            }
+    rest_density_ = float(rho);
+    const double inv = 1.0 / rho;
+    lattice_grad_sum_ = float(inv * inv * (g2 + double(glm::dot(gsum, gsum))));
+}
+
+void ParticleSolver::pbf_densities(std::vector<float>& out) {
+    const Kernels k(pbf_->kernel_radius);
+    sort_by_cell(pbf_->kernel_radius);
+    const Particles& p = particles_;
+    out.assign(p.size(), 0.0f);
+    for_each_run(grid_, [&](uint32_t i, const Ranges& rg) {
+        const Vec3 xi = p.position[i];
+        float rho = 0.0f;
+        for (int q = 0; q < rg.n; ++q)
+            for (uint32_t j = rg.s[q]; j < rg.e[q]; ++j) {
+                const Vec3 d = xi - p.position[j];
+                rho += k.W(glm::dot(d, d));
+            }
+        out[i] = rho;
+    });
+}
+
+void ParticleSolver::pbf_densities_brute_force(std::vector<float>& out) const {
+    const Kernels k(pbf_->kernel_radius);
+    const Particles& p = particles_;
+    out.assign(p.size(), 0.0f);
+    for (size_t i = 0; i < p.size(); ++i) {
+        if (!p.active[i]) continue;
+        double rho = 0.0;
+        for (size_t j = 0; j < p.size(); ++j) {
+            if (!p.active[j]) continue;
+            const Vec3 d = p.position[i] - p.position[j];
+            rho += k.W(glm::dot(d, d));
+        }
+        out[i] = float(rho);
+    }
+}
+
+void ParticleSolver::collide_fluid(size_t i, StepCounts& c) {
+    Particles& p = particles_;
+    const Vec3 lift(0.0f, collision_.radius, 0.0f);
+    Vec3 from = p.last_position[i] - lift;
+    Vec3 to = p.position[i] - lift;
+    Vec3 v = p.velocity[i];
+    constexpr int kMaxContacts = 4;
+    for (int b = 0; b < kMaxContacts; ++b) {
+        const auto hit = robust_hit(from, to);
+        if (!hit) break;
+        ++c.collisions;
+        const Vec3 n = hit->normal;
+        // Slide: the rest of the motion loses its normal part (and the damping share).
+        Vec3 rest = to - hit->point;
+        rest -= std::min(glm::dot(rest, n), 0.0f) * n;
+        const float vn = glm::dot(v, n);
+        if (vn < 0.0f) v -= vn * n;
+        v *= 1.0f - collision_.damping;
+        from = hit->point + Vec3(0.0f, collision_.offset, 0.0f);
+        to = from + rest * (1.0f - collision_.damping);
+    }
+    if (terrain_.contains_xz(to.x, to.z)) {
+        const float h = terrain_.height_mesh(to.x, to.z);
+        if (to.y < h) {
+            ++c.guarded;
+            const Vec3 n = terrain_.normal_mesh(to.x, to.z);
+            const float vn = glm::dot(v, n);
+            if (vn < 0.0f) v -= vn * n;
+            to.y = h + collision_.offset;
+        }
+    }
+    p.velocity[i] = v;
+    p.position[i] = to + lift;
+}
+
+void ParticleSolver::step_pbf(float dt) {
+    const PbfDef& d = *pbf_;
+    Particles& p = particles_;
+    const size_t n = p.size();
+    const Kernels k(d.kernel_radius);
+    const Vec3 g(0.0f, -integrator_.gravity, 0.0f);
+    const float inv_rho0 = 1.0f / rest_density_;
+    const float eps = d.relaxation * lattice_grad_sum_;
+    const float dq = d.scorr_dq * d.kernel_radius;
+    const float inv_wdq = 1.0f / k.W(dq * dq);
+    const float scorr_scale = d.scorr_k * lattice_grad_sum_ > 0.0f ? d.scorr_k / lattice_grad_sum_ : 0.0f;
+    const float max_move = 0.5f * d.spacing;  // per iteration: a spawn overlap never explodes
+    const bool terrain = collision_.mode != CollisionMode::None;
+
+    // 1. Predict.
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i != r.end(); ++i) {
+            respawn_flag_[i] = 0;
+            if (!p.active[i]) continue;
+            p.velocity[i] += g * dt;
+            p.last_position[i] = p.position[i];
+            p.position[i] += p.velocity[i] * dt;
+        }
+    });
+    // 2. Bin the predicted positions (reorders every array by cell).
+    sort_by_cell(d.kernel_radius);
+    lambda_.assign(n, 0.0f);
+    density_.assign(n, 0.0f);
+    delta_.assign(n, Vec3(0.0f));
+
+    // 3. Density constraint iterations.
+    for (int it = 0; it < d.iterations; ++it) {
+        for_each_run(grid_, [&](uint32_t i, const Ranges& rg) {
+            const Vec3 xi = p.position[i];
+            float rho = 0.0f, sum_g2 = 0.0f;
+            Vec3 gi(0.0f);
+            for (int q = 0; q < rg.n; ++q)
+                for (uint32_t j = rg.s[q]; j < rg.e[q]; ++j) {
+                    const Vec3 dd = xi - p.position[j];
+                    const float r2 = glm::dot(dd, dd);
+                    if (r2 >= k.h2) continue;
+                    rho += k.W(r2);
+                    const Vec3 gr = k.grad(dd, std::sqrt(r2)) * inv_rho0;
+                    gi += gr;
+                    sum_g2 += glm::dot(gr, gr);
+                }
+            sum_g2 += glm::dot(gi, gi);
+            const float C = rho * inv_rho0 - 1.0f;
+            density_[i] = C;
+            lambda_[i] = -std::max(C, 0.0f) / (sum_g2 + eps);
+        });
+        for_each_run(grid_, [&](uint32_t i, const Ranges& rg) {
+            const Vec3 xi = p.position[i];
+            const float li = lambda_[i];
+            Vec3 dx(0.0f);
+            for (int q = 0; q < rg.n; ++q)
+                for (uint32_t j = rg.s[q]; j < rg.e[q]; ++j) {
+                    if (j == i) continue;
+                    const Vec3 dd = xi - p.position[j];
+                    const float r2 = glm::dot(dd, dd);
+                    if (r2 >= k.h2) continue;
+                    const float w = k.W(r2) * inv_wdq;
+                    const float w2 = w * w;
+                    float sc = w2 * w2;  // n = 4
+                    for (int e = 4; e < d.scorr_n; ++e) sc *= w;
+                    if (d.scorr_n < 4) sc = std::pow(w, float(d.scorr_n));
+                    dx += (li + lambda_[j] - scorr_scale * sc) * k.grad(dd, std::sqrt(r2));
+                }
+            dx *= inv_rho0;
+            const float len = glm::length(dx);
+            if (len > max_move) dx *= max_move / len;
+            delta_[i] = dx;
+        });
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t i = r.begin(); i != r.end(); ++i) {
+                if (!p.active[i]) continue;
+                Vec3 x = p.position[i] + delta_[i];
+                if (terrain && terrain_.contains_xz(x.x, x.z)) {
+                    // Out of the ground along the triangle's normal (to the closest point
+                    // of its plane, lifted by the radius): a vertical lift on a steep
+                    // wall would fling the particle up by the wall's height.
+                    const float h = terrain_.height_mesh(x.x, x.z) + collision_.radius;
+                    if (x.y < h) {
+                        const Vec3 nrm = terrain_.normal_mesh(x.x, x.z);
+                        x += ((h - x.y) * nrm.y) * nrm;
+                    }
+                }
+                p.position[i] = x;
+            }
+        });
+    }
+
+    // 4. Velocity from the motion, swept terrain collision (sliding), exits.
+    std::atomic<uint64_t> steps{0}, collisions{0}, guarded{0}, tunneled{0};
+    const float inv_dt = 1.0f / dt;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 512), [&](const tbb::blocked_range<size_t>& range) {
+        StepCounts c;
+        uint64_t local = 0;
+        for (size_t i = range.begin(); i != range.end(); ++i) {
+            if (!p.active[i]) continue;
+            ++local;
+            p.velocity[i] = (p.position[i] - p.last_position[i]) * inv_dt;
+            if (terrain) collide_fluid(i, c);
+            if (depth_below_surface(p.position[i]) > kTunnelEpsilon) ++c.tunneled;
+        }
+        steps += local;
+        collisions += c.collisions;
+        guarded += c.guarded;
+        tunneled += c.tunneled;
+    });
+
+    // 5. XSPH viscosity and vorticity confinement (gathers of the velocities).
+    if (d.xsph > 0.0f || d.vorticity > 0.0f) {
+        if (d.vorticity > 0.0f) {
+            omega_.assign(n, Vec3(0.0f));
+            for_each_run(grid_, [&](uint32_t i, const Ranges& rg) {
+                Vec3 w(0.0f);
+                for (int q = 0; q < rg.n; ++q)
+                    for (uint32_t j = rg.s[q]; j < rg.e[q]; ++j) {
+                        const Vec3 dd = p.position[i] - p.position[j];
+                        const float r = glm::length(dd);
+                        w += glm::cross(p.velocity[j] - p.velocity[i], -k.grad(dd, r));
+                    }
+                omega_[i] = w * inv_rho0;
+            });
+        }
+        for_each_run(grid_, [&](uint32_t i, const Ranges& rg) {
+            const Vec3 xi = p.position[i], vi = p.velocity[i];
+            Vec3 visc(0.0f), eta(0.0f);
+            for (int q = 0; q < rg.n; ++q)
+                for (uint32_t j = rg.s[q]; j < rg.e[q]; ++j) {
+                    const Vec3 dd = xi - p.position[j];
+                    const float r2 = glm::dot(dd, dd);
+                    if (r2 >= k.h2) continue;
+                    visc += (p.velocity[j] - vi) * k.W(r2);
+                    if (d.vorticity > 0.0f) eta += glm::length(omega_[j]) * k.grad(dd, std::sqrt(r2));
+                }
+            Vec3 v = vi + d.xsph * inv_rho0 * visc;
+            if (d.vorticity > 0.0f) {
+                const float el = glm::length(eta);
+                if (el > 1e-12f) v += dt * d.vorticity * glm::cross(eta / el, omega_[i]);
+            }
+            delta_[i] = v;
+        });
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t i = r.begin(); i != r.end(); ++i)
+                if (p.active[i]) p.velocity[i] = delta_[i];
+        });
+    }
+    for (size_t i = 0; i < n; ++i)
+        if (p.active[i]) respawn_flag_[i] = exit_flag(p.position[i]);
+
+    // Density error of the last iteration (serial sum: deterministic).
+    double sum = 0.0;
+    float mx = 0.0f;
+    size_t cnt = 0;
+    for (size_t i = 0; i < n; ++i) {
+        if (!p.active[i]) continue;
+        sum += std::max(density_[i], 0.0f);
+        mx = std::max(mx, density_[i]);
+        ++cnt;
+    }
+    counters_.density_error_mean = cnt ? float(sum / double(cnt)) : 0.0f;
+    counters_.density_error_max = mx;
+    finish_step(steps, StepCounts{.collisions = collisions, .guarded = guarded, .tunneled = tunneled});
+}
+
+}  // namespace mr
