@@ -2,6 +2,7 @@
 // peers' side-by-side rely on), bad options (exit 2, one line), and --peers never
 // crashing whether or not the peers are installed.
 #include <gtest/gtest.h>
+#include "cli_fixture.h"
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -17,40 +18,14 @@ using json = nlohmann::json;
 
 namespace {
 
-struct BenchRun {
-    int code = -1;
-    std::string out;
-    std::string err;
-};
+using BenchRun = mr::test::CliResult;
+using mr::test::slurp;
 
-std::string slurp(const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
-
-class Bench : public ::testing::Test {
+class Bench : public mr::test::CliFixture {
 protected:
-    void SetUp() override {
-        dir_ = fs::temp_directory_path() /
-               ("metariver_bench_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-    }
-    void TearDown() override { fs::remove_all(dir_); }
-
+    /// `metariver bench ARGS` from the source tree, as documented (drivers in bench/peers).
     BenchRun run(const std::string& args) {
-        const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-        // From the source tree, as documented (the drivers are found in bench/peers).
-        const std::string cmd = "cd " + std::string(METARIVER_SOURCE_DIR) + " && " + METARIVER_EXE + " bench " + args +
-                                " >" + out.string() + " 2>" + err.string();
-        const int status = std::system(cmd.c_str());
-        BenchRun r;
-        r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-        r.out = slurp(out);
-        r.err = slurp(err);
-        return r;
+        return CliFixture::run("bench " + args, "cd " + std::string(METARIVER_SOURCE_DIR) + " &&");
     }
 
     void expect_bad(const std::string& args, const std::string& must_contain) {
@@ -60,7 +35,6 @@ protected:
         EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "one line: " << r.err;
     }
 
-    fs::path dir_;
 };
 
 TEST_F(Bench, W2JsonHasTheDocumentedKeys) {

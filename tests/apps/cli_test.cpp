@@ -1,6 +1,7 @@
 // End-to-end tests of the metariver binary: good runs and every kind of bad input
 // (exit code 2, one line naming the file/option/key, nothing written).
 #include <gtest/gtest.h>
+#include "cli_fixture.h"
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -16,42 +17,11 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct CliResult {
-    int code = -1;
-    std::string out;
-    std::string err;
-};
+using mr::test::CliResult;
+using mr::test::slurp;
 
-std::string slurp(const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
-
-class Cli : public ::testing::Test {
+class Cli : public mr::test::CliFixture {
 protected:
-    void SetUp() override {
-        dir_ = fs::temp_directory_path() /
-               ("metariver_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-    }
-    void TearDown() override { fs::remove_all(dir_); }
-
-    CliResult run(const std::string& args) {
-        const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-        const std::string cmd = std::string(METARIVER_EXE) + " " + args + " >" + out.string() + " 2>" + err.string();
-        const int status = std::system(cmd.c_str());
-        CliResult r;
-        r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-        r.out = slurp(out);
-        r.err = slurp(err);
-        fs::remove(out);
-        fs::remove(err);
-        return r;
-    }
-
     fs::path write(const std::string& name, const std::string& bytes) {
         const fs::path p = dir_ / name;
         std::ofstream(p, std::ios::binary) << bytes;
@@ -79,7 +49,6 @@ protected:
         EXPECT_EQ(files_left(), before) << args;
     }
 
-    fs::path dir_;
 };
 
 std::string shared_map(const char* name) {

@@ -6,6 +6,7 @@
 #include <metariver/render.h>
 
 #include <gtest/gtest.h>
+#include "cli_fixture.h"
 
 #include <cstdlib>
 #include <filesystem>
@@ -18,18 +19,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct CliResult {
-    int code = -1;
-    std::string out;
-    std::string err;
-};
-
-std::string slurp(const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
+using mr::test::CliResult;
+using mr::test::slurp;
 
 bool headless_gl_available(std::string& why) {
     static int state = -1;
@@ -51,35 +42,15 @@ bool headless_gl_available(std::string& why) {
         }                                                                             \
     } while (0)
 
-class RenderCli : public ::testing::Test {
+class RenderCli : public mr::test::CliFixture {
 protected:
-    void SetUp() override {
-        dir_ = fs::temp_directory_path() /
-               ("metariver_render_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-    }
-    void TearDown() override { fs::remove_all(dir_); }
-
-    CliResult run(const std::string& args, const std::string& env = "") {
-        const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-        const std::string cmd = env + " " + std::string(METARIVER_EXE) + " " + args + " >" + out.string() + " 2>" + err.string();
-        const int status = std::system(cmd.c_str());
-        CliResult r;
-        r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-        r.out = slurp(out);
-        r.err = slurp(err);
-        fs::remove(out);
-        fs::remove(err);
-        return r;
-    }
+    /// `ENV metariver ARGS` (env: variable assignments, may be empty).
+    CliResult run(const std::string& args, const std::string& env = "") { return CliFixture::run(args, env); }
     size_t entries(const fs::path& p) {
         size_t n = 0;
         for (auto it = fs::directory_iterator(p); it != fs::directory_iterator(); ++it) ++n;
         return n;
     }
-
-    fs::path dir_;
 };
 
 int count_lines(const std::string& s) {
