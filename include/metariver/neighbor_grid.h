@@ -2,10 +2,16 @@
 // pair forces only visit the 27 cells around a particle, O(N) instead of the paper's
 // O(N^2) all-pairs loop.
 //
-// Cells are keyed densely over the active particles' bounding box when that box has
-// few enough cells (spatially coherent order: x fastest), otherwise by a spatial hash
-// into a table of ~2N buckets (bounded memory whatever the spread). Hash collisions
-// only add candidates: callers always test the real distance.
+// Three layouts, chosen per build from the active particles' bounding box:
+//  - dense: one bucket per cell of the box (x fastest), when the box has at most ~32
+//    cells per particle;
+//  - blocked (two-level): a dense directory of coarse blocks (4^3, 8^3 or 16^3 cells)
+//    over the box, at most ~4 directory entries per particle, with cells allocated only
+//    in the blocks that hold particles: bucket = (block slot, local cell, x fastest),
+//    so a neighbour x-row is one range, or two where it crosses a block face;
+//  - hashed: a spatial hash into ~2N buckets (bounded memory whatever the spread), when
+//    even the coarsest directory or its blocks' cells would be too large. Hash
+//    collisions only add candidates: callers always test the real distance.
 #pragma once
 
 #include <metariver/core.h>
@@ -20,6 +26,8 @@ namespace mr {
 
 class NeighborGrid {
 public:
+    enum class Layout : uint8_t { Dense, Blocked, Hashed };
+
     /// Bins the particles with active[i] != 0 into cells of `cell_size` metres (> 0).
     /// Inactive particles are left out. Reuses its buffers (no allocation once warm).
     void build(std::span<const Vec3> positions, std::span<const uint8_t> active, float cell_size);
@@ -42,13 +50,14 @@ public:
         const int cx = cell_coord(p.x, origin_.x), cy = cell_coord(p.y, origin_.y), cz = cell_coord(p.z, origin_.z);
         uint32_t seen[27];
         int nseen = 0;
+        const bool hashed = layout_ == Layout::Hashed;
         for (int dz = -1; dz <= 1; ++dz)
             for (int dy = -1; dy <= 1; ++dy)
                 for (int dx = -1; dx <= 1; ++dx) {
                     const int64_t b = bucket(cx + dx, cy + dy, cz + dz);
                     if (b < 0) continue;
                     const uint32_t ub = static_cast<uint32_t>(b);
-                    if (hashed_) {  // two neighbour cells can share a hash bucket: visit it once
+                    if (hashed) {  // two neighbour cells can share a hash bucket: visit it once
                         bool dup = false;
                         for (int s = 0; s < nseen; ++s) dup |= seen[s] == ub;
                         if (dup) continue;
@@ -59,7 +68,9 @@ public:
     }
 
     float cell_size() const { return cell_; }
-    bool hashed() const { return hashed_; }
+    bool hashed() const { return layout_ == Layout::Hashed; }
+    /// The layout the last build() chose.
+    Layout layout() const { return layout_; }
 
     /// Positions of the binned particles in order() order, as separate x, y, z arrays
     /// (as they were at build time): neighbour ranges are contiguous slices of these.
@@ -72,23 +83,27 @@ public:
     size_t run_count() const { return run_start_.empty() ? 0 : run_start_.size() - 1; }
     uint32_t run_start(size_t r) const { return run_start_[r]; }
     /// Calls f(begin, end) for each range of order() positions holding the particles of
-    /// the 27 cells around cell run r: every such particle exactly once (a dense grid
-    /// merges the three cells of an x-row into one range).
+    /// the 27 cells around cell run r: every such particle exactly once, at most 27
+    /// ranges (a dense grid merges the three cells of an x-row into one range, a blocked
+    /// one into one or two, and both leave out empty rows; hashed: one range per cell).
     template <class F>
     void for_each_neighbor_range(size_t r, F&& f) const {
-        const uint64_t key = run_key_[r];
-        const int cx = int(key & 0x1FFFFF), cy = int((key >> 21) & 0x1FFFFF), cz = int(key >> 42);
-        if (!hashed_) {
-            const int x0 = std::max(cx - 1, 0), x1 = std::min(cx + 1, dims_[0] - 1);
-            for (int dz = -1; dz <= 1; ++dz)
-                for (int dy = -1; dy <= 1; ++dy) {
-                    const int64_t b0 = bucket(x0, cy + dy, cz + dz);
-                    if (b0 < 0) continue;
-                    const int64_t b1 = b0 + (x1 - x0);
-                    f(start_[size_t(b0)], start_[size_t(b1) + 1]);
-                }
+        if (layout_ != Layout::Hashed) {
+            // The ranges are gathered first by a tight loop (no calls, so its state stays
+            // in registers), empty ones dropped, then handed to f.
+            uint32_t rs[18], re[18];
+            int n;
+            switch (layout_ == Layout::Dense ? 0 : shift_) {
+                case 0: n = dense_ranges(r, rs, re); break;
+                case 2: n = blocked_ranges<2>(r, rs, re); break;
+                case 3: n = blocked_ranges<3>(r, rs, re); break;
+                default: n = blocked_ranges<4>(r, rs, re); break;
+            }
+            for (int k = 0; k < n; ++k) f(rs[k], re[k]);
             return;
         }
+        const uint64_t key = run_key_[r];
+        const int cx = int(key & 0x1FFFFF), cy = int((key >> 21) & 0x1FFFFF), cz = int(key >> 42);
         // Hashed: each neighbour cell is found as the run with its exact key among the
         // runs of its bucket, so no cell is visited twice and no foreign cell is visited.
         for (int dz = -1; dz <= 1; ++dz)
@@ -108,29 +123,98 @@ public:
     }
 
 private:
-    int cell_coord(float v, float o) const { return static_cast<int>(std::floor((v - o) * inv_cell_)); }
-    uint64_t cell_key(const Vec3& p) const {
-        // Coordinates relative to the box's corner are >= 0; 21 bits each (clamped: a
-        // cloud 2M cells wide only merges far cells, which distance tests separate).
-        const auto c = [](int v) { return static_cast<uint64_t>(std::clamp(v, 0, 0x1FFFFF)); };
-        return c(cell_coord(p.x, origin_.x)) | (c(cell_coord(p.y, origin_.y)) << 21) |
-               (c(cell_coord(p.z, origin_.z)) << 42);
+    static constexpr uint32_t kNoBlock = 0xFFFFFFFFu;
+
+    /// Dense: the non-empty x-rows (3 cells, clipped to the box) around run r.
+    int dense_ranges(size_t r, uint32_t* rs, uint32_t* re) const {
+        const uint64_t key = run_key_[r];
+        const int cx = int(key & 0x1FFFFF), cy = int((key >> 21) & 0x1FFFFF), cz = int(key >> 42);
+        const int nx = dims_[0], ny = dims_[1], nz = dims_[2];
+        const int x0 = std::max(cx - 1, 0), x1 = std::min(cx + 1, nx - 1);
+        const int y0 = std::max(cy - 1, 0), y1 = std::min(cy + 1, ny - 1);
+        const int z0 = std::max(cz - 1, 0), z1 = std::min(cz + 1, nz - 1);
+        const size_t sy = size_t(nx), sz = size_t(nx) * size_t(ny), w = size_t(x1 - x0 + 1);
+        const uint32_t* const base = start_.data() + size_t(x0);
+        int n = 0;
+        for (int z = z0; z <= z1; ++z) {
+            const uint32_t* row = base + size_t(z) * sz + size_t(y0) * sy;
+            for (int y = y0; y <= y1; ++y, row += sy) {
+                const uint32_t b = row[0], e = row[w];
+                rs[n] = b;
+                re[n] = e;
+                n += b != e;
+            }
+        }
+        return n;
     }
-    /// Bucket of cell (x, y, z), or -1 when a dense grid has no such cell.
+    /// Blocked with blocks of 2^S cells a side: the non-empty parts of the x-rows
+    /// around run r, one per row or two where a row crosses a block face.
+    template <int S>
+    int blocked_ranges(size_t r, uint32_t* rs, uint32_t* re) const {
+        constexpr int M = (1 << S) - 1;
+        const uint64_t key = run_key_[r];
+        const int cx = int(key & 0x1FFFFF), cy = int((key >> 21) & 0x1FFFFF), cz = int(key >> 42);
+        const int x0 = std::max(cx - 1, 0), x1 = std::min(cx + 1, dims_[0] - 1);
+        const int y0 = std::max(cy - 1, 0), y1 = std::min(cy + 1, dims_[1] - 1);
+        const int z0 = std::max(cz - 1, 0), z1 = std::min(cz + 1, dims_[2] - 1);
+        const size_t nbx = size_t(nblocks_[0]), nbxy = nbx * size_t(nblocks_[1]);
+        const uint32_t* const dir = dir_.data() + (x0 >> S);
+        const uint32_t* const start = start_.data();
+        const int lx0 = x0 & M, lx1 = x1 & M;
+        const bool split = (x1 >> S) != (x0 >> S);  // the row crosses into the next block
+        const int end0 = (split ? M : lx1) + 1;
+        int n = 0;
+        for (int z = z0; z <= z1; ++z) {
+            const uint32_t* const dz = dir + size_t(z >> S) * nbxy;
+            const uint32_t lz = uint32_t(z & M) << (2 * S);
+            for (int y = y0; y <= y1; ++y) {
+                const uint32_t* const d = dz + size_t(y >> S) * nbx;
+                const uint32_t local = lz | (uint32_t(y & M) << S);
+                if (const uint32_t slot = d[0]; slot != kNoBlock) {
+                    const uint32_t* const row = start + ((size_t(slot) << (3 * S)) | local);
+                    const uint32_t b = row[lx0], e = row[end0];
+                    rs[n] = b;
+                    re[n] = e;
+                    n += b != e;
+                }
+                if (split) {
+                    if (const uint32_t slot = d[1]; slot != kNoBlock) {
+                        const uint32_t* const row = start + ((size_t(slot) << (3 * S)) | local);
+                        const uint32_t b = row[0], e = row[lx1 + 1];
+                        rs[n] = b;
+                        re[n] = e;
+                        n += b != e;
+                    }
+                }
+            }
+        }
+        return n;
+    }
+
+    int cell_coord(float v, float o) const { return static_cast<int>(std::floor((v - o) * inv_cell_)); }
+    /// Bucket of cell (x, y, z), or -1 when a dense or blocked grid has no such cell.
     int64_t bucket(int x, int y, int z) const {
-        if (!hashed_) {
+        if (layout_ != Layout::Hashed) {
             if (x < 0 || y < 0 || z < 0 || x >= dims_[0] || y >= dims_[1] || z >= dims_[2]) return -1;
-            return x + static_cast<int64_t>(dims_[0]) * (y + static_cast<int64_t>(dims_[1]) * z);
+            if (layout_ == Layout::Dense) return x + static_cast<int64_t>(dims_[0]) * (y + static_cast<int64_t>(dims_[1]) * z);
+            const int s = shift_, m = (1 << s) - 1;
+            const uint32_t slot = dir_[block_index(x >> s, y >> s, z >> s)];
+            if (slot == kNoBlock) return -1;
+            return (static_cast<int64_t>(slot) << (3 * s)) | ((z & m) << (2 * s)) | ((y & m) << s) | (x & m);
         }
         const uint32_t h = (static_cast<uint32_t>(x) * 73856093u) ^ (static_cast<uint32_t>(y) * 19349663u) ^
                            (static_cast<uint32_t>(z) * 83492791u);
         return h & hash_mask_;
     }
-
+    size_t block_index(int bx, int by, int bz) const {
+        return size_t(bx) + size_t(nblocks_[0]) * (size_t(by) + size_t(nblocks_[1]) * size_t(bz));
+    }
     float cell_ = 1.0f, inv_cell_ = 1.0f;
     Vec3 origin_{0.0f};
     int dims_[3] = {0, 0, 0};
-    bool hashed_ = false;
+    Layout layout_ = Layout::Dense;
+    int shift_ = 2;                          // blocked: blocks of 2^shift cells a side
+    int nblocks_[3] = {0, 0, 0};             // blocked: directory size
     uint32_t hash_mask_ = 0;
     size_t bucket_count_ = 0;
     std::vector<uint32_t> start_;            // bucket_count + 1
@@ -140,6 +224,7 @@ private:
     std::vector<uint32_t> run_start_;        // cell runs over order(), + 1
     std::vector<uint64_t> run_key_;          // the cell of each run
     std::vector<uint32_t> bucket_run_start_; // hashed: runs of bucket b are [start(b), start(b + 1))
+    std::vector<uint32_t> dir_;              // blocked: block slot per directory entry, or kNoBlock
     std::vector<uint32_t> scratch_;
     std::vector<uint64_t> key_scratch_;
     std::vector<float> sx_, sy_, sz_;

@@ -54,12 +54,13 @@ constexpr int kChunk = 512;
 /// Eight independent lanes so the loop vectorises without reassociating the sum (the
 /// result is the same whatever the vector width), a candidate at distance 0 (the
 /// particle itself, or one exactly on top of it) adds nothing, as in the pair loop.
+/// The arrays must hold finite values up to the next multiple of 8 past m: the lanes
+/// past m are masked out (their terms are exactly 0), so there is no scalar tail.
 [[gnu::target_clones("avx2", "default")]] void spring_sum(float xi, float yi, float zi, const float* cx,
                                                          const float* cy, const float* cz, int m, float r,
                                                          float max_d, float half_k, float out[3]) {
     float ax[8] = {}, ay[8] = {}, az[8] = {};
-    int k = 0;
-    for (; k + 8 <= m; k += 8) {
+    for (int k = 0; k < m; k += 8) {
         for (int l = 0; l < 8; ++l) {
             const float dx = xi - cx[k + l], dy = yi - cy[k + l], dz = zi - cz[k + l];
             const float d2 = dx * dx + dy * dy + dz * dz;
@@ -67,21 +68,12 @@ constexpr int kChunk = 512;
             // Branch-free (computed for every candidate, then masked) so the loop
             // vectorises; max(len, 1e-20) keeps the masked-out value finite (k r <= 5e9).
             const float s_all = half_k * (r / std::max(len, 1e-20f) - 1.0f);
-            const float on = static_cast<float>((d2 > 0.0f) & (len - r < max_d));
+            const float on = static_cast<float>((d2 > 0.0f) & (len - r < max_d) & (k + l < m));
             const float s = s_all * on;
             ax[l] += s * dx;
             ay[l] += s * dy;
             az[l] += s * dz;
         }
-    }
-    for (int l = 0; k < m; ++k, ++l) {
-        const float dx = xi - cx[k], dy = yi - cy[k], dz = zi - cz[k];
-        const float d2 = dx * dx + dy * dy + dz * dz;
-        const float len = std::sqrt(d2);
-        const float s = (d2 > 0.0f && len - r < max_d) ? half_k * (r / len - 1.0f) : 0.0f;
-        ax[l] += s * dx;
-        ay[l] += s * dy;
-        az[l] += s * dz;
     }
     float sx = 0.0f, sy = 0.0f, sz = 0.0f;
     for (int l = 0; l < 8; ++l) {
@@ -108,12 +100,13 @@ void add_spring_forces_grid(Particles& p, const NeighborGrid& grid, const Spring
     const auto order = grid.order();
     const auto sx = grid.sorted_x(), sy = grid.sorted_y(), sz = grid.sorted_z();
     tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.run_count(), 16), [&](const tbb::blocked_range<size_t>& range) {
-        alignas(32) float cx[kChunk], cy[kChunk], cz[kChunk];
+        alignas(32) float cx[kChunk + 8], cy[kChunk + 8], cz[kChunk + 8];
         for (size_t run = range.begin(); run != range.end(); ++run) {
             const uint32_t begin = grid.run_start(run), end = grid.run_start(run + 1);
             int fill = 0;
             bool first_chunk = true;
             const auto flush = [&] {
+                for (int t = 0; t < 8; ++t) cx[fill + t] = cy[fill + t] = cz[fill + t] = 0.0f;  // finite padding
                 for (uint32_t k = begin; k < end; ++k) {
                     const uint32_t i = order[k];
                     const Vec3 pi = p.position[i];
@@ -125,6 +118,16 @@ void add_spring_forces_grid(Particles& p, const NeighborGrid& grid, const Spring
                 first_chunk = false;
             };
             grid.for_each_neighbor_range(run, [&](uint32_t s, uint32_t e) {
+                if (fill + (e - s) <= uint32_t(kChunk)) {  // the common case: the range fits
+                    const int f0 = fill;
+                    for (uint32_t t = s; t < e; ++t) {
+                        cx[f0 + int(t - s)] = sx[t];
+                        cy[f0 + int(t - s)] = sy[t];
+                        cz[f0 + int(t - s)] = sz[t];
+                    }
+                    fill += static_cast<int>(e - s);
+                    return;
+                }
                 while (s < e) {
                     if (fill == kChunk) flush();
                     const uint32_t take = std::min<uint32_t>(e - s, static_cast<uint32_t>(kChunk - fill));

@@ -79,8 +79,11 @@ TEST(Emitters, BoxSinkTakesParticlesOut) {
                      SinkDef{.kind = SinkKind::Box, .min = Vec3(20, -10, 0), .max = Vec3(24, 20, 16)});
     for (int f = 0; f < 900; ++f) s.step_frame(1.0f / 60.0f);
     EXPECT_GT(s.counters().sunk, 20u);
-    for (size_t i = 0; i < s.particles().size(); ++i)
-        if (s.particles().active[i]) EXPECT_LT(s.particles().position[i].x, 24.5f) << "none passes the sink";
+    for (size_t i = 0; i < s.particles().size(); ++i) {
+        if (s.particles().active[i]) {
+            EXPECT_LT(s.particles().position[i].x, 24.5f) << "none passes the sink";
+        }
+    }
 }
 
 TEST(ChannelMap, ValleyChannelHeadIsAtTheUpstreamEndAndRampDrainsDownhill) {
