@@ -243,6 +243,8 @@ private:
     uint8_t exit_flag(const Vec3& p) const;
     void finish_step(uint64_t steps, const StepCounts& c);
     std::optional<RayHit> robust_hit(const Vec3& from, const Vec3& to) const;
+    /// Lifts `to` (terrain-lifted frame) onto the mesh when it ended below it.
+    void guard_above_terrain(Vec3& to, Vec3& v, StepCounts& c) const;
     bool out_of_bounds(const Vec3& p) const;
     /// Bins active particles and reorders every array by cell (grid mode).
     void sort_by_cell(float cell);

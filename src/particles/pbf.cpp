@@ -163,16 +163,7 @@ void ParticleSolver::collide_fluid(size_t i, StepCounts& c) {
         from = hit->point + Vec3(0.0f, collision_.offset, 0.0f);
         to = from + rest * (1.0f - collision_.damping);
     }
-    if (terrain_.contains_xz(to.x, to.z)) {
-        const float h = terrain_.height_mesh(to.x, to.z);
-        if (to.y < h) {
-            ++c.guarded;
-            const Vec3 n = terrain_.normal_mesh(to.x, to.z);
-            const float vn = glm::dot(v, n);
-            if (vn < 0.0f) v -= vn * n;
-            to.y = h + collision_.offset;
-        }
-    }
+    guard_above_terrain(to, v, c);
     p.velocity[i] = v;
     p.position[i] = to + lift;
 }

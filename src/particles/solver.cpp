@@ -323,6 +323,19 @@ std::optional<RayHit> ParticleSolver::robust_hit(const Vec3& from, const Vec3& t
     return bvh_.intersect_segment(terrain_, from, to);
 }
 
+// Heightfield guard: whatever the float rounding at seams did, a particle never ends below
+// the mesh: it is lifted to the surface (+ offset) and loses its velocity into the ground.
+void ParticleSolver::guard_above_terrain(Vec3& to, Vec3& v, StepCounts& c) const {
+    if (!terrain_.contains_xz(to.x, to.z)) return;
+    const float h = terrain_.height_mesh(to.x, to.z);
+    if (to.y >= h) return;
+    ++c.guarded;
+    const Vec3 n = terrain_.normal_mesh(to.x, to.z);
+    const float vn = glm::dot(v, n);
+    if (vn < 0.0f) v -= vn * n;
+    to.y = h + collision_.offset;
+}
+
 void ParticleSolver::collide_robust(size_t i, float dt, StepCounts& c) {
     Particles& p = particles_;
     const Vec3 lift(0.0f, collision_.radius, 0.0f);
@@ -341,17 +354,7 @@ void ParticleSolver::collide_robust(size_t i, float dt, StepCounts& c) {
         from = hit->point + Vec3(0.0f, collision_.offset, 0.0f);
         to = from + v * dt;
     }
-    // Heightfield guard: whatever the float rounding at seams did, never end below.
-    if (terrain_.contains_xz(to.x, to.z)) {
-        const float h = terrain_.height_mesh(to.x, to.z);
-        if (to.y < h) {
-            ++c.guarded;
-            const Vec3 n = terrain_.normal_mesh(to.x, to.z);
-            const float vn = glm::dot(v, n);
-            if (vn < 0.0f) v -= vn * n;
-            to.y = h + collision_.offset;
-        }
-    }
+    guard_above_terrain(to, v, c);
     p.velocity[i] = v;
     p.position[i] = to + lift;
 }
