@@ -39,6 +39,10 @@ Result<Heightmap> load_heightmap_png(const std::string& path);
 /// The same from bytes in memory; `name` is used in error messages.
 Result<Heightmap> load_heightmap_png_memory(std::span<const uint8_t> bytes, const std::string& name);
 
+/// A width x height map with every sample = value (procedural, bit_depth 32);
+/// negative sizes count as 0. Callers shape it from there.
+Heightmap flat_heightmap(int width, int height, float value = 0.0f);
+
 /// Procedural terrains, deterministic for a seed.
 /// A valley with a winding river channel running downhill from the far end (high z
 /// in terrain space, low image row) to the near end.

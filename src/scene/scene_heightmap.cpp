@@ -11,14 +11,7 @@ Result<Heightmap> load_scene_heightmap(const SceneDef& def) {
         case TerrainSource::Valley: return procedural_valley(s.width, s.height, s.seed);
         case TerrainSource::Strict: return procedural_strict(s.width, s.height);
         case TerrainSource::Bowl: return procedural_bowl(s.width, s.height);
-        case TerrainSource::Flat: {
-            Heightmap m;
-            m.width = s.width;
-            m.height = s.height;
-            m.bit_depth = 32;
-            m.samples.assign(static_cast<size_t>(s.width) * s.height, 0.0f);
-            return m;
-        }
+        case TerrainSource::Flat: return flat_heightmap(s.width, s.height);
         case TerrainSource::File:
             if (s.heightmap.empty())
                 return Error{fmt::format("scene '{}' needs a heightmap file (give --heightmap FILE)", def.name)};

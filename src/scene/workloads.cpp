@@ -16,11 +16,7 @@ float w2_height(float x, float z) {
 }
 
 Heightmap w2_heightmap() {
-    Heightmap m;
-    m.width = 257;
-    m.height = 257;
-    m.bit_depth = 32;
-    m.samples.resize(257 * 257);
+    Heightmap m = flat_heightmap(257, 257);
     // Image row r is z = r (paper_row_orientation = false), column c is x = c.
     for (int r = 0; r < 257; ++r)
         for (int c = 0; c < 257; ++c) m.samples[static_cast<size_t>(r) * 257 + c] = w2_height(float(c), float(r));

@@ -50,22 +50,23 @@ void normalise(std::vector<float>& s) {
     for (float& v : s) v = range > 0.0f ? std::clamp((v - min) / range, 0.0f, 1.0f) : 0.0f;
 }
 
-Heightmap make_map(int width, int height) {
-    Heightmap m;
-    m.width = std::max(width, 0);
-    m.height = std::max(height, 0);
-    m.bit_depth = 32;
-    m.samples.assign(static_cast<size_t>(m.width) * m.height, 0.0f);
-    return m;
-}
 
 /// Coordinate of sample k of n in [0, 1] (0.5 for a single sample).
 float unit(int k, int n) { return n > 1 ? static_cast<float>(k) / static_cast<float>(n - 1) : 0.5f; }
 
 }  // namespace
 
+Heightmap flat_heightmap(int width, int height, float value) {
+    Heightmap m;
+    m.width = std::max(width, 0);
+    m.height = std::max(height, 0);
+    m.bit_depth = 32;
+    m.samples.assign(static_cast<size_t>(m.width) * m.height, value);
+    return m;
+}
+
 Heightmap procedural_valley(int width, int height, uint32_t seed) {
-    Heightmap m = make_map(width, height);
+    Heightmap m = flat_heightmap(width, height);
     if (m.samples.empty()) return m;
 
     Lcg rng(seed ^ 0x9e3779b9u);
@@ -112,7 +113,7 @@ Heightmap procedural_valley(int width, int height, uint32_t seed) {
 Heightmap procedural_strict(int width, int height) {
     // Fitted to strict17.png / strict.png: red falls linearly from ~1.0 at image row 0
     // to ~0.13 at the last row; a strip of ~18% of the width in the middle is 8% lower.
-    Heightmap m = make_map(width, height);
+    Heightmap m = flat_heightmap(width, height);
     const float centre = 0.5f * static_cast<float>(m.width - 1);
     const float half_strip = 0.09f * static_cast<float>(m.width);
     for (int r = 0; r < m.height; ++r) {
@@ -130,7 +131,7 @@ Heightmap procedural_bowl(int width, int height) {
     // Fitted to bowl.png: value = 0.02 + 0.98 (1 - exp(-2.6 u^2)), u = distance from
     // the centre / half the shorter side (bowl.png: 5/255 at the centre, 240/255 at
     // the middle of an edge, 255 in the corners).
-    Heightmap m = make_map(width, height);
+    Heightmap m = flat_heightmap(width, height);
     const float cx = 0.5f * static_cast<float>(m.width - 1), cy = 0.5f * static_cast<float>(m.height - 1);
     const float radius = std::max(std::min(cx, cy), 0.5f);
     for (int r = 0; r < m.height; ++r) {

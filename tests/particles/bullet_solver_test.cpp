@@ -20,14 +20,7 @@ namespace {
 
 constexpr float kFrame = 1.0f / 60.0f;
 
-Heightmap flat_map(int w, int h) {
-    Heightmap m;
-    m.width = w;
-    m.height = h;
-    m.bit_depth = 32;
-    m.samples.assign(static_cast<size_t>(w) * h, 0.0f);
-    return m;
-}
+Heightmap flat_map(int w, int h) { return flat_heightmap(w, h); }
 
 Terrain build_terrain(const Heightmap& map, float area_scale, float height_scale) {
     auto t = Terrain::build(map, TerrainDef{.area_scale = area_scale, .height_scale = height_scale});

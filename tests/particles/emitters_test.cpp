@@ -13,11 +13,7 @@ struct World {
 
 World ramp_world() {
     // Heights fall along +x: image column c has 1 - c / (w - 1); 33 x 17 samples.
-    Heightmap m;
-    m.width = 33;
-    m.height = 17;
-    m.bit_depth = 32;
-    m.samples.resize(33 * 17);
+    Heightmap m = flat_heightmap(33, 17);
     for (int r = 0; r < 17; ++r)
         for (int c = 0; c < 33; ++c) m.samples[size_t(r) * 33 + c] = 1.0f - float(c) / 32.0f;
     auto t = Terrain::build(m, TerrainDef{.area_scale = 1.0f, .height_scale = 8.0f});

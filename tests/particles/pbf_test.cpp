@@ -26,10 +26,7 @@ World make_world(const Heightmap& map, TerrainDef def = {}) {
 
 /// A box: flat floor at 0, walls `wall` samples thick of normalised height 1.
 Heightmap box_map(int side, int wall) {
-    Heightmap m;
-    m.width = m.height = side;
-    m.bit_depth = 32;
-    m.samples.assign(size_t(side) * side, 0.0f);
+    Heightmap m = flat_heightmap(side, side);
     for (int r = 0; r < side; ++r)
         for (int c = 0; c < side; ++c)
             if (r < wall || c < wall || r >= side - wall || c >= side - wall) m.samples[size_t(r) * side + c] = 1.0f;

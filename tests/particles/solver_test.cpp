@@ -21,14 +21,7 @@ World make_world(const Heightmap& map, TerrainDef def = {}) {
     return World{std::move(t.value()), std::move(b.value())};
 }
 
-Heightmap flat_map(int w, int h, float v) {
-    Heightmap m;
-    m.width = w;
-    m.height = h;
-    m.bit_depth = 32;
-    m.samples.assign(static_cast<size_t>(w) * h, v);
-    return m;
-}
+Heightmap flat_map(int w, int h, float v) { return flat_heightmap(w, h, v); }
 
 /// Heights rising with x: image column c has value c / (w - 1).
 Heightmap ramp_x(int w, int h) {

@@ -37,14 +37,7 @@ std::optional<World> make_world(const std::string& name, const Heightmap& map, T
     return World{name, std::move(t.value()), std::move(b.value())};
 }
 
-Heightmap blank(int w, int h) {
-    Heightmap m;
-    m.width = w;
-    m.height = h;
-    m.bit_depth = 32;
-    m.samples.assign(static_cast<size_t>(w) * h, 0.0f);
-    return m;
-}
+Heightmap blank(int w, int h) { return flat_heightmap(w, h); }
 
 /// Independent random heights per sample: neighbouring samples differ by up to the
 /// full height scale (slopes up to 40:1 with height_scale 40).

@@ -10,12 +10,8 @@ namespace mr {
 namespace {
 
 Heightmap random_map(int w, int h, uint32_t seed) {
-    Heightmap m;
-    m.width = w;
-    m.height = h;
-    m.bit_depth = 32;
+    Heightmap m = flat_heightmap(w, h);
     Lcg rng(seed);
-    m.samples.resize(static_cast<size_t>(w) * h);
     for (float& v : m.samples) v = static_cast<float>(rng.next());
     return m;
 }
