@@ -101,6 +101,14 @@ public:
     uint32_t triangle_at(float x, float z) const;
 
 private:
+    /// Heights of the four corners of the cell under (x, z) (clamped into the rectangle):
+    /// h00 at (i, j), h01 at (i, j+1), h10 at (i+1, j), h11 at (i+1, j+1), and the
+    /// fractions u (along x) and v (along z) inside the cell.
+    struct CellCorners {
+        float h00, h01, h10, h11, u, v;
+    };
+    CellCorners cell_corners(float x, float z) const;
+
     int columns_ = 0, rows_ = 0;
     float area_scale_ = 1.0f;
     std::vector<Vec3> vertices_;

@@ -116,23 +116,22 @@ bool Terrain::contains_xz(float x, float z) const {
     return x >= 0.0f && x <= ex && z >= 0.0f && z <= ez;
 }
 
-float Terrain::height_bilinear(float x, float z) const {
-    if (vertices_.empty()) return 0.0f;
+Terrain::CellCorners Terrain::cell_corners(float x, float z) const {
     const AxisCell cx = axis_cell(x, area_scale_, columns_);
     const AxisCell cz = axis_cell(z, area_scale_, rows_);
-    const float h00 = sample(cz.index, cx.index), h01 = sample(cz.index, cx.index + 1);
-    const float h10 = sample(cz.index + 1, cx.index), h11 = sample(cz.index + 1, cx.index + 1);
-    const float u = cx.frac, v = cz.frac;
+    return {sample(cz.index, cx.index), sample(cz.index, cx.index + 1), sample(cz.index + 1, cx.index),
+            sample(cz.index + 1, cx.index + 1), cx.frac, cz.frac};
+}
+
+float Terrain::height_bilinear(float x, float z) const {
+    if (vertices_.empty()) return 0.0f;
+    const auto [h00, h01, h10, h11, u, v] = cell_corners(x, z);
     return (h00 * (1.0f - u) + h01 * u) * (1.0f - v) + (h10 * (1.0f - u) + h11 * u) * v;
 }
 
 Vec3 Terrain::normal_bilinear(float x, float z) const {
     if (vertices_.empty()) return Vec3(0.0f, 1.0f, 0.0f);
-    const AxisCell cx = axis_cell(x, area_scale_, columns_);
-    const AxisCell cz = axis_cell(z, area_scale_, rows_);
-    const float h00 = sample(cz.index, cx.index), h01 = sample(cz.index, cx.index + 1);
-    const float h10 = sample(cz.index + 1, cx.index), h11 = sample(cz.index + 1, cx.index + 1);
-    const float u = cx.frac, v = cz.frac;
+    const auto [h00, h01, h10, h11, u, v] = cell_corners(x, z);
     const float dhdx = ((h01 - h00) * (1.0f - v) + (h11 - h10) * v) / area_scale_;
     const float dhdz = ((h10 - h00) * (1.0f - u) + (h11 - h01) * u) / area_scale_;
     return glm::normalize(Vec3(-dhdx, 1.0f, -dhdz));
@@ -149,11 +148,7 @@ uint32_t Terrain::triangle_at(float x, float z) const {
 
 float Terrain::height_mesh(float x, float z) const {
     if (vertices_.empty()) return 0.0f;
-    const AxisCell cx = axis_cell(x, area_scale_, columns_);
-    const AxisCell cz = axis_cell(z, area_scale_, rows_);
-    const float h00 = sample(cz.index, cx.index), h01 = sample(cz.index, cx.index + 1);
-    const float h10 = sample(cz.index + 1, cx.index), h11 = sample(cz.index + 1, cx.index + 1);
-    const float u = cx.frac, v = cz.frac;
+    const auto [h00, h01, h10, h11, u, v] = cell_corners(x, z);
     if (u + v <= 1.0f) {
         // Triangle (c, c+W, c+1): vertices (i, j), (i+1, j), (i, j+1).
         return h00 + u * (h01 - h00) + v * (h10 - h00);
