@@ -122,14 +122,18 @@ ScenarioResult bench_simulation(const std::string& name, const SceneDef& def, in
                 {"field_kernel", std::string(to_string(def.field.kernel))},
                 {"frames", frames},
                 {"warmup", warmup}};
-    // Plausibility (issue 5) beside the times: nothing through the ground, outflow at the
-    // sinks over the measured frames, water in the channel, density error, no explosion.
+    // Plausibility (issues 5 and 9) beside the times: nothing through the ground (and how
+    // often the guard had to lift a particle), outflow at the sinks over the measured
+    // frames, water in the channel, density error, no explosion, no spray, settled speed.
     r.quality = {{"tunneled", s.counters().tunneled},
+                 {"guarded", s.counters().guarded},
                  {"respawned", s.counters().respawned},
                  {"outflow_per_s", double(s.counters().sunk - sunk_before) * 60.0 / double(std::max(frames, 1))},
                  {"wet_channel_fraction", s.wet_fraction()},
                  {"density_error_max", density_max},
-                 {"max_speed", max_speed}};
+                 {"max_speed", max_speed},
+                 {"final_speed_p95", percentiles(s.active_speeds()).p95},
+                 {"spray_fraction", s.spray_fraction()}};
     return r;
 }
 
@@ -215,6 +219,7 @@ ScenarioResult bench_w2(int n) {
     r.quality = {{"fall_ms_total", fall_ms},
                  {"tunneled", below},
                  {"tunneled_steps", solver.counters().tunneled},
+                 {"guarded", solver.counters().guarded},
                  {"penetrating_0_25", penetrating},
                  {"outside", outside},
                  {"respawned", solver.counters().respawned}};

@@ -1,5 +1,5 @@
-// `metariver run`: headless simulation of a scene for N frames; optional per-frame
-// OBJ export and a JSON stats file. Deterministic for a seed. All inputs are checked
+// `metariver run`: headless simulation of a scene for N frames; optional OBJ export of
+// every N-th frame and a JSON stats file. Deterministic for a seed. All inputs are checked
 // before anything is written; a failure part-way removes what this run wrote.
 #include "commands.h"
 
@@ -11,6 +11,7 @@
 #include <cmath>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <vector>
 
 namespace mr::app {
@@ -25,9 +26,11 @@ struct RunOptions {
     double dt = 1.0 / 60.0;
     std::string stats;
     std::string obj_dir;
+    std::optional<long long> obj_every;  ///< --obj-every; unset = every frame
 };
 
 constexpr long long kMaxFrames = 100'000'000;
+constexpr long long kMaxObjEvery = 1'000'000'000;
 
 int fail(int code, const std::string& message) {
     fmt::print(stderr, "metariver run: {}\n", message);
@@ -55,6 +58,11 @@ int run(const RunOptions& o) {
         return fail(kExitBadInput, fmt::format("--frames: must be in [1, {}] (got {})", kMaxFrames, o.frames));
     if (!std::isfinite(o.dt) || o.dt <= 0.0 || o.dt > 1.0)
         return fail(kExitBadInput, fmt::format("--dt: must be in (0, 1] seconds (got {})", o.dt));
+    if (o.obj_every && o.obj_dir.empty())
+        return fail(kExitBadInput, "--obj-every: needs --obj-dir (the folder to write to)");
+    if (o.obj_every && (*o.obj_every < 1 || *o.obj_every > kMaxObjEvery))
+        return fail(kExitBadInput, fmt::format("--obj-every: must be in [1, {}] (got {})", kMaxObjEvery, *o.obj_every));
+    const long long obj_every = o.obj_every.value_or(1);
     auto def = o.scene.resolve();
     if (!def) return fail(kExitBadInput, def.error().message);
 
@@ -101,11 +109,12 @@ int run(const RunOptions& o) {
     surface_ms.reserve(static_cast<size_t>(o.frames));
     total_ms.reserve(static_cast<size_t>(o.frames));
     const int digits = std::max(5, static_cast<int>(std::to_string(o.frames - 1).size()));
-    // Plausibility: outflow at the sinks, wet-channel fraction (sampled every 10 frames
-    // over the second half), largest speed and density error seen.
+    // Plausibility: outflow at the sinks, wet-channel and spray fractions (sampled every
+    // 10 frames over the second half; spray also at the last frame), largest speed and
+    // density error seen.
     FlowMeter flow;
-    double wet_sum = 0.0, density_mean_sum = 0.0;
-    long long wet_n = 0;
+    double wet_sum = 0.0, density_mean_sum = 0.0, spray_sum = 0.0;
+    long long wet_n = 0, spray_n = 0;
     float max_speed = 0.0f, density_max = 0.0f;
     for (long long f = 0; f < o.frames; ++f) {
         sim.step(static_cast<float>(o.dt));
@@ -117,12 +126,16 @@ int run(const RunOptions& o) {
             density_mean_sum += sim.counters().density_error_mean;
             ++wet_n;
         }
+        if ((2 * f >= o.frames && f % 10 == 0) || f == o.frames - 1) {
+            spray_sum += sim.spray_fraction();
+            ++spray_n;
+        }
         const FrameTimings& t = sim.last_timings();
         sim_ms.push_back(t.simulate_ms);
         field_ms.push_back(t.field_ms);
         surface_ms.push_back(t.surface_ms);
         total_ms.push_back(t.simulate_ms + t.field_ms + t.surface_ms);
-        if (!o.obj_dir.empty()) {
+        if (!o.obj_dir.empty() && (f % obj_every == 0 || f == o.frames - 1)) {
             const std::string path = (fs::path(o.obj_dir) / fmt::format("surface_{:0{}}.obj", f, digits)).string();
             if (auto s = write_surface_obj(path, sim.surface(), fmt::format("metariver water surface, frame {}", f)); !s) {
                 cleanup();
@@ -134,6 +147,8 @@ int run(const RunOptions& o) {
 
     const SolverCounters& c = sim.counters();
     const SceneDef& d = sim.def();
+    const double spray = spray_sum / double(std::max(spray_n, 1LL));
+    const Percentiles final_speed = percentiles(sim.active_speeds());
     if (!o.stats.empty()) {
         nlohmann::json j;
         j["scene"] = d.name;
@@ -160,6 +175,7 @@ int run(const RunOptions& o) {
         const FlowMeter::Summary fs = flow.summary();
         j["plausibility"] = {
             {"tunneled", c.tunneled},
+            {"guarded", c.guarded},
             {"respawned", c.respawned},
             {"emitted", c.emitted},
             {"sunk", c.sunk},
@@ -170,7 +186,9 @@ int run(const RunOptions& o) {
             {"wet_channel_fraction", wet_n ? wet_sum / double(wet_n) : 0.0},
             {"density_error_mean", wet_n ? density_mean_sum / double(wet_n) : 0.0},
             {"density_error_max", density_max},
-            {"max_speed", max_speed}};
+            {"max_speed", max_speed},
+            {"final_speed", {{"median", final_speed.median}, {"p95", final_speed.p95}, {"max", final_speed.max}}},
+            {"spray_fraction", spray}};
         j["state_hash"] = fmt::format("{:016x}", sim.state_hash());
         j["stage_ms"] = {{"simulate", stage_json(sim_ms)},
                          {"field", stage_json(field_ms)},
@@ -183,11 +201,12 @@ int run(const RunOptions& o) {
     }
     const Percentiles tot = percentiles(total_ms);
     fmt::print("{}: {} frames, {}/{} particles active, surface {} triangles / {} vertices, "
-               "tunneled {}, respawned {}, outflow {:.1f}/s ({}), wet {:.0f} %, frame median {:.3f} ms (p95 {:.3f})\n",
+               "tunneled {}, guarded {}, respawned {}, outflow {:.1f}/s ({}), wet {:.0f} %, spray {:.1f} %, "
+               "final speed p95 {:.2f} m/s, frame median {:.3f} ms (p95 {:.3f})\n",
                d.name, o.frames, sim.particles().active_count(), sim.particles().size(),
-               sim.surface().triangle_count(), sim.surface().vertex_count(), c.tunneled, c.respawned,
+               sim.surface().triangle_count(), sim.surface().vertex_count(), c.tunneled, c.guarded, c.respawned,
                flow.summary().rate, flow.summary().steady ? "steady" : "not steady",
-               100.0 * (wet_n ? wet_sum / double(wet_n) : 0.0), tot.median, tot.p95);
+               100.0 * (wet_n ? wet_sum / double(wet_n) : 0.0), 100.0 * spray, final_speed.p95, tot.median, tot.p95);
     if (!o.obj_dir.empty()) fmt::print("wrote {} OBJ files to {}\n", written.size(), o.obj_dir);
     if (!o.stats.empty()) fmt::print("wrote stats to {}\n", o.stats);
     return kExitOk;
@@ -202,7 +221,9 @@ void register_run(CLI::App& app, std::function<int()>& action) {
     cmd->add_option("--frames", opts->frames, "frames to simulate (default 300)");
     cmd->add_option("--dt", opts->dt, "frame time in seconds (default 1/60)");
     cmd->add_option("--stats", opts->stats, "write run statistics as JSON to this file");
-    cmd->add_option("--obj-dir", opts->obj_dir, "write the water surface of every frame (and the terrain) as OBJ");
+    cmd->add_option("--obj-dir", opts->obj_dir, "write the water surface (and the terrain) as OBJ to this folder");
+    cmd->add_option("--obj-every", opts->obj_every,
+                    "with --obj-dir: write every N-th frame's surface (0, N, 2N, ... and the last), [1, 1e9]; default 1");
     cmd->callback([opts, &action] { action = [opts] { return run(*opts); }; });
 }
 

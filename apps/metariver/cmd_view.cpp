@@ -547,7 +547,8 @@ int view(const ViewOptions& o) {
                 ImGui::Text("simulate %.2f ms  field %.2f ms  surface %.2f ms", t.simulate_ms, t.field_ms, t.surface_ms);
                 ImGui::Text("particles %zu / %zu", sim->particles().active_count(), sim->particles().size());
                 ImGui::Text("water %zu triangles, terrain %zu", sim->surface().triangle_count(), rs.terrain_triangles);
-                ImGui::Text("tunneled %llu  respawned %llu  collisions %llu", static_cast<unsigned long long>(c.tunneled),
+                ImGui::Text("tunneled %llu  guarded %llu  respawned %llu  collisions %llu",
+                            static_cast<unsigned long long>(c.tunneled), static_cast<unsigned long long>(c.guarded),
                             static_cast<unsigned long long>(c.respawned), static_cast<unsigned long long>(c.collisions));
                 ImGui::Text("upload %.1f KB/frame, GL objects %llu", static_cast<double>(rs.last_upload_bytes) / 1024.0,
                             static_cast<unsigned long long>(rs.gl_objects_created));

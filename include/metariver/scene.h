@@ -14,6 +14,7 @@
 #include <array>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -96,6 +97,17 @@ std::vector<std::string> scene_warnings(const SceneDef& def);
 /// Loads or generates the heightmap a scene describes.
 Result<Heightmap> load_scene_heightmap(const SceneDef& def);
 
+/// A particle with fewer than this many neighbours within the kernel radius is isolated.
+inline constexpr int kSprayNeighbours = 3;
+
+/// Spray: the share of the active particles that are isolated AND airborne. Isolated:
+/// fewer than kSprayNeighbours other active particles at a distance < kernel_radius.
+/// Airborne: more than 2 * spacing above the terrain mesh (height_mesh at the particle's
+/// x, z); a particle outside the terrain's rectangle counts as airborne. 0 when no
+/// particle is active. O(N) through a neighbour grid of cell kernel_radius (> 0).
+float spray_fraction(const Terrain& terrain, std::span<const Vec3> positions, std::span<const uint8_t> active,
+                     float kernel_radius, float spacing);
+
 /// Per-frame times of the three stages, milliseconds.
 struct FrameTimings {
     double simulate_ms = 0.0;
@@ -140,6 +152,12 @@ public:
     /// Fraction of the active particles inside the wet channel (WetChannelDef defaults
     /// scaled to the terrain: width max(3 m, 3 samples), depth 3 m).
     float wet_fraction() const;
+    /// spray_fraction() of the current particles at the scene's scale: pbf: pbf.spacing
+    /// and pbf.kernel_radius; springs: spacing springs.min_distance (1 m when 0); bullet:
+    /// spacing 2 * bullet.sphere_radius; kernel radius 2 * spacing for both.
+    float spray_fraction() const;
+    /// |velocity| of every active particle, m/s, in index order.
+    std::vector<double> active_speeds() const;
 
 private:
     Simulation(const SceneDef& def, Terrain terrain, Bvh bvh);

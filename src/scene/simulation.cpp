@@ -151,6 +151,35 @@ float Simulation::wet_fraction() const {
     return wet_channel_fraction(terrain_, channel_, p.position, p.active, wet);
 }
 
+float Simulation::spray_fraction() const {
+    float spacing = 1.0f, kernel = 2.0f;
+    switch (def_.solver) {
+        case SolverKind::Pbf:
+            spacing = def_.pbf.spacing;
+            kernel = def_.pbf.kernel_radius;
+            break;
+        case SolverKind::Springs:
+            spacing = def_.springs.min_distance > 0.0f ? def_.springs.min_distance : 1.0f;
+            kernel = 2.0f * spacing;
+            break;
+        case SolverKind::Bullet:
+            spacing = 2.0f * def_.bullet.sphere_radius;
+            kernel = 2.0f * spacing;
+            break;
+    }
+    const Particles& p = particles();
+    return mr::spray_fraction(terrain_, p.position, p.active, kernel, spacing);
+}
+
+std::vector<double> Simulation::active_speeds() const {
+    const Particles& p = particles();
+    std::vector<double> speeds;
+    speeds.reserve(p.size());
+    for (size_t i = 0; i < p.size(); ++i)
+        if (p.active[i]) speeds.push_back(static_cast<double>(glm::length(p.velocity[i])));
+    return speeds;
+}
+
 uint64_t Simulation::state_hash() const {
     uint64_t h = 1469598103934665603ull;
     auto mix = [&h](const void* data, size_t n) {

@@ -58,6 +58,22 @@ TEST_F(Bench, W2JsonHasTheDocumentedKeys) {
         EXPECT_GE(s["median_ms"].get<double>(), 0.0) << stage;
     }
     EXPECT_FALSE(j.contains("peers")) << "peers only with --peers";
+    for (const char* key : {"tunneled", "guarded"}) EXPECT_TRUE(res["quality"].contains(key)) << key;
+}
+
+// The river scenario's quality: the guard beside tunneled, spray and settled speed (issue 9).
+TEST_F(Bench, RiverQualityHasGuardedSprayAndFinalSpeed) {
+    const fs::path out = dir_ / "bench.json";
+    const BenchRun r = run("--scenario river --particles 1000 --frames 3 --json " + out.string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    const json q = json::parse(slurp(out))["results"][0]["quality"];
+    for (const char* key : {"tunneled", "guarded", "spray_fraction", "final_speed_p95"})
+        ASSERT_TRUE(q.contains(key)) << key << " in " << q.dump();
+    EXPECT_GE(q["spray_fraction"].get<double>(), 0.0);
+    EXPECT_LE(q["spray_fraction"].get<double>(), 1.0);
+    EXPECT_GT(q["final_speed_p95"].get<double>(), 0.0);  // 30 frames after the first emission: moving
+    EXPECT_LE(q["final_speed_p95"].get<double>(), q["max_speed"].get<double>() * (1.0 + 1e-6));
+    EXPECT_NE(r.out.find("\"guarded\""), std::string::npos) << "the table shows it too";
 }
 
 TEST_F(Bench, BadOptionsExitTwoWithOneLine) {

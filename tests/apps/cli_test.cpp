@@ -12,6 +12,7 @@
 #include <sstream>
 #include <string>
 #include <sys/wait.h>
+#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -81,6 +82,86 @@ TEST_F(Cli, RunWritesStatsAndObjs) {
     std::istringstream lines(last);
     for (std::string line; std::getline(lines, line);) faces += line.rfind("f ", 0) == 0;
     EXPECT_EQ(faces, j["triangles"].get<size_t>());
+}
+
+TEST_F(Cli, RunObjEveryWritesEveryNthAndTheLastFrame) {
+    const fs::path objs = dir_ / "objs";
+    CliResult r = run("run --preset paper-bowl --frames 12 --obj-every 5 --obj-dir " + objs.string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(objs)) names.push_back(e.path().filename().string());
+    std::sort(names.begin(), names.end());
+    const std::vector<std::string> want{"surface_00000.obj", "surface_00005.obj", "surface_00010.obj",
+                                        "surface_00011.obj", "terrain.obj"};
+    EXPECT_EQ(names, want);
+    EXPECT_NE(r.out.find("wrote 5 OBJ files"), std::string::npos) << r.out;
+}
+
+TEST_F(Cli, BadObjEvery) {
+    for (const char* bad : {"0", "-5", "1000000001"})
+        expect_bad(std::string("run --frames 3 --obj-every ") + bad, "--obj-every: must be in [1, 1000000000]");
+    expect_bad("run --frames 3 --obj-every often", "--obj-every");
+    expect_bad("run --frames 3 --obj-every 99999999999999999999", "--obj-every");
+    // Without a folder to write to.
+    const fs::path stats = dir_ / "s.json";
+    CliResult r = run("run --frames 3 --obj-every 2 --stats " + stats.string());
+    EXPECT_EQ(r.code, 2);
+    EXPECT_NE(r.err.find("--obj-every"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("--obj-dir"), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_FALSE(fs::exists(stats));
+}
+
+TEST_F(Cli, StatsHaveFinalSpeedSprayAndGuarded) {
+    const fs::path stats = dir_ / "s.json";
+    CliResult r = run("run --preset paper-bowl --frames 60 --seed 3 --stats " + stats.string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    for (const char* word : {"guarded ", "spray ", "final speed p95 "})
+        EXPECT_NE(r.out.find(word), std::string::npos) << word << " in " << r.out;
+    const auto j = nlohmann::json::parse(slurp(stats));
+    const auto& pl = j["plausibility"];
+    ASSERT_TRUE(pl.contains("final_speed") && pl.contains("spray_fraction") && pl.contains("guarded")) << pl.dump();
+    EXPECT_EQ(pl["guarded"], j["guarded"]);
+    const double median = pl["final_speed"]["median"], p95 = pl["final_speed"]["p95"], max = pl["final_speed"]["max"];
+    EXPECT_GT(median, 0.0);  // three particles falling or sliding in the bowl
+    EXPECT_LE(median, p95);
+    EXPECT_LE(p95, max);
+    EXPECT_LE(max, pl["max_speed"].get<double>() * (1.0 + 1e-6));  // the last frame is one of the frames
+    const double spray = pl["spray_fraction"];
+    EXPECT_GE(spray, 0.0);
+    EXPECT_LE(spray, 1.0);
+}
+
+// Two particles falling far above flat ground: both isolated and airborne at every
+// sampled frame (spray 1), and after 30 frames of free fall both move at g t.
+TEST_F(Cli, StatsOfAFreeFall) {
+    const fs::path scene = write("fall.toml", R"(solver = "springs"
+surface = false
+[terrain]
+source = "flat"
+width = 9
+height = 9
+[particles]
+count = 2
+spawn_center = [4.0, 200.0, 4.0]
+spawn_half_extent = [3.0, 0.0, 3.0]
+spawn_interval = 0
+initial_velocity = [0.0, 0.0, 0.0]
+flow_rate = 0.0
+[sink]
+kind = "none"
+[springs]
+stiffness = 0.0
+[forces]
+gravity = 9.82
+)");
+    const fs::path stats = dir_ / "s.json";
+    CliResult r = run("run --scene " + scene.string() + " --frames 30 --stats " + stats.string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto pl = nlohmann::json::parse(slurp(stats))["plausibility"];
+    EXPECT_EQ(pl["spray_fraction"].get<double>(), 1.0);
+    EXPECT_NEAR(pl["final_speed"]["median"].get<double>(), 9.82 * 30.0 / 60.0, 0.05) << pl.dump();
+    EXPECT_NEAR(pl["final_speed"]["max"].get<double>(), 9.82 * 30.0 / 60.0, 0.05) << pl.dump();
 }
 
 TEST_F(Cli, RunIsDeterministicForASeed) {
