@@ -69,7 +69,7 @@ int run(const RunOptions& o) {
     auto sim_result = Simulation::create(def.value());
     if (!sim_result) return fail(kExitBadInput, sim_result.error().message);
     Simulation& sim = *sim_result.value();
-    for (const std::string& w : scene_warnings(sim.def())) fmt::print(stderr, "metariver run: warning: {}\n", w);
+    for (const std::string& w : sim.warnings()) fmt::print(stderr, "metariver run: warning: {}\n", w);
 
     // The OBJ folder: created if missing; everything this run writes there is recorded
     // so a failure can take it back.

@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -136,9 +137,9 @@ struct IntegratorDef {
 struct SolverCounters {
     uint64_t particle_steps = 0;  ///< active particle integrations
     uint64_t collisions = 0;      ///< terrain hits handled
-    uint64_t tunneled = 0;        ///< particle-steps ending below the terrain mesh after collision handling
+    uint64_t tunneled = 0;        ///< particle-steps ending below the mesh (lifted by the radius) after the collision response, before any guard
     uint64_t respawned = 0;       ///< particles re-spawned after leaving the terrain bounds
-    uint64_t guarded = 0;         ///< robust mode: particles lifted by the heightfield guard
+    uint64_t guarded = 0;         ///< robust mode: particle-steps the heightfield guard had to lift (each one also tunneled)
     uint64_t emitted = 0;         ///< particles emitted by a flow-rate source (activations and recycles)
     uint64_t sunk = 0;            ///< particles taken out by a sink (recycled to the source)
     // Latest step's state (not cumulative):
@@ -147,9 +148,9 @@ struct SolverCounters {
     float max_speed = 0.0f;           ///< fastest active particle, m/s
 };
 
-/// Depth below the mesh surface (metres) a particle must reach to count as tunneled:
-/// the paper's placement (hit + 0.07 up + v dt) may legally end a hair below the
-/// surface through float rounding; anything deeper went through the ground.
+/// Depth below the mesh (metres) that tests and the Bullet solver tolerate for a
+/// particle found at the end of a frame (Bullet's contacts rest a hair inside the
+/// mesh). The own solvers count any depth > 0 as tunneled, before correcting it.
 inline constexpr float kTunnelEpsilon = 1e-3f;
 
 /// Spring accelerations (eq. 3) for the active particles, all pairs, added to p.force.
@@ -176,6 +177,9 @@ public:
     /// Pours water: moves the spawn centre to `center` and (re)spawns `count` particles
     /// there at once, taking inactive particles first, then the oldest-poured ones.
     virtual void pour(const Vec3& center, int count) = 0;
+    /// Non-fatal advice about the scene as this solver runs it on its terrain (e.g. a
+    /// flow rate the source cannot deliver), one line each, naming the field.
+    virtual std::vector<std::string> warnings() const { return {}; }
 };
 
 /// Owns the stepping of one particle set over one terrain: spawning, forces,
@@ -200,8 +204,16 @@ public:
     const SolverCounters& counters() const override { return counters_; }
     uint64_t frame() const override { return frame_; }
 
-    void set_spawn_center(const Vec3& center) override { spawn_.center = center; }
+    void set_spawn_center(const Vec3& center) override;
     void pour(const Vec3& center, int count) override;
+    std::vector<std::string> warnings() const override;
+
+    /// PBF: the lattice source (emission at the rest spacing, never onto water); none
+    /// for the paper's springs, which spawn at random points of the volume.
+    const LatticeSource* lattice_source() const { return lattice_ ? &*lattice_ : nullptr; }
+    /// Particles per second the source emits: the flow rate, capped (PBF) to what the
+    /// lattice source can deliver.
+    float emit_rate() const;
 
     /// Activates particles at the given positions (with the initial velocity), in
     /// order, starting at the first inactive one; extra positions are ignored.
@@ -239,12 +251,23 @@ private:
     void step_pbf(float dt);
     void init_pbf();
     void emit(float dt);
+    /// PBF: emits floor(emit_debt_) particles (at most the pool) into free lattice slots.
+    void emit_lattice();
+    void build_lattice();
     /// Flags particles for respawn (1) or the sink (2) after a step.
     uint8_t exit_flag(const Vec3& p) const;
     void finish_step(uint64_t steps, const StepCounts& c);
+    void record_max_speed();
     std::optional<RayHit> robust_hit(const Vec3& from, const Vec3& to) const;
-    /// Lifts `to` (terrain-lifted frame) onto the mesh when it ended below it.
-    void guard_above_terrain(Vec3& to, Vec3& v, StepCounts& c) const;
+    /// True when `lifted` (a centre moved down by the radius) is below the mesh.
+    bool ends_below_terrain(const Vec3& lifted) const;
+    /// Counts a particle-step that ended below the mesh (`to` in the terrain-lifted
+    /// frame) as tunneled, then lifts it onto the mesh (+ offset) and counts guarded.
+    void count_and_guard(Vec3& to, Vec3& v, StepCounts& c) const;
+    /// Moves a predicted position (PBF iterations) out of the lifted terrain along the
+    /// triangle normal to `offset` above it (or back to `fallback` where that fails);
+    /// true when it had to.
+    bool push_out_of_terrain(Vec3& x, const Vec3& fallback) const;
     bool out_of_bounds(const Vec3& p) const;
     /// Bins active particles and reorders every array by cell (grid mode).
     void sort_by_cell(float cell);
@@ -267,9 +290,12 @@ private:
     std::optional<PbfDef> pbf_;
     SinkDef sink_;
     double emit_credit_ = 0.0;  ///< fractional particles the source owes
+    std::optional<LatticeSource> lattice_;
+    std::vector<Vec3> emit_slots_;  ///< scratch of emit_lattice()
     float rest_density_ = 1.0f;
     float lattice_grad_sum_ = 1.0f;
     std::vector<float> lambda_, density_;
+    std::vector<uint8_t> contact_;  ///< PBF: held by the terrain this step
     std::vector<Vec3> delta_, omega_;
     // Reorder scratch (reused; no allocation once warm).
     std::vector<uint32_t> perm_;

@@ -134,6 +134,9 @@ public:
     const Bvh& bvh() const { return bvh_; }
     const Particles& particles() const { return solver_->particles(); }
     const SolverCounters& counters() const { return solver_->counters(); }
+    /// Non-fatal advice: scene_warnings(def) plus the solver's on this terrain (e.g. a
+    /// flow rate its source cannot deliver, and what it was capped to).
+    std::vector<std::string> warnings() const;
     /// The dense field (paper kernels); empty when the scene uses a compact kernel.
     const ScalarGrid& field() const { return field_; }
     /// The sparse field (compact kernels); empty for the paper's kernels.

@@ -105,6 +105,7 @@ void ParticleSolver::init_pbf() {
                 g2 += double(glm::dot(gr, gr));
             }
     rest_density_ = float(rho);
+    build_lattice();
     const double inv = 1.0 / rho;
     lattice_grad_sum_ = float(inv * inv * (g2 + double(glm::dot(gsum, gsum))));
 }
@@ -149,10 +150,14 @@ void ParticleSolver::collide_fluid(size_t i, StepCounts& c) {
     Vec3 to = p.position[i] - lift;
     Vec3 v = p.velocity[i];
     constexpr int kMaxContacts = 4;
-    for (int b = 0; b < kMaxContacts; ++b) {
+    for (int b = 0; b <= kMaxContacts; ++b) {
         const auto hit = robust_hit(from, to);
         if (!hit) break;
         ++c.collisions;
+        if (b == kMaxContacts) {  // still sliding into a crease: stay at the last contact
+            to = from;
+            break;
+        }
         const Vec3 n = hit->normal;
         // Slide: the rest of the motion loses its normal part (and the damping share).
         Vec3 rest = to - hit->point;
@@ -163,9 +168,31 @@ void ParticleSolver::collide_fluid(size_t i, StepCounts& c) {
         from = hit->point + Vec3(0.0f, collision_.offset, 0.0f);
         to = from + rest * (1.0f - collision_.damping);
     }
-    guard_above_terrain(to, v, c);
+    count_and_guard(to, v, c);
     p.velocity[i] = v;
     p.position[i] = to + lift;
+}
+
+// Out of the ground along the triangle's normal onto its plane lifted by radius +
+// offset (a vertical lift on a steep wall would fling the particle up by the wall's
+// height). The offset keeps resting particles strictly above the surface, so the
+// next step's swept segment starts above it and rounding cannot hide a crossing. At a
+// concave crease the new point can be under the neighbouring triangle: a few rounds,
+// then the particle stays where it started the step (`fallback`, above the ground): a
+// vertical lift out of a narrow pit or off a spike's flank would fling it.
+bool ParticleSolver::push_out_of_terrain(Vec3& x, const Vec3& fallback) const {
+    const float lift = collision_.radius + collision_.offset;
+    bool pushed = false;
+    for (int round = 0; round < 3; ++round) {
+        if (!terrain_.contains_xz(x.x, x.z)) return pushed;
+        const float h = terrain_.height_mesh(x.x, x.z) + lift;
+        if (x.y >= h) return pushed;
+        const Vec3 nrm = terrain_.normal_mesh(x.x, x.z);
+        x += ((h - x.y) * nrm.y) * nrm;
+        pushed = true;
+    }
+    if (terrain_.contains_xz(x.x, x.z) && x.y < terrain_.height_mesh(x.x, x.z) + lift) x = fallback;
+    return true;
 }
 
 void ParticleSolver::step_pbf(float dt) {
@@ -195,6 +222,7 @@ void ParticleSolver::step_pbf(float dt) {
     // 2. Bin the predicted positions (reorders every array by cell).
     sort_by_cell(d.kernel_radius);
     lambda_.assign(n, 0.0f);
+    contact_.assign(n, 0);
     density_.assign(n, 0.0f);
     delta_.assign(n, Vec3(0.0f));
 
@@ -245,17 +273,25 @@ void ParticleSolver::step_pbf(float dt) {
             for (size_t i = r.begin(); i != r.end(); ++i) {
                 if (!p.active[i]) continue;
                 Vec3 x = p.position[i] + delta_[i];
-                if (terrain && terrain_.contains_xz(x.x, x.z)) {
-                    // Out of the ground along the triangle's normal (to the closest point
-                    // of its plane, lifted by the radius): a vertical lift on a steep
-                    // wall would fling the particle up by the wall's height.
-                    const float h = terrain_.height_mesh(x.x, x.z) + collision_.radius;
-                    if (x.y < h) {
-                        const Vec3 nrm = terrain_.normal_mesh(x.x, x.z);
-                        x += ((h - x.y) * nrm.y) * nrm;
-                    }
-                }
+                if (terrain && push_out_of_terrain(x, p.last_position[i])) contact_[i] = 1;
                 p.position[i] = x;
+            }
+        });
+    }
+
+    // Bed friction: a particle the terrain held this step (pushed out in an iteration)
+    // loses the `damping` share of its motion along the ground (linear drag at the
+    // bed). It takes the energy out of a pool's slosh; too much of it holds a shallow
+    // river on its bed (docs/river.md has the measured trade-off).
+    if (terrain && collision_.damping > 0.0f) {
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t i = r.begin(); i != r.end(); ++i) {
+                if (!contact_[i]) continue;
+                const Vec3 x = p.position[i];
+                if (!terrain_.contains_xz(x.x, x.z)) continue;
+                const Vec3 nrm = terrain_.normal_mesh(x.x, x.z);
+                const Vec3 dx = x - p.last_position[i];
+                p.position[i] = x - collision_.damping * (dx - glm::dot(dx, nrm) * nrm);
             }
         });
     }
@@ -270,8 +306,8 @@ void ParticleSolver::step_pbf(float dt) {
             if (!p.active[i]) continue;
             ++local;
             p.velocity[i] = (p.position[i] - p.last_position[i]) * inv_dt;
-            if (terrain) collide_fluid(i, c);
-            if (depth_below_surface(p.position[i]) > kTunnelEpsilon) ++c.tunneled;
+            if (terrain) collide_fluid(i, c);  // counts tunneled before its guard
+            else if (ends_below_terrain(p.position[i] - Vec3(0.0f, collision_.radius, 0.0f))) ++c.tunneled;
         }
         steps += local;
         collisions += c.collisions;

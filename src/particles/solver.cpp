@@ -21,6 +21,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -110,10 +112,28 @@ void ParticleSolver::place(std::span<const Vec3> positions) {
     }
 }
 
-void ParticleSolver::pour(const Vec3& center, int count) {
+void ParticleSolver::set_spawn_center(const Vec3& center) {
     spawn_.center = center;
+    if (lattice_) build_lattice();
+}
+
+void ParticleSolver::pour(const Vec3& center, int count) {
+    set_spawn_center(center);
     const size_t n = particles_.size();
-    if (n == 0) return;
+    if (n == 0 || count <= 0) return;
+    if (lattice_) {
+        // The lattice source emits them as slots free up; when the pool is short, the
+        // oldest-poured particles are taken back into it first.
+        for (int k = 0; k < count && size_t(k) < n; ++k) {
+            if (size_t(k) >= n - next_to_activate_) {
+                const size_t i = slot_of_id(next_to_pour_);
+                if (i < next_to_activate_) deactivate(i);
+                next_to_pour_ = static_cast<uint32_t>((next_to_pour_ + 1) % n);
+            }
+        }
+        emit_credit_ += double(std::min<size_t>(size_t(count), n));
+        return;
+    }
     for (int k = 0; k < count; ++k) {
         if (next_to_activate_ < n) {
             spawn(next_to_activate_++);  // inactive particles are the suffix
@@ -153,9 +173,80 @@ void ParticleSolver::emit(float dt) {
     }
 }
 
+float ParticleSolver::emit_rate() const {
+    const float rate = spawn_.particles_per_second();
+    return lattice_ ? std::min(rate, lattice_->max_rate()) : rate;
+}
+
+void ParticleSolver::build_lattice() {
+    LatticeSource::Def d{.shape = spawn_.shape,
+                         .center = spawn_.center,
+                         .half_extent = spawn_.half_extent,
+                         .inflow = spawn_.initial_velocity,
+                         .spacing = pbf_->spacing,
+                         .clearance = collision_.mode == CollisionMode::None ? 0.0f : collision_.radius + collision_.offset,
+                         .gravity = integrator_.gravity};
+    lattice_ = LatticeSource::build(d, terrain_);
+}
+
+std::vector<std::string> ParticleSolver::warnings() const {
+    std::vector<std::string> w;
+    if (!lattice_) return w;
+    const float rate = spawn_.particles_per_second();
+    if (lattice_->slots().empty())
+        w.push_back(fmt::format("particles.spawn_center: the source volume at [{}, {}, {}] has no lattice slot above "
+                                "the terrain (spacing pbf.spacing = {} m): it cannot emit; raise the source or "
+                                "widen particles.spawn_half_extent",
+                                spawn_.center.x, spawn_.center.y, spawn_.center.z, pbf_->spacing));
+    else if (rate > lattice_->max_rate())
+        w.push_back(fmt::format("particles.flow_rate: {:.1f} particles per second is more than the source can deliver "
+                                "at spacing {} m and inflow speed {:.2f} m/s ({} lattice slots): capped to {:.1f}; "
+                                "widen particles.spawn_half_extent or raise particles.initial_velocity",
+                                rate, pbf_->spacing, glm::length(spawn_.initial_velocity), lattice_->slots().size(),
+                                lattice_->max_rate()));
+    return w;
+}
+
+void ParticleSolver::emit_lattice() {
+    const size_t pool = particles_.size() - next_to_activate_;
+    const double cap = double(std::max<size_t>(lattice_->slots().size(), 1));
+    if (emit_credit_ > cap) emit_credit_ = cap;  // a blocked source does not build an endless backlog
+    const size_t want = std::min(pool, static_cast<size_t>(std::max(emit_credit_, 0.0)));
+    if (want == 0) return;
+    lattice_->emit(particles_.position, next_to_activate_, want, emit_slots_);
+    for (const Vec3& q : emit_slots_) {
+        const size_t i = next_to_activate_++;
+        particles_.position[i] = q;
+        particles_.last_position[i] = q;
+        particles_.velocity[i] = spawn_.initial_velocity;
+        particles_.active[i] = 1;
+        ++counters_.emitted;
+    }
+    emit_credit_ -= double(emit_slots_.size());
+}
+
 void ParticleSolver::step_frame(float frame_dt) {
     const bool by_rate = spawn_.particles_per_second() > 0.0f;
     const bool due = spawn_.interval == 0 || frame_ % static_cast<uint64_t>(spawn_.interval) == 0;
+    if (lattice_) {
+        // PBF: every activation goes through the lattice source. Without a rate the
+        // source owes the whole pool (interval 0) or one particle when due; what does
+        // not fit now is emitted as the slots free up.
+        const size_t pool = particles_.size() - next_to_activate_;
+        if (!by_rate && spawn_.interval == 0) emit_credit_ = std::max(emit_credit_, double(pool));
+        else if (!by_rate && due) emit_credit_ += 1.0;
+        const float dt = integrator_.fixed_dt > 0.0f ? integrator_.fixed_dt : frame_dt;
+        const int sub = std::max(integrator_.substeps, 1);
+        const float h = dt / static_cast<float>(sub);
+        if (frame_ == 0) emit_lattice();
+        for (int s = 0; s < sub; ++s) {
+            step(h);
+            if (by_rate) emit_credit_ += double(emit_rate()) * h;
+            emit_lattice();
+        }
+        ++frame_;
+        return;
+    }
     if (due && !by_rate) {
         const size_t n = spawn_.interval == 0 ? particles_.size() : 1;
         for (size_t k = 0; k < n && next_to_activate_ < particles_.size(); ++k) spawn(next_to_activate_++);
@@ -198,6 +289,19 @@ void ParticleSolver::finish_step(uint64_t steps, const StepCounts& c) {
     counters_.guarded += c.guarded;
     counters_.tunneled += c.tunneled;
     const size_t n = particles_.size();
+    if (lattice_) {
+        // PBF: out of bounds or sunk, every particle goes back to the pool; without a
+        // flow rate the source owes it back at once (it re-emits as slots free up).
+        const bool by_rate = spawn_.particles_per_second() > 0.0f;
+        for (size_t i = n; i-- > 0;) {
+            if (respawn_flag_[i] == 0) continue;
+            ++(respawn_flag_[i] == 1 ? counters_.respawned : counters_.sunk);
+            deactivate(i);
+            if (!by_rate) emit_credit_ += 1.0;
+        }
+        record_max_speed();
+        return;
+    }
     const bool pool = spawn_.particles_per_second() > 0.0f;
     // Serial, in index order: the RNG sequence does not depend on the thread count.
     for (size_t i = 0; i < n; ++i) {
@@ -216,6 +320,10 @@ void ParticleSolver::finish_step(uint64_t steps, const StepCounts& c) {
                 deactivate(i);
             }
     }
+    record_max_speed();
+}
+
+void ParticleSolver::record_max_speed() {
     float vmax = 0.0f;
     for (size_t i = 0; i < next_to_activate_; ++i) vmax = std::max(vmax, glm::length(particles_.velocity[i]));
     counters_.max_speed = vmax;
@@ -275,12 +383,8 @@ void ParticleSolver::step(float dt) {
             p.last_position[i] = p.position[i];
             p.position[i] += p.velocity[i] * dt;
             ++local_steps;
-            collide(i, dt, c);
-            if (const uint8_t flag = exit_flag(p.position[i])) {
-                respawn_flag_[i] = flag;
-                continue;
-            }
-            if (depth_below_surface(p.position[i]) > kTunnelEpsilon) ++c.tunneled;
+            collide(i, dt, c);  // counts tunneled before any correction
+            respawn_flag_[i] = exit_flag(p.position[i]);
         }
         steps += local_steps;
         collisions += c.collisions;
@@ -292,10 +396,17 @@ void ParticleSolver::step(float dt) {
 
 void ParticleSolver::collide(size_t i, float dt, StepCounts& c) {
     switch (collision_.mode) {
-        case CollisionMode::Paper: collide_paper(i, dt, c); break;
-        case CollisionMode::Robust: collide_robust(i, dt, c); break;
+        case CollisionMode::Paper:
+            collide_paper(i, dt, c);
+            break;
+        case CollisionMode::Robust: collide_robust(i, dt, c); return;  // counts inside, before its guard
         case CollisionMode::None: break;
     }
+    if (ends_below_terrain(particles_.position[i] - Vec3(0.0f, collision_.radius, 0.0f))) ++c.tunneled;
+}
+
+bool ParticleSolver::ends_below_terrain(const Vec3& lifted) const {
+    return terrain_.contains_xz(lifted.x, lifted.z) && lifted.y < terrain_.height_mesh(lifted.x, lifted.z);
 }
 
 namespace {
@@ -315,21 +426,34 @@ void ParticleSolver::collide_paper(size_t i, float dt, StepCounts& c) {
     p.position[i] = hit->point + lift + Vec3(0.0f, collision_.offset, 0.0f) + v * dt;
 }
 
+// Contact skin: the query runs from a hair above the segment's start to a hair below
+// its end. A particle resting exactly on the surface (or a rounding error under it)
+// starts its next segment on the plane, where the watertight test's t = 0 can round
+// either way, and a segment ending exactly on the surface has the same problem at
+// t = 1: both are contacts. On a heightfield a vertical shift of the start can only
+// reveal crossings, never hide one. The skin grows with the height's magnitude (float
+// spacing is 6e-8 relative).
 std::optional<RayHit> ParticleSolver::robust_hit(const Vec3& from, const Vec3& to) const {
+    const float skin = 1e-4f + 1e-6f * std::max(std::abs(from.y), std::abs(to.y));
+    const Vec3 a = from + Vec3(0.0f, skin, 0.0f);
+    const Vec3 b = to - Vec3(0.0f, skin, 0.0f);
     if (collision_.query == CollisionQuery::Heightfield) {
-        HeightfieldQuery q = intersect_segment_heightfield(terrain_, from, to);
+        HeightfieldQuery q = intersect_segment_heightfield(terrain_, a, b);
         if (!q.too_long) return q.hit;
     }
-    return bvh_.intersect_segment(terrain_, from, to);
+    return bvh_.intersect_segment(terrain_, a, b);
 }
 
-// Heightfield guard: whatever the float rounding at seams did, a particle never ends below
-// the mesh: it is lifted to the surface (+ offset) and loses its velocity into the ground.
-void ParticleSolver::guard_above_terrain(Vec3& to, Vec3& v, StepCounts& c) const {
-    if (!terrain_.contains_xz(to.x, to.z)) return;
-    const float h = terrain_.height_mesh(to.x, to.z);
-    if (to.y >= h) return;
+// Measure, then correct. A particle-step that ends below the (lifted) mesh after the
+// collision response is a tunneling event: the swept query missed a crossing or the
+// response left the particle below. It is counted first; the heightfield guard then
+// lifts the particle to the surface (+ offset), removes its velocity into the ground,
+// and counts itself. With a sound query and response both counters stay 0 (tests).
+void ParticleSolver::count_and_guard(Vec3& to, Vec3& v, StepCounts& c) const {
+    if (!ends_below_terrain(to)) return;
+    ++c.tunneled;
     ++c.guarded;
+    const float h = terrain_.height_mesh(to.x, to.z);
     const Vec3 n = terrain_.normal_mesh(to.x, to.z);
     const float vn = glm::dot(v, n);
     if (vn < 0.0f) v -= vn * n;
@@ -345,16 +469,20 @@ void ParticleSolver::collide_robust(size_t i, float dt, StepCounts& c) {
     // A bounce moves the particle along a new segment (hit + offset -> + v dt) that can
     // itself cross the ground near a crease; re-check it a few times, then guard.
     constexpr int kMaxBounces = 4;
-    for (int b = 0; b < kMaxBounces; ++b) {
+    for (int b = 0; b <= kMaxBounces; ++b) {
         const auto hit = robust_hit(from, to);
         if (!hit) break;
         ++c.collisions;
+        if (b == kMaxBounces) {  // still bouncing in a crease: stay at the last contact
+            to = from;
+            break;
+        }
         v = reflect_about(v, hit->normal) * (1.0f - collision_.damping);
         // Straight up from a point on a heightfield never goes below it.
         from = hit->point + Vec3(0.0f, collision_.offset, 0.0f);
         to = from + v * dt;
     }
-    guard_above_terrain(to, v, c);
+    count_and_guard(to, v, c);
     p.velocity[i] = v;
     p.position[i] = to + lift;
 }

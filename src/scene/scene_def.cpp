@@ -32,26 +32,29 @@ std::string_view to_string(SolverKind s) {
 }
 
 SceneDef default_scene() {
-    // A PBF river down the procedural valley: a disc source at the head of the valley's
-    // main channel emits 4000 particles (spacing 0.5 m, 125 litres each) at 420 per
-    // second (all active within 10 s); particles leaving over the terrain's edges return to the source. Two
+    // A PBF river down the procedural valley: a disc source (radius 2.5 m, 1.5 m above
+    // the ground, inflow 3 m/s down: a lattice source that can deliver about 600
+    // particles per second) at the head of the valley's main channel emits 4000
+    // particles (spacing 0.5 m, 125 litres each) at 420 per second (all active within
+    // 10 s); bed friction 0.002 per contact step (0.005 already holds the shallow river
+    // on its bed for a minute: docs/river.md); particles leaving over the terrain's edges return to the source. Two
     // substeps of 1/120 s with 3 density iterations; the sparse poly6 field wraps them.
     SceneDef d = springs_valley_scene();
     d.solver = SolverKind::Pbf;
     d.spawn = {.count = 4000,
                .center = Vec3(0.0f),
-               .half_extent = Vec3(1.5f, 0.5f, 1.5f),
+               .half_extent = Vec3(2.5f, 0.5f, 2.5f),
                .interval = 0,
-               .initial_velocity = Vec3(0.0f, -1.0f, 0.0f),
+               .initial_velocity = Vec3(0.0f, -3.0f, 0.0f),
                .auto_center = true,
-               .auto_height = 1.0f,
+               .auto_height = 1.5f,
                .auto_channel = true,
                .shape = SourceShape::Disc,
                .flow_rate = 420.0f,
                .litres_per_particle = 0.0f};
     d.pbf = PbfDef{};
     d.sink = SinkDef{.kind = SinkKind::Edges};
-    d.collision = {.mode = CollisionMode::Robust, .damping = 0.02f, .offset = 0.005f, .leaf_triangles = 8,
+    d.collision = {.mode = CollisionMode::Robust, .damping = 0.002f, .offset = 0.005f, .leaf_triangles = 8,
                    .radius = 0.1f, .query = CollisionQuery::Heightfield};
     d.integrator = {.gravity = 9.82f, .fixed_dt = 0.0f, .substeps = 2};
     d.field = {.kernel = FieldKernel::Poly6,

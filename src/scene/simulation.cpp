@@ -92,6 +92,12 @@ Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh)
     }
 }
 
+std::vector<std::string> Simulation::warnings() const {
+    std::vector<std::string> w = scene_warnings(def_);
+    for (std::string& s : solver_->warnings()) w.push_back(std::move(s));
+    return w;
+}
+
 Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def) {
     if (auto v = validate(def); !v) return v.error();
     auto map = load_scene_heightmap(def);

@@ -3,6 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdio>
+
 namespace mr {
 namespace {
 
@@ -102,6 +105,97 @@ TEST(FlowMeter, SteadyRateIsSteadyAndABurstIsNot) {
     EXPECT_TRUE(steady.summary().steady);
     EXPECT_NEAR(steady.summary().rate, 30.0, 0.5);
     EXPECT_FALSE(burst.summary().steady);
+}
+
+}  // namespace
+}  // namespace mr
+
+namespace mr {
+namespace {
+
+World bowlish_world() {
+    // A V-shaped trough along x: heights rise with |z - 8|; 17 x 17 samples.
+    Heightmap m = flat_heightmap(17, 17);
+    for (int r = 0; r < 17; ++r)
+        for (int c = 0; c < 17; ++c) m.samples[size_t(r) * 17 + c] = std::abs(float(r) - 8.0f) / 8.0f;
+    auto t = Terrain::build(m, TerrainDef{.area_scale = 1.0f, .height_scale = 8.0f});
+    auto b = Bvh::build(t.value(), BvhDef{});
+    return World{std::move(t.value()), std::move(b.value())};
+}
+
+TEST(LatticeSource, SlotsAreALatticeAtTheSpacingAboveTheTerrainDownstreamFirst) {
+    World w = bowlish_world();
+    const LatticeSource::Def def{.shape = SourceShape::Box, .center = Vec3(8, 3, 8), .half_extent = Vec3(2, 2, 4),
+                                 .inflow = Vec3(0, -2, 0), .spacing = 0.5f, .clearance = 0.1f};
+    const LatticeSource src = LatticeSource::build(def, w.terrain);
+    const auto slots = src.slots();
+    ASSERT_FALSE(slots.empty());
+    EXPECT_LT(slots.size(), size_t(9 * 9 * 17)) << "slots inside the trough's walls are dropped";
+    for (size_t i = 0; i < slots.size(); ++i) {
+        const Vec3 q = slots[i];
+        const Vec3 o = (q - def.center) / def.spacing;
+        EXPECT_NEAR(o.x, std::round(o.x), 1e-4f);
+        EXPECT_NEAR(o.y, std::round(o.y), 1e-4f);
+        EXPECT_NEAR(o.z, std::round(o.z), 1e-4f);
+        EXPECT_GE(q.y, w.terrain.height_mesh(q.x, q.z) + def.clearance) << "slot under the ground";
+        if (i > 0) EXPECT_GE(q.y, slots[i - 1].y) << "downstream (the bottom, for an inflow going down) first";
+    }
+    // Rate: slots * speed / (extent along the inflow + d).
+    const float extent = slots.back().y - slots.front().y;
+    EXPECT_NEAR(src.max_rate(), float(slots.size()) * 2.0f / (extent + 0.5f), 1e-3f);
+}
+
+TEST(LatticeSource, NeverEmitsOntoWaterOrTwiceIntoOneSlot) {
+    World w = bowlish_world();
+    LatticeSource src = LatticeSource::build(
+        LatticeSource::Def{.shape = SourceShape::Disc, .center = Vec3(8, 6, 8), .half_extent = Vec3(1.5f, 0.5f, 0),
+                           .spacing = 0.5f},
+        w.terrain);
+    // Water already sits in part of the source: random points in its lower half.
+    std::vector<Vec3> water;
+    Lcg rng(4);
+    for (int k = 0; k < 40; ++k) water.emplace_back(rng.uniform(6.5f, 9.5f), rng.uniform(5.4f, 6.0f), rng.uniform(6.5f, 9.5f));
+    std::vector<Vec3> out;
+    src.emit(water, water.size(), 1000, out);
+    ASSERT_FALSE(out.empty());
+    EXPECT_LT(out.size(), src.slots().size()) << "occupied slots were skipped";
+    const float free = LatticeSource::kFreeFraction * 0.5f;
+    for (size_t a = 0; a < out.size(); ++a) {
+        for (const Vec3& q : water) EXPECT_GE(glm::length(out[a] - q), free) << "emitted onto water";
+        for (size_t b = a + 1; b < out.size(); ++b) EXPECT_GE(glm::length(out[a] - out[b]), 0.5f - 1e-4f);
+    }
+    // The same particles plus the emitted ones: nothing is free any more.
+    std::vector<Vec3> all = water;
+    all.insert(all.end(), out.begin(), out.end());
+    std::vector<Vec3> again;
+    src.emit(all, all.size(), 1000, again);
+    EXPECT_TRUE(again.empty());
+    // Inactive particles (past `active`) do not block.
+    src.emit(all, 0, 1000, again);
+    EXPECT_EQ(again.size(), src.slots().size());
+}
+
+TEST(LatticeSource, AFlowRateTheSourceCannotDeliverIsAWarningAndCapped) {
+    World w = ramp_world();
+    SpawnDef spawn{.count = 4000, .center = Vec3(4, 9, 8), .half_extent = Vec3(1, 0.25f, 1), .interval = 0,
+                   .initial_velocity = Vec3(0, -1, 0)};
+    spawn.shape = SourceShape::Disc;
+    spawn.flow_rate = 2000.0f;
+    ParticleSolver s(w.terrain, w.bvh, spawn, SpringDef{}, CollisionDef{.mode = CollisionMode::Robust, .radius = 0.1f},
+                     IntegratorDef{.fixed_dt = 1.0f / 120.0f}, 1, PbfDef{}, SinkDef{});
+    ASSERT_NE(s.lattice_source(), nullptr);
+    const float cap = s.lattice_source()->max_rate();
+    EXPECT_LT(cap, 2000.0f);
+    EXPECT_FLOAT_EQ(s.emit_rate(), cap);
+    const auto warn = s.warnings();
+    ASSERT_EQ(warn.size(), 1u);
+    EXPECT_NE(warn[0].find("particles.flow_rate"), std::string::npos) << warn[0];
+    char capped[32];
+    std::snprintf(capped, sizeof capped, "capped to %.1f", cap);
+    EXPECT_NE(warn[0].find(capped), std::string::npos) << warn[0];
+    for (int f = 0; f < 240; ++f) s.step_frame(1.0f / 120.0f);
+    EXPECT_LE(double(s.counters().emitted), 2.0 * cap + 60.0) << "at most the cap (plus the first fill)";
+    EXPECT_GT(double(s.counters().emitted), 0.5 * 2.0 * cap);
 }
 
 }  // namespace
