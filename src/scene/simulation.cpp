@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <vector>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -50,6 +51,54 @@ Vec3 channel_spawn_center(const Terrain& t, const ChannelMap& m, float auto_heig
     return Vec3(x, t.height_mesh(x, z) + auto_height, z);
 }
 
+/// Fits an automatically placed source to the terrain: its footprint (disc radius or
+/// box half extents) moves inward until it lies inside the rectangle (shrinking only
+/// where the terrain is narrower than the source); its height is below.
+void fit_auto_source(const Terrain& t, SpawnDef& spawn) {
+    const float s = t.area_scale();
+    const float margin = 0.25f * s;
+    const Vec3 size = t.bounds().extent();
+    Vec3& he = spawn.half_extent;
+    const bool disc = spawn.shape == SourceShape::Disc;
+    const float rx = spawn.shape == SourceShape::Point ? 0.0f : he.x;
+    const float rz = spawn.shape == SourceShape::Point ? 0.0f : (disc ? he.x : he.z);
+    const float fx = std::min(rx, std::max(0.0f, 0.5f * size.x - margin));
+    const float fz = std::min(rz, std::max(0.0f, 0.5f * size.z - margin));
+    if (disc) {
+        he.x = std::min(fx, fz);
+    } else if (spawn.shape == SourceShape::Box) {
+        he.x = fx;
+        he.z = fz;
+    }
+    const float ex = spawn.shape == SourceShape::Point ? 0.0f : he.x;
+    const float ez = spawn.shape == SourceShape::Point ? 0.0f : (disc ? he.x : he.z);
+    const float x0 = t.bounds().min.x, z0 = t.bounds().min.z;
+    Vec3& c = spawn.center;
+    c.x = std::clamp(c.x, x0 + ex + margin, std::max(x0 + ex + margin, x0 + size.x - ex - margin));
+    c.z = std::clamp(c.z, z0 + ez + margin, std::max(z0 + ez + margin, z0 + size.z - ez - margin));
+    // auto_height above the ground at the centre, raised where needed so that at least
+    // half of the footprint's ground lies a spacing-ish (0.5 m) below the source's
+    // bottom: a source over spikes or wedged between steep walls would have no lattice
+    // slots, and one raised to the highest ground under it would drop its water from
+    // metres up.
+    c.y = t.height_mesh(c.x, c.z) + spawn.auto_height;
+    std::vector<float> ground;
+    const int n = std::max(2, int(std::ceil(2.0f * std::max(ex, ez) / (0.5f * s)))) + 1;
+    for (int a = 0; a < n; ++a)
+        for (int b = 0; b < n; ++b) {
+            const float x = c.x - ex + 2.0f * ex * float(a) / float(n - 1);
+            const float z = c.z - ez + 2.0f * ez * float(b) / float(n - 1);
+            if (t.contains_xz(x, z) && (!disc || (x - c.x) * (x - c.x) + (z - c.z) * (z - c.z) <= ex * ex * 1.0001f))
+                ground.push_back(t.height_mesh(x, z));
+        }
+    if (!ground.empty()) {
+        std::nth_element(ground.begin(), ground.begin() + ground.size() / 2, ground.end());
+        const float bottom = c.y - (spawn.shape == SourceShape::Point ? 0.0f : he.y);
+        const float need = ground[ground.size() / 2] + 0.5f;
+        if (bottom < need) c.y += need - bottom;
+    }
+}
+
 }  // namespace
 
 Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh)
@@ -58,6 +107,7 @@ Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh)
     if (spawn.auto_center) {
         spawn.center = spawn.auto_channel ? channel_spawn_center(terrain_, channel_, spawn.auto_height)
                                           : auto_spawn_center(terrain_, spawn.auto_height);
+        fit_auto_source(terrain_, spawn);
         spawn.auto_center = false;
         def_.spawn = spawn;
     }
