@@ -102,9 +102,11 @@ ScenarioResult bench_simulation(const std::string& name, const SceneDef& def, in
     Simulation& s = *sim.value();
     for (int f = 0; f < warmup; ++f) s.step(1.0f / 60.0f);
     const uint64_t sunk_before = s.counters().sunk;
+    OutletMeter outlets(s.terrain(), s.channel(), s.main_channel().back());
     float max_speed = 0.0f, density_max = 0.0f;
     for (int f = 0; f < frames; ++f) {
         s.step(1.0f / 60.0f);
+        outlets.record(double(f + 1) / 60.0, s.last_exits());
         max_speed = std::max(max_speed, s.counters().max_speed);
         density_max = std::max(density_max, s.counters().density_error_max);
         const FrameTimings& t = s.last_timings();
@@ -125,6 +127,9 @@ ScenarioResult bench_simulation(const std::string& name, const SceneDef& def, in
     // Plausibility (issues 5 and 9) beside the times: nothing through the ground (and how
     // often the guard had to lift a particle), outflow at the sinks over the measured
     // frames, water in the channel, density error, no explosion, no spray, settled speed.
+    // Outflow over inflow: the main outlet's rate over the second half of the measured
+    // frames over the source's nominal rate; coverage of the main channel at the end.
+    const double inflow = def.spawn.particles_per_second();
     r.quality = {{"tunneled", s.counters().tunneled},
                  {"guarded", s.counters().guarded},
                  {"respawned", s.counters().respawned},
@@ -133,7 +138,9 @@ ScenarioResult bench_simulation(const std::string& name, const SceneDef& def, in
                  {"density_error_max", density_max},
                  {"max_speed", max_speed},
                  {"final_speed_p95", percentiles(s.active_speeds()).p95},
-                 {"spray_fraction", s.spray_fraction()}};
+                 {"spray_fraction", s.spray_fraction()},
+                 {"outflow_over_inflow", inflow > 0.0 ? outlets.summary().main.rate / inflow : 0.0},
+                 {"channel_coverage", s.channel_coverage()}};
     return r;
 }
 

@@ -53,6 +53,22 @@ nlohmann::json stage_json(const std::vector<double>& ms) {
     return {{"median", p.median}, {"p95", p.p95}, {"mean", p.mean}, {"max", p.max}};
 }
 
+/// One entry per outlet: cell [row, col], position [x, z] (metres), drainage cells,
+/// particles over the run, rate over the second half, whether it is the main channel's.
+nlohmann::json outlets_json(const OutletMeter& m, const OutletMeter::Summary& s) {
+    nlohmann::json a = nlohmann::json::array();
+    for (size_t k = 0; k < m.outlets().size(); ++k) {
+        const OutletMeter::Outlet& o = m.outlets()[k];
+        a.push_back({{"cell", {o.row, o.column}},
+                     {"position", {o.x, o.z}},
+                     {"accumulation", o.accumulation},
+                     {"particles", s.outlets[k].particles},
+                     {"rate_per_s", s.outlets[k].rate},
+                     {"main", o.main}});
+    }
+    return a;
+}
+
 int run(const RunOptions& o) {
     if (o.frames < 1 || o.frames > kMaxFrames)
         return fail(kExitBadInput, fmt::format("--frames: must be in [1, {}] (got {})", kMaxFrames, o.frames));
@@ -112,13 +128,17 @@ int run(const RunOptions& o) {
     // Plausibility: outflow at the sinks, wet-channel and spray fractions (sampled every
     // 10 frames over the second half; spray also at the last frame), largest speed and
     // density error seen.
+    // Per outlet (issue 10): exits assigned to the terrain's outlets; the main channel's
+    // coverage sampled with spray.
     FlowMeter flow;
-    double wet_sum = 0.0, density_mean_sum = 0.0, spray_sum = 0.0;
+    OutletMeter outlets(sim.terrain(), sim.channel(), sim.main_channel().back());
+    double wet_sum = 0.0, density_mean_sum = 0.0, spray_sum = 0.0, coverage_sum = 0.0;
     long long wet_n = 0, spray_n = 0;
     float max_speed = 0.0f, density_max = 0.0f;
     for (long long f = 0; f < o.frames; ++f) {
         sim.step(static_cast<float>(o.dt));
         flow.record(double(f + 1) * o.dt, sim.counters().sunk);
+        outlets.record(double(f + 1) * o.dt, sim.last_exits());
         max_speed = std::max(max_speed, sim.counters().max_speed);
         density_max = std::max(density_max, sim.counters().density_error_max);
         if (2 * f >= o.frames && f % 10 == 0) {
@@ -128,6 +148,7 @@ int run(const RunOptions& o) {
         }
         if ((2 * f >= o.frames && f % 10 == 0) || f == o.frames - 1) {
             spray_sum += sim.spray_fraction();
+            coverage_sum += sim.channel_coverage();
             ++spray_n;
         }
         const FrameTimings& t = sim.last_timings();
@@ -149,6 +170,10 @@ int run(const RunOptions& o) {
     const SceneDef& d = sim.def();
     const double spray = spray_sum / double(std::max(spray_n, 1LL));
     const Percentiles final_speed = percentiles(sim.active_speeds());
+    const double coverage = coverage_sum / double(std::max(spray_n, 1LL));
+    const OutletMeter::Summary os = outlets.summary();
+    const double inflow = d.spawn.particles_per_second();  // as asked, not capped
+    const double over_inflow = inflow > 0.0 ? os.main.rate / inflow : 0.0;
     if (!o.stats.empty()) {
         nlohmann::json j;
         j["scene"] = d.name;
@@ -188,7 +213,13 @@ int run(const RunOptions& o) {
             {"density_error_max", density_max},
             {"max_speed", max_speed},
             {"final_speed", {{"median", final_speed.median}, {"p95", final_speed.p95}, {"max", final_speed.max}}},
-            {"spray_fraction", spray}};
+            {"spray_fraction", spray},
+            {"outflow_over_inflow", over_inflow},
+            {"time_to_outlet_s", os.main.first_s},
+            {"channel_coverage", coverage},
+            {"main_channel_cells", sim.main_channel().size()},
+            {"outlets", outlets_json(outlets, os)},
+            {"outlet_other", {{"particles", os.other.particles}, {"rate_per_s", os.other.rate}}}};
         j["state_hash"] = fmt::format("{:016x}", sim.state_hash());
         j["stage_ms"] = {{"simulate", stage_json(sim_ms)},
                          {"field", stage_json(field_ms)},
@@ -201,12 +232,14 @@ int run(const RunOptions& o) {
     }
     const Percentiles tot = percentiles(total_ms);
     fmt::print("{}: {} frames, {}/{} particles active, surface {} triangles / {} vertices, "
-               "tunneled {}, guarded {}, respawned {}, outflow {:.1f}/s ({}), wet {:.0f} %, spray {:.1f} %, "
+               "tunneled {}, guarded {}, respawned {}, outflow {:.1f}/s ({}), main outlet {:.1f}/s = {:.2f} of "
+               "inflow (first at {:.2f} s), channel coverage {:.0f} %, wet {:.0f} %, spray {:.1f} %, "
                "final speed p95 {:.2f} m/s, frame median {:.3f} ms (p95 {:.3f})\n",
                d.name, o.frames, sim.particles().active_count(), sim.particles().size(),
                sim.surface().triangle_count(), sim.surface().vertex_count(), c.tunneled, c.guarded, c.respawned,
-               flow.summary().rate, flow.summary().steady ? "steady" : "not steady",
-               100.0 * (wet_n ? wet_sum / double(wet_n) : 0.0), 100.0 * spray, final_speed.p95, tot.median, tot.p95);
+               flow.summary().rate, flow.summary().steady ? "steady" : "not steady", os.main.rate, over_inflow,
+               os.main.first_s, 100.0 * coverage, 100.0 * (wet_n ? wet_sum / double(wet_n) : 0.0), 100.0 * spray,
+               final_speed.p95, tot.median, tot.p95);
     if (!o.obj_dir.empty()) fmt::print("wrote {} OBJ files to {}\n", written.size(), o.obj_dir);
     if (!o.stats.empty()) fmt::print("wrote stats to {}\n", o.stats);
     return kExitOk;

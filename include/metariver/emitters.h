@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <span>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace mr {
@@ -103,6 +104,22 @@ public:
     std::pair<int, int> main_head() const { return head_; }
     /// Downhill direction (x, z unit vector) of the flow at cell (i, j).
     Vec3 flow_direction(int i, int j) const;
+    /// The flow path from cell (i, j): (i, j), its D8 receiver, that one's receiver, ...
+    /// up to the border cell where the flow leaves the terrain (receiver -1), included.
+    /// Every cell drains to a border cell (the depressions are filled), so it ends there.
+    std::vector<std::pair<int, int>> path_from(int i, int j) const;
+    /// The last cell of path_from(i, j): where the flow from (i, j) leaves the terrain.
+    std::pair<int, int> outlet_of(int i, int j) const;
+    /// The channel cell (accumulation >= threshold) nearest to cell (i, j) (Euclidean, in
+    /// cells; ties: the lowest row-major index); (i, j) itself when there is no channel cell.
+    std::pair<int, int> nearest_channel_cell(int i, int j) const;
+    /// A border cell that is a channel cell and drains out of the terrain (receiver -1).
+    struct Outlet {
+        int row = 0, column = 0;
+        uint32_t accumulation = 0;  ///< cells that drain out through it (itself included)
+    };
+    /// Every outlet, largest accumulation first (ties: row-major order).
+    std::span<const Outlet> outlets() const { return outlets_; }
 
 private:
     int rows_ = 0, columns_ = 0;
@@ -112,6 +129,7 @@ private:
     std::vector<int32_t> receiver_;  ///< D8 receiver cell index, -1 at outlets
     std::vector<float> dist_;
     std::pair<int, int> head_{0, 0};
+    std::vector<Outlet> outlets_;
 };
 
 /// Wet channel: a particle is in it when it lies within `width` metres (horizontally)

@@ -180,6 +180,10 @@ public:
     /// Non-fatal advice about the scene as this solver runs it on its terrain (e.g. a
     /// flow rate the source cannot deliver), one line each, naming the field.
     virtual std::vector<std::string> warnings() const { return {}; }
+    /// Where the outlet-edge sink (SinkKind::Edges) took particles during the latest
+    /// step_frame: each one's position at exit (just past the terrain's edge), in the
+    /// solver's deterministic order. Empty for solvers without sinks.
+    virtual std::span<const Vec3> last_exits() const { return {}; }
 };
 
 /// Owns the stepping of one particle set over one terrain: spawning, forces,
@@ -207,6 +211,8 @@ public:
     void set_spawn_center(const Vec3& center) override;
     void pour(const Vec3& center, int count) override;
     std::vector<std::string> warnings() const override;
+    /// step_frame clears the list; every step() (substep) appends its exits.
+    std::span<const Vec3> last_exits() const override { return exits_; }
 
     /// PBF: the lattice source (emission at the rest spacing, never onto water); none
     /// for the paper's springs, which spawn at random points of the volume.
@@ -257,6 +263,8 @@ private:
     /// Flags particles for respawn (1) or the sink (2) after a step.
     uint8_t exit_flag(const Vec3& p) const;
     void finish_step(uint64_t steps, const StepCounts& c);
+    /// Counts particle i as sunk; with the outlet-edge sink, records where it left.
+    void record_sunk(size_t i);
     void record_max_speed();
     std::optional<RayHit> robust_hit(const Vec3& from, const Vec3& to) const;
     /// True when `lifted` (a centre moved down by the radius) is below the mesh.
@@ -287,6 +295,7 @@ private:
     uint32_t next_to_pour_ = 0;    ///< round-robin cursor over particle ids for pour()
     NeighborGrid grid_;
     std::vector<uint8_t> respawn_flag_;
+    std::vector<Vec3> exits_;  ///< last_exits(): reused, no allocation once warm
     std::optional<PbfDef> pbf_;
     SinkDef sink_;
     double emit_credit_ = 0.0;  ///< fractional particles the source owes

@@ -17,6 +17,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace mr {
@@ -108,6 +109,67 @@ inline constexpr int kSprayNeighbours = 3;
 float spray_fraction(const Terrain& terrain, std::span<const Vec3> positions, std::span<const uint8_t> active,
                      float kernel_radius, float spacing);
 
+/// Water over the main channel (issue 10): the share of a path's cells (e.g. the main
+/// channel from the source to its outlet) with water over them. A cell is covered when
+/// an active particle lies within `radius_samples` samples horizontally of the cell's
+/// centre and at most `depth` metres above the ground sample there. O(active + cells):
+/// each particle visits the 5 x 5 cells around it through a cell -> path index grid.
+class ChannelCoverage {
+public:
+    ChannelCoverage() = default;
+    ChannelCoverage(const Terrain& t, std::span<const std::pair<int, int>> cells, float radius_samples = 1.5f,
+                    float depth = 3.0f);
+    size_t cells() const { return ground_.size(); }
+    /// Covered cells / cells (0 for an empty path).
+    float measure(std::span<const Vec3> positions, std::span<const uint8_t> active) const;
+
+private:
+    int rows_ = 0, columns_ = 0;
+    float scale_ = 1.0f, radius_ = 1.5f, depth_ = 3.0f;
+    Vec3 origin_{0.0f};  ///< the terrain's (min x, 0, min z)
+    std::vector<std::pair<int, int>> cells_;
+    std::vector<float> ground_;    ///< ground height at each path cell, metres
+    std::vector<int32_t> index_;   ///< grid cell -> path index, -1 off the path
+};
+
+/// Outflow per outlet (issue 10): each exit position a solver reports (Solver::last_exits)
+/// goes to the nearest of the terrain's outlets (ChannelMap::outlets(), plus the main
+/// channel's outlet cell if it is not one of them): the exit projected onto the terrain's
+/// rectangle, within max(3 samples, 3 m) of the outlet cell's centre; else to "other"
+/// (spray over an edge, ...).
+class OutletMeter {
+public:
+    struct Outlet {
+        int row = 0, column = 0;
+        float x = 0.0f, z = 0.0f;   ///< the cell's centre, metres
+        uint32_t accumulation = 0;  ///< drainage cells (ChannelMap)
+        bool main = false;          ///< the main channel's outlet
+    };
+    OutletMeter(const Terrain& t, const ChannelMap& m, std::pair<int, int> main_outlet);
+    std::span<const Outlet> outlets() const { return outlets_; }
+    /// Index into outlets() of the outlet an exit belongs to, -1 for other.
+    int assign(const Vec3& exit) const;
+    /// Feed after every frame: its end time and its exits.
+    void record(double time_s, std::span<const Vec3> exits);
+    struct Count {
+        uint64_t particles = 0;   ///< over the whole run
+        double rate = 0.0;        ///< particles per second over the second half (FlowMeter's window; 0 under 8 frames)
+        double first_s = -1.0;    ///< end time of the frame of the first exit, seconds (-1: none)
+    };
+    struct Summary {
+        std::vector<Count> outlets;  ///< parallel to outlets()
+        Count other;
+        Count main;  ///< the main outlet's (zero when there is none)
+    };
+    Summary summary() const;
+
+private:
+    std::vector<Outlet> outlets_;
+    float x0_ = 0, x1_ = 0, z0_ = 0, z1_ = 0, radius_ = 3.0f;
+    std::vector<double> t_;
+    std::vector<std::pair<uint32_t, int32_t>> exits_;  ///< (frame record, outlet or -1)
+};
+
 /// Per-frame times of the three stages, milliseconds.
 struct FrameTimings {
     double simulate_ms = 0.0;
@@ -161,6 +223,14 @@ public:
     float spray_fraction() const;
     /// |velocity| of every active particle, m/s, in index order.
     std::vector<double> active_speeds() const;
+    /// Where the outlet-edge sink took particles during the latest frame (Solver::last_exits).
+    std::span<const Vec3> last_exits() const { return solver_->last_exits(); }
+    /// The main channel: ChannelMap::path_from the source's channel cell (the main head
+    /// for the automatic channel source, else the channel cell nearest the source's
+    /// centre) to the border cell where it leaves the terrain (back()).
+    std::span<const std::pair<int, int>> main_channel() const { return main_path_; }
+    /// ChannelCoverage of the main channel by the current particles (1.5 samples, 3 m).
+    float channel_coverage() const;
 
 private:
     Simulation(const SceneDef& def, Terrain terrain, Bvh bvh);
@@ -178,6 +248,8 @@ private:
     FrameTimings timings_;
     uint64_t field_overflows_ = 0;
     ChannelMap channel_;
+    std::vector<std::pair<int, int>> main_path_;
+    ChannelCoverage coverage_;
 };
 
 }  // namespace mr

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <queue>
 #include <tuple>
@@ -140,7 +141,43 @@ ChannelMap ChannelMap::build(const Terrain& t) {
         cur = next;
     }
     m.head_ = {int(cur / size_t(C)), int(cur % size_t(C))};
+    // Outlets: channel cells on the border whose flow leaves the terrain.
+    for (size_t c = 0; c < n; ++c) {
+        const int i = int(c / size_t(C)), j = int(c % size_t(C));
+        if ((i == 0 || j == 0 || i == R - 1 || j == C - 1) && m.receiver_[c] < 0 && m.acc_[c] >= m.threshold_)
+            m.outlets_.push_back(Outlet{.row = i, .column = j, .accumulation = m.acc_[c]});
+    }
+    std::stable_sort(m.outlets_.begin(), m.outlets_.end(),
+                     [](const Outlet& a, const Outlet& b) { return a.accumulation > b.accumulation; });
     return m;
+}
+
+std::vector<std::pair<int, int>> ChannelMap::path_from(int i, int j) const {
+    std::vector<std::pair<int, int>> path;
+    int32_t c = int32_t(size_t(i) * columns_ + j);
+    // Receivers lead strictly down the filled surface: no cycle; the bound is a guard.
+    for (size_t k = 0; c >= 0 && k < receiver_.size(); ++k) {
+        path.emplace_back(c / columns_, c % columns_);
+        c = receiver_[size_t(c)];
+    }
+    return path;
+}
+
+std::pair<int, int> ChannelMap::outlet_of(int i, int j) const { return path_from(i, j).back(); }
+
+std::pair<int, int> ChannelMap::nearest_channel_cell(int i, int j) const {
+    std::pair<int, int> best{i, j};
+    long long best_d = std::numeric_limits<long long>::max();
+    for (int a = 0; a < rows_; ++a)
+        for (int b = 0; b < columns_; ++b) {
+            if (!is_channel(a, b)) continue;
+            const long long d = (long long)(a - i) * (a - i) + (long long)(b - j) * (b - j);
+            if (d < best_d) {
+                best_d = d;
+                best = {a, b};
+            }
+        }
+    return best;
 }
 
 Vec3 ChannelMap::flow_direction(int i, int j) const {

@@ -226,6 +226,7 @@ void ParticleSolver::emit_lattice() {
 }
 
 void ParticleSolver::step_frame(float frame_dt) {
+    exits_.clear();
     const bool by_rate = spawn_.particles_per_second() > 0.0f;
     const bool due = spawn_.interval == 0 || frame_ % static_cast<uint64_t>(spawn_.interval) == 0;
     if (lattice_) {
@@ -295,7 +296,8 @@ void ParticleSolver::finish_step(uint64_t steps, const StepCounts& c) {
         const bool by_rate = spawn_.particles_per_second() > 0.0f;
         for (size_t i = n; i-- > 0;) {
             if (respawn_flag_[i] == 0) continue;
-            ++(respawn_flag_[i] == 1 ? counters_.respawned : counters_.sunk);
+            if (respawn_flag_[i] == 1) ++counters_.respawned;
+            else record_sunk(i);
             deactivate(i);
             if (!by_rate) emit_credit_ += 1.0;
         }
@@ -309,18 +311,23 @@ void ParticleSolver::finish_step(uint64_t steps, const StepCounts& c) {
             ++counters_.respawned;
             spawn(i);
         } else if (respawn_flag_[i] == 2 && !pool) {
-            ++counters_.sunk;  // no flow rate: straight back to the source
+            record_sunk(i);  // no flow rate: straight back to the source
             spawn(i);
         }
     }
     if (pool) {  // recycled into the pool, highest index first (swaps only move processed slots)
         for (size_t i = n; i-- > 0;)
             if (respawn_flag_[i] == 2) {
-                ++counters_.sunk;
+                record_sunk(i);
                 deactivate(i);
             }
     }
     record_max_speed();
+}
+
+void ParticleSolver::record_sunk(size_t i) {
+    ++counters_.sunk;
+    if (sink_.kind == SinkKind::Edges) exits_.push_back(particles_.position[i]);
 }
 
 void ParticleSolver::record_max_speed() {

@@ -1,9 +1,12 @@
 // Plausibility measures of a particle state that need the terrain: spray (particles
-// thrown out of the water) and the speeds of the active particles.
+// thrown out of the water), water over the main channel (ChannelCoverage) and the
+// outflow per outlet (OutletMeter).
 #include <metariver/neighbor_grid.h>
 #include <metariver/scene.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 
 namespace mr {
 
@@ -32,6 +35,116 @@ float spray_fraction(const Terrain& terrain, std::span<const Vec3> positions, st
         spray += neighbours < kSprayNeighbours;
     }
     return static_cast<float>(double(spray) / double(count));
+}
+
+ChannelCoverage::ChannelCoverage(const Terrain& t, std::span<const std::pair<int, int>> cells, float radius_samples,
+                                 float depth)
+    : rows_(t.rows()),
+      columns_(t.columns()),
+      scale_(t.area_scale()),
+      radius_(radius_samples * t.area_scale()),
+      depth_(depth),
+      origin_(t.bounds().min.x, 0.0f, t.bounds().min.z),
+      index_(size_t(t.rows()) * size_t(t.columns()), -1) {
+    for (const auto& [i, j] : cells) {
+        int32_t& k = index_[size_t(i) * size_t(columns_) + size_t(j)];
+        if (k >= 0) continue;  // a cell counts once
+        k = int32_t(cells_.size());
+        cells_.emplace_back(i, j);
+        ground_.push_back(t.sample(i, j));
+    }
+}
+
+float ChannelCoverage::measure(std::span<const Vec3> positions, std::span<const uint8_t> active) const {
+    if (cells_.empty()) return 0.0f;
+    std::vector<uint8_t> covered(cells_.size(), 0);
+    size_t count = 0;
+    const size_t n = std::min(positions.size(), active.size());
+    const float r2 = radius_ * radius_;
+    // Cells within radius_ of a particle lie within `reach` cells of its nearest cell
+    // (2 for 1.5 samples).
+    const int reach = int(std::ceil(radius_ / scale_ + 0.5f));
+    for (size_t k = 0; k < n; ++k) {
+        if (!active[k]) continue;
+        const Vec3 p = positions[k] - origin_;
+        const float fi = p.z / scale_, fj = p.x / scale_;
+        if (!(fi > -float(reach) - 1.0f && fi < float(rows_ + reach) && fj > -float(reach) - 1.0f &&
+              fj < float(columns_ + reach)))
+            continue;  // far outside the grid (or not finite)
+        const int ci = int(std::lround(fi)), cj = int(std::lround(fj));
+        for (int a = std::max(ci - reach, 0); a <= std::min(ci + reach, rows_ - 1); ++a)
+            for (int b = std::max(cj - reach, 0); b <= std::min(cj + reach, columns_ - 1); ++b) {
+                const int32_t c = index_[size_t(a) * size_t(columns_) + size_t(b)];
+                if (c < 0 || covered[size_t(c)]) continue;
+                const float dx = p.x - float(b) * scale_, dz = p.z - float(a) * scale_;
+                if (dx * dx + dz * dz <= r2 && p.y - ground_[size_t(c)] <= depth_) {
+                    covered[size_t(c)] = 1;
+                    ++count;
+                }
+            }
+    }
+    return float(double(count) / double(cells_.size()));
+}
+
+OutletMeter::OutletMeter(const Terrain& t, const ChannelMap& m, std::pair<int, int> main_outlet) {
+    const float s = t.area_scale();
+    auto add = [&](int i, int j, uint32_t acc) {
+        outlets_.push_back(Outlet{.row = i, .column = j, .x = t.bounds().min.x + float(j) * s,
+                                  .z = t.bounds().min.z + float(i) * s, .accumulation = acc,
+                                  .main = std::pair(i, j) == main_outlet});
+    };
+    for (const ChannelMap::Outlet& o : m.outlets()) add(o.row, o.column, o.accumulation);
+    if (std::none_of(outlets_.begin(), outlets_.end(), [](const Outlet& o) { return o.main; }))
+        add(main_outlet.first, main_outlet.second, m.accumulation(main_outlet.first, main_outlet.second));
+    x0_ = t.bounds().min.x;
+    x1_ = t.bounds().max.x;
+    z0_ = t.bounds().min.z;
+    z1_ = t.bounds().max.z;
+    radius_ = std::max(3.0f * s, 3.0f);
+}
+
+int OutletMeter::assign(const Vec3& exit) const {
+    if (!std::isfinite(exit.x) || !std::isfinite(exit.z)) return -1;
+    // The exit projected onto the rectangle: on its border for a particle over an edge.
+    const float x = std::clamp(exit.x, x0_, x1_), z = std::clamp(exit.z, z0_, z1_);
+    int best = -1;
+    float best_d2 = radius_ * radius_;
+    for (size_t k = 0; k < outlets_.size(); ++k) {
+        const float dx = x - outlets_[k].x, dz = z - outlets_[k].z;
+        const float d2 = dx * dx + dz * dz;
+        if (d2 < best_d2 || (best < 0 && d2 == best_d2)) {
+            best_d2 = d2;
+            best = int(k);
+        }
+    }
+    return best;
+}
+
+void OutletMeter::record(double time_s, std::span<const Vec3> exits) {
+    for (const Vec3& e : exits) exits_.emplace_back(uint32_t(t_.size()), int32_t(assign(e)));
+    t_.push_back(time_s);
+}
+
+OutletMeter::Summary OutletMeter::summary() const {
+    Summary s;
+    s.outlets.resize(outlets_.size());
+    // The second half as FlowMeter measures it: frame records (k0, last].
+    const size_t last = t_.empty() ? 0 : t_.size() - 1, k0 = t_.size() / 2;
+    const double span = t_.size() >= 8 && t_[last] > t_[k0] ? t_[last] - t_[k0] : 0.0;
+    std::vector<uint64_t> late(outlets_.size() + 1, 0);  // second-half exits; the last one: other
+    for (const auto& [k, o] : exits_) {
+        Count& c = o < 0 ? s.other : s.outlets[size_t(o)];
+        ++c.particles;
+        if (c.first_s < 0.0) c.first_s = t_[k];
+        late[o < 0 ? outlets_.size() : size_t(o)] += k > k0 && k <= last;
+    }
+    if (span > 0.0) {
+        for (size_t k = 0; k < outlets_.size(); ++k) s.outlets[k].rate = double(late[k]) / span;
+        s.other.rate = double(late.back()) / span;
+    }
+    for (size_t k = 0; k < outlets_.size(); ++k)
+        if (outlets_[k].main) s.main = s.outlets[k];
+    return s;
 }
 
 }  // namespace mr

@@ -99,6 +99,19 @@ void fit_auto_source(const Terrain& t, SpawnDef& spawn) {
     }
 }
 
+/// The main channel from the source: from the main head for the automatic channel
+/// source, else from the channel cell nearest the source's centre, to where it leaves.
+std::vector<std::pair<int, int>> main_channel_path(const Terrain& t, const ChannelMap& m, const SpawnDef& asked,
+                                                   const Vec3& center) {
+    if (asked.auto_center && asked.auto_channel) return m.path_from(m.main_head().first, m.main_head().second);
+    const float s = t.area_scale();
+    // Clamped before rounding: the source is checked against the terrain only later.
+    const int i = int(std::lround(std::clamp((center.z - t.bounds().min.z) / s, 0.0f, float(t.rows() - 1))));
+    const int j = int(std::lround(std::clamp((center.x - t.bounds().min.x) / s, 0.0f, float(t.columns() - 1))));
+    const auto [a, b] = m.nearest_channel_cell(i, j);
+    return m.path_from(a, b);
+}
+
 }  // namespace
 
 Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh)
@@ -111,6 +124,8 @@ Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh)
         spawn.auto_center = false;
         def_.spawn = spawn;
     }
+    main_path_ = main_channel_path(terrain_, channel_, def.spawn, def_.spawn.center);
+    coverage_ = ChannelCoverage(terrain_, main_path_);
     // Compact kernel: the sparse field over the particles' box or the terrain's.
     sparse_def_.kernel = poly6_kernel(def_.field.radius, 1.0f);
     sparse_def_.resolution = def_.field.resolution;
@@ -205,6 +220,11 @@ float Simulation::wet_fraction() const {
     const Particles& p = particles();
     const WetChannelDef wet{.width = std::max(3.0f, 3.0f * terrain_.area_scale()), .depth = 3.0f};
     return wet_channel_fraction(terrain_, channel_, p.position, p.active, wet);
+}
+
+float Simulation::channel_coverage() const {
+    const Particles& p = particles();
+    return coverage_.measure(p.position, p.active);
 }
 
 float Simulation::spray_fraction() const {

@@ -132,6 +132,48 @@ TEST_F(Cli, StatsHaveFinalSpeedSprayAndGuarded) {
     EXPECT_LE(spray, 1.0);
 }
 
+// The default river on the valley for 360 frames (6 s): the outlet keys, consistent with
+// each other and with the sink counter.
+TEST_F(Cli, StatsHaveOutletsCoverageAndOutflowOverInflow) {
+    const fs::path stats = dir_ / "s.json";
+    CliResult r = run("run --frames 360 --stats " + stats.string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    for (const char* word : {"main outlet ", " of inflow", "channel coverage "})
+        EXPECT_NE(r.out.find(word), std::string::npos) << word << " in " << r.out;
+    const auto pl = nlohmann::json::parse(slurp(stats))["plausibility"];
+    for (const char* key : {"outlets", "outlet_other", "outflow_over_inflow", "time_to_outlet_s", "channel_coverage",
+                            "main_channel_cells", "wet_channel_fraction"})
+        ASSERT_TRUE(pl.contains(key)) << key << " in " << pl.dump();
+    ASSERT_TRUE(pl["outlets"].is_array() && !pl["outlets"].empty()) << pl.dump();
+    int mains = 0;
+    uint64_t particles = pl["outlet_other"]["particles"].get<uint64_t>();
+    double main_rate = 0.0;
+    uint64_t main_particles = 0;
+    for (const auto& o : pl["outlets"]) {
+        ASSERT_TRUE(o.contains("cell") && o.contains("position") && o.contains("particles") && o.contains("rate_per_s"))
+            << o.dump();
+        EXPECT_EQ(o["cell"].size(), 2u);
+        EXPECT_EQ(o["position"].size(), 2u);
+        EXPECT_GE(o["rate_per_s"].get<double>(), 0.0);
+        particles += o["particles"].get<uint64_t>();
+        if (o["main"].get<bool>()) {
+            ++mains;
+            main_rate = o["rate_per_s"];
+            main_particles = o["particles"];
+        }
+    }
+    EXPECT_EQ(mains, 1);
+    EXPECT_EQ(particles, pl["sunk"].get<uint64_t>()) << "every particle the edges took is at an outlet or other";
+    EXPECT_GT(pl["main_channel_cells"].get<int>(), 20);
+    const double coverage = pl["channel_coverage"];
+    EXPECT_GT(coverage, 0.0) << "the source sits on the main channel";
+    EXPECT_LE(coverage, 1.0);
+    EXPECT_NEAR(pl["outflow_over_inflow"].get<double>(), main_rate / 420.0, 1e-9);  // the default source: 420/s
+    const double first = pl["time_to_outlet_s"];
+    EXPECT_TRUE(first == -1.0 || (first > 0.0 && first <= 6.0 + 1e-9)) << first;
+    EXPECT_EQ(first > 0.0, main_particles > 0);
+}
+
 // Two particles falling far above flat ground: both isolated and airborne at every
 // sampled frame (spray 1), and after 30 frames of free fall both move at g t.
 TEST_F(Cli, StatsOfAFreeFall) {

@@ -3,8 +3,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <utility>
+#include <vector>
 
 namespace mr {
 namespace {
@@ -68,15 +72,24 @@ TEST(Emitters, OutletEdgesRecycleParticlesToTheSourceAtAFixedBudget) {
     for (int c : seen) EXPECT_EQ(c, 1);
 }
 
+/// Springless particles sliding down the ramp from a box source near its top (x = 3) at
+/// `rate` per second, 1/60 s frames of `substeps` steps.
+ParticleSolver sliding(const World& w, int count, float rate, SinkDef sink, int substeps = 1) {
+    SpawnDef spawn{.count = count, .center = Vec3(3, 9, 8), .half_extent = Vec3(1, 0.2f, 1), .interval = 0};
+    spawn.flow_rate = rate;
+    return ParticleSolver(w.terrain, w.bvh, spawn, SpringDef{},
+                          CollisionDef{.mode = CollisionMode::Robust, .damping = 0.0f, .offset = 0.01f},
+                          IntegratorDef{.fixed_dt = 1.0f / 60.0f, .substeps = substeps}, 1, std::nullopt, sink);
+}
+
 TEST(Emitters, BoxSinkTakesParticlesOut) {
     World w = ramp_world();
-    SpawnDef spawn{.count = 50, .center = Vec3(3, 9, 8), .half_extent = Vec3(1, 0.2f, 1), .interval = 0};
-    spawn.flow_rate = 25.0f;
-    ParticleSolver s(w.terrain, w.bvh, spawn, SpringDef{},
-                     CollisionDef{.mode = CollisionMode::Robust, .damping = 0.0f, .offset = 0.01f},
-                     IntegratorDef{.fixed_dt = 1.0f / 60.0f}, 1, std::nullopt,
-                     SinkDef{.kind = SinkKind::Box, .min = Vec3(20, -10, 0), .max = Vec3(24, 20, 16)});
-    for (int f = 0; f < 900; ++f) s.step_frame(1.0f / 60.0f);
+    ParticleSolver s =
+        sliding(w, 50, 25.0f, SinkDef{.kind = SinkKind::Box, .min = Vec3(20, -10, 0), .max = Vec3(24, 20, 16)});
+    for (int f = 0; f < 900; ++f) {
+        s.step_frame(1.0f / 60.0f);
+        ASSERT_TRUE(s.last_exits().empty()) << "a box sink takes particles over no edge: no exit positions";
+    }
     EXPECT_GT(s.counters().sunk, 20u);
     for (size_t i = 0; i < s.particles().size(); ++i) {
         if (s.particles().active[i]) {
@@ -94,6 +107,76 @@ TEST(ChannelMap, ValleyChannelHeadIsAtTheUpstreamEndAndRampDrainsDownhill) {
     World w = ramp_world();
     const ChannelMap r = ChannelMap::build(w.terrain);
     EXPECT_GT(r.flow_direction(8, 10).x, 0.9f) << "downhill is +x";
+}
+
+bool neighbours(std::pair<int, int> a, std::pair<int, int> b) {
+    return a != b && std::abs(a.first - b.first) <= 1 && std::abs(a.second - b.second) <= 1;
+}
+
+TEST(ChannelMap, RampPathFromTheTopEndsOnTheLowEdge) {
+    World w = ramp_world();  // 33 columns (x) x 17 rows (z), falling along +x
+    const ChannelMap m = ChannelMap::build(w.terrain);
+    const auto path = m.path_from(8, 1);
+    ASSERT_EQ(path.size(), 32u) << "straight down the ramp: columns 1 .. 32";
+    for (size_t k = 0; k < path.size(); ++k) EXPECT_EQ(path[k], std::pair(8, int(k) + 1));
+    EXPECT_EQ(m.outlet_of(8, 1), std::pair(8, 32));
+    EXPECT_EQ(m.outlet_of(3, 32), std::pair(3, 32)) << "an outlet cell is its own path";
+    EXPECT_EQ(m.nearest_channel_cell(8, 1), std::pair(8, 15)) << "accumulation 16 = threshold from column 15 on";
+    // Outlets: the whole low edge (every row drains straight out), 33 cells each.
+    ASSERT_EQ(m.outlets().size(), 17u);
+    for (const ChannelMap::Outlet& o : m.outlets()) {
+        EXPECT_EQ(o.column, 32);
+        EXPECT_EQ(o.accumulation, 33u);
+    }
+}
+
+TEST(ChannelMap, ValleyMainPathRunsDownTheChannelToTheLargestOutlet) {
+    auto t = Terrain::build(procedural_valley(65, 97, 7), TerrainDef{.area_scale = 1.0f, .height_scale = 24.0f});
+    const ChannelMap m = ChannelMap::build(t.value());
+    const auto [hi, hj] = m.main_head();
+    const auto path = m.path_from(hi, hj);
+    ASSERT_GT(path.size(), 48u) << "the channel runs most of the valley's 97 rows";
+    EXPECT_EQ(path.front(), m.main_head());
+    for (size_t k = 1; k < path.size(); ++k) {
+        EXPECT_TRUE(neighbours(path[k - 1], path[k])) << k;
+        EXPECT_GT(m.accumulation(path[k].first, path[k].second), m.accumulation(path[k - 1].first, path[k - 1].second));
+        EXPECT_TRUE(m.is_channel(path[k].first, path[k].second)) << k;
+    }
+    const auto [oi, oj] = path.back();
+    EXPECT_TRUE(oi == 0 || oj == 0 || oi == 96 || oj == 64) << "it leaves over the border";
+    EXPECT_LT(oi, 10) << "at the valley's low end";
+    // Outlets against their definition: border channel cells whose path is themselves.
+    std::vector<std::pair<int, int>> want;
+    for (int i = 0; i < 97; ++i)
+        for (int j = 0; j < 65; ++j)
+            if ((i == 0 || j == 0 || i == 96 || j == 64) && m.is_channel(i, j) && m.path_from(i, j).size() == 1)
+                want.emplace_back(i, j);
+    std::vector<std::pair<int, int>> got;
+    for (const ChannelMap::Outlet& o : m.outlets()) got.emplace_back(o.row, o.column);
+    for (size_t k = 1; k < m.outlets().size(); ++k)
+        EXPECT_GE(m.outlets()[k - 1].accumulation, m.outlets()[k].accumulation);
+    ASSERT_FALSE(got.empty());
+    EXPECT_EQ(got.front(), path.back()) << "the main channel drains the most";
+    std::sort(got.begin(), got.end());
+    EXPECT_EQ(got, want);
+}
+
+TEST(Emitters, OutletEdgeExitsAreRecordedWhereTheParticlesLeftEachFrame) {
+    World w = ramp_world();
+    ParticleSolver s = sliding(w, 150, 40.0f, SinkDef{.kind = SinkKind::Edges}, 2);
+    uint64_t exits = 0;
+    for (int f = 0; f < 900; ++f) {
+        const uint64_t before = s.counters().sunk;
+        s.step_frame(1.0f / 60.0f);
+        ASSERT_EQ(s.last_exits().size(), s.counters().sunk - before) << "frame " << f;
+        for (const Vec3& p : s.last_exits()) {
+            EXPECT_GT(p.x, 32.0f) << "past the low edge";
+            EXPECT_GE(p.z, 0.0f);
+            EXPECT_LE(p.z, 16.0f);
+        }
+        exits += s.last_exits().size();
+    }
+    EXPECT_GT(exits, 100u);
 }
 
 TEST(FlowMeter, SteadyRateIsSteadyAndABurstIsNot) {

@@ -1,10 +1,13 @@
 // spray_fraction(): the neighbour-grid version against an all-pairs twin written from the
 // definition, and two states whose answer is known without computing (0 and 1).
+// ChannelCoverage against its all-pairs twin and constructed answers (0, 1/2, 1);
+// OutletMeter's assignment of exits to outlets and its rates.
 #include <metariver/neighbor_grid.h>
 #include <metariver/scene.h>
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 #include <set>
 #include <vector>
@@ -147,6 +150,215 @@ TEST(SprayFraction, SimulationUsesTheSolversScale) {
     ASSERT_TRUE(sim.ok()) << sim.error().message;
     sim.value()->step(1.0f / 600.0f);
     EXPECT_EQ(sim.value()->spray_fraction(), 0.0f);
+}
+
+/// 33 columns (x) x 17 rows (z), 1 m samples, 8 m relief. `v` = 0: a plane falling
+/// along +x (every low-edge cell is an outlet); `v` > 0: also falling towards row 8 by
+/// `v` of the relief, so all water gathers into row 8 and leaves at cell (8, 32) alone.
+Terrain ramp_terrain(float v) {
+    Heightmap m = flat_heightmap(33, 17);
+    for (int r = 0; r < 17; ++r)
+        for (int c = 0; c < 33; ++c)
+            m.samples[size_t(r) * 33 + c] = v * float(std::abs(r - 8)) / 8.0f + (1.0f - v) * (1.0f - float(c) / 32.0f);
+    auto t = Terrain::build(m, TerrainDef{.area_scale = 1.0f, .height_scale = 8.0f});
+    EXPECT_TRUE(t.ok()) << t.error().message;
+    return std::move(t.value());
+}
+
+/// The definition, O(cells x particles): a cell is covered when an active particle is
+/// within 1.5 samples horizontally of its centre and at most 3 m above its ground sample.
+float coverage_brute_force(const Terrain& t, std::span<const std::pair<int, int>> cells, const std::vector<Vec3>& pos,
+                           const std::vector<uint8_t>& active) {
+    const float s = t.area_scale(), r = 1.5f * s;
+    size_t covered = 0;
+    for (const auto& [i, j] : cells) {
+        bool wet = false;
+        for (size_t k = 0; k < pos.size() && !wet; ++k) {
+            const float dx = pos[k].x - float(j) * s, dz = pos[k].z - float(i) * s;
+            wet = active[k] && dx * dx + dz * dz <= r * r && pos[k].y - t.sample(i, j) <= 3.0f;
+        }
+        covered += wet;
+    }
+    return cells.empty() ? 0.0f : float(double(covered) / double(cells.size()));
+}
+
+TEST(ChannelCoverage, AgreesExactlyWithTheDefinition) {
+    for (const float scale : {1.0f, 2.5f}) {
+        auto t = Terrain::build(procedural_valley(65, 97, 7), TerrainDef{.area_scale = scale, .height_scale = 24.0f});
+        ASSERT_TRUE(t.ok());
+        const ChannelMap m = ChannelMap::build(t.value());
+        const auto path = m.path_from(m.main_head().first, m.main_head().second);
+        const ChannelCoverage cov(t.value(), path);
+        ASSERT_EQ(cov.cells(), path.size());
+        std::mt19937 rng(99);
+        int mixed = 0;
+        for (int trial = 0; trial < 12; ++trial) {
+            // Particles scattered around random path cells (some off the grid, some high).
+            std::uniform_int_distribution<size_t> cell(0, path.size() - 1);
+            std::normal_distribution<float> off(0.0f, 2.0f * scale), up(1.0f, 2.5f);
+            std::bernoulli_distribution inactive(0.2);
+            std::vector<Vec3> pos;
+            std::vector<uint8_t> active;
+            const int n = 5 * (trial + 1);
+            for (int k = 0; k < n; ++k) {
+                const auto [i, j] = path[cell(rng)];
+                pos.emplace_back(float(j) * scale + off(rng), t.value().sample(i, j) + up(rng),
+                                 float(i) * scale + off(rng));
+                active.push_back(!inactive(rng));
+            }
+            pos.emplace_back(-1e9f, 0.0f, 5.0f);  // far off the grid
+            active.push_back(1);
+            const float want = coverage_brute_force(t.value(), path, pos, active);
+            EXPECT_EQ(cov.measure(pos, active), want) << "scale " << scale << " trial " << trial;
+            mixed += want > 0.0f && want < 1.0f;
+        }
+        EXPECT_GE(mixed, 10) << "mostly partial coverage, or the comparison proves little";
+    }
+}
+
+TEST(ChannelCoverage, OneAlongTheWholePathNoneWithoutWaterHalfForHalf) {
+    const Terrain t = ramp_terrain(0.0f);
+    const ChannelMap m = ChannelMap::build(t);
+    const auto path = m.path_from(8, 1);  // columns 1 .. 32 of row 8
+    ASSERT_EQ(path.size(), 32u);
+    const ChannelCoverage cov(t, path);
+    auto at = [&](float i, float j, float up) { return Vec3(j, t.height_mesh(j, i) + up, i); };
+    std::vector<Vec3> pos;
+    for (const auto& [i, j] : path) pos.push_back(at(float(i), float(j), 1.0f));
+    std::vector<uint8_t> on(pos.size(), 1), off(pos.size(), 0);
+    EXPECT_EQ(cov.measure(pos, on), 1.0f);
+    EXPECT_EQ(cov.measure(pos, off), 0.0f) << "inactive particles are no water";
+    EXPECT_EQ(cov.measure({}, {}), 0.0f);
+    // 1.2 samples to the side of columns 1 .. 16: each is within 1.5 samples of its own
+    // cell only (the next one is sqrt(1.2^2 + 1) = 1.56 away): exactly half.
+    std::vector<Vec3> side;
+    for (int j = 1; j <= 16; ++j) side.push_back(at(9.2f, float(j), 0.5f));
+    EXPECT_EQ(cov.measure(side, std::vector<uint8_t>(side.size(), 1)), 0.5f);
+    // Exactly 1.5 samples counts: one particle at x = 2.5 covers columns 1 .. 4.
+    const std::vector<Vec3> one{at(8.0f, 2.5f, 0.5f)};
+    EXPECT_EQ(cov.measure(one, std::vector<uint8_t>{1}), 4.0f / 32.0f);
+    // 1.6 samples to the side: too far; 3.5 m up: too high; 2.9 m up: water.
+    std::vector<Vec3> far, high, deep;
+    for (const auto& [i, j] : path) {
+        far.push_back(at(float(i) + 1.6f, float(j), 0.5f));
+        high.push_back(Vec3(float(j), t.sample(i, j) + 3.5f, float(i)));
+        deep.push_back(Vec3(float(j), t.sample(i, j) + 2.9f, float(i)));
+    }
+    EXPECT_EQ(cov.measure(far, on), 0.0f);
+    EXPECT_EQ(cov.measure(high, on), 0.0f);
+    EXPECT_EQ(cov.measure(deep, on), 1.0f);
+}
+
+TEST(OutletMeter, ExitsGoToTheNearestOutletAlongTheBorderOrToOther) {
+    // The plane: every low-edge cell is an outlet; the main channel from (8, 1) leaves at (8, 32).
+    const Terrain plane = ramp_terrain(0.0f);
+    const ChannelMap pm = ChannelMap::build(plane);
+    const OutletMeter p(plane, pm, pm.outlet_of(8, 1));
+    ASSERT_EQ(p.outlets().size(), 17u);
+    auto cell = [&](const OutletMeter& m, int k) { return std::pair(m.outlets()[size_t(k)].row, m.outlets()[size_t(k)].column); };
+    const int main = p.assign(Vec3(32.3f, 0.0f, 8.1f));
+    ASSERT_GE(main, 0);
+    EXPECT_TRUE(p.outlets()[size_t(main)].main);
+    EXPECT_EQ(cell(p, main), std::pair(8, 32));
+    const int beside = p.assign(Vec3(32.3f, 0.0f, 2.2f));
+    ASSERT_GE(beside, 0);
+    EXPECT_EQ(cell(p, beside), std::pair(2, 32)) << "another outlet, not the main one";
+    EXPECT_FALSE(p.outlets()[size_t(beside)].main);
+    EXPECT_EQ(p.assign(Vec3(-0.3f, 5.0f, 8.0f)), -1) << "over the upstream edge";
+    EXPECT_EQ(p.assign(Vec3(5.0f, 5.0f, -0.3f)), -1) << "over a side edge, far from the outlets";
+    EXPECT_EQ(cell(p, p.assign(Vec3(31.0f, 5.0f, -0.3f))), std::pair(0, 32)) << "over a side edge, at the corner outlet";
+
+    // The V: one outlet, (8, 32); within max(3 samples, 3 m) = 3 m along the border, or other.
+    const Terrain v = ramp_terrain(0.5f);
+    const ChannelMap vm = ChannelMap::build(v);
+    ASSERT_EQ(vm.outlets().size(), 1u);
+    EXPECT_EQ(vm.outlet_of(8, 1), std::pair(8, 32));
+    const OutletMeter o(v, vm, vm.outlet_of(8, 1));
+    // Measured along the border: a fast particle 1.5 m past the edge counts where it crossed.
+    EXPECT_EQ(o.assign(Vec3(33.5f, 3.0f, 8.0f + 2.9f)), 0);
+    EXPECT_EQ(o.assign(Vec3(33.5f, 3.0f, 8.0f - 2.9f)), 0);
+    EXPECT_EQ(o.assign(Vec3(32.1f, 3.0f, 8.0f + 3.1f)), -1);
+    EXPECT_EQ(o.assign(Vec3(std::nanf(""), 3.0f, 8.0f)), -1);
+}
+
+TEST(OutletMeter, CountsRatesOverTheSecondHalfAndTheFirstExit) {
+    const Terrain v = ramp_terrain(0.5f);
+    const ChannelMap vm = ChannelMap::build(v);
+    OutletMeter o(v, vm, vm.outlet_of(8, 1));
+    const Vec3 main(32.2f, 1.0f, 8.0f), spray(-0.2f, 9.0f, 8.0f);
+    // 16 frames at t = 1 .. 16 s: the second half is frames 9 .. 15 (t 10 .. 16, 7 s).
+    for (int k = 0; k < 16; ++k) {
+        std::vector<Vec3> exits;
+        if (k == 2) exits = {main};
+        if (k == 3) exits = {spray};
+        if (k >= 9) exits = {main, main};
+        o.record(double(k + 1), exits);
+    }
+    const OutletMeter::Summary s = o.summary();
+    ASSERT_EQ(s.outlets.size(), 1u);
+    EXPECT_EQ(s.main.particles, 15u);
+    EXPECT_DOUBLE_EQ(s.main.rate, 14.0 / 7.0);
+    EXPECT_EQ(s.main.first_s, 3.0);
+    EXPECT_EQ(s.other.particles, 1u);
+    EXPECT_EQ(s.other.rate, 0.0);
+    EXPECT_EQ(s.other.first_s, 4.0);
+    EXPECT_EQ(OutletMeter(v, vm, vm.outlet_of(8, 1)).summary().main.first_s, -1.0);
+}
+
+// A solver with the outlet-edge sink on the V: water let go at the top runs to the main
+// outlet; water thrown back over the upstream edge is "other", never the main outlet.
+TEST(OutletMeter, WaterThrownOverTheUpstreamEdgeIsNotTheMainOutlet) {
+    const Terrain v = ramp_terrain(0.5f);
+    auto bvh = Bvh::build(v, BvhDef{});
+    ASSERT_TRUE(bvh.ok());
+    const ChannelMap vm = ChannelMap::build(v);
+    auto run = [&](Vec3 centre, Vec3 velocity) {
+        OutletMeter meter(v, vm, vm.outlet_of(8, 1));
+        SpawnDef spawn{.count = 60, .center = centre, .half_extent = Vec3(0.5f, 0.1f, 0.5f), .interval = 0,
+                       .initial_velocity = velocity};
+        spawn.flow_rate = 30.0f;
+        ParticleSolver s(v, bvh.value(), spawn, SpringDef{},
+                         CollisionDef{.mode = CollisionMode::Robust, .damping = 0.0f, .offset = 0.01f},
+                         IntegratorDef{.fixed_dt = 1.0f / 60.0f}, 1, std::nullopt, SinkDef{.kind = SinkKind::Edges});
+        for (int f = 0; f < 900; ++f) {
+            s.step_frame(1.0f / 60.0f);
+            meter.record(double(f + 1) / 60.0, s.last_exits());
+        }
+        const OutletMeter::Summary sum = meter.summary();
+        EXPECT_EQ(sum.main.particles + sum.other.particles, s.counters().sunk) << "every exit is somewhere";
+        return sum;
+    };
+    const float top = v.height_mesh(3.0f, 8.0f);
+    const OutletMeter::Summary down = run(Vec3(3.0f, top + 0.5f, 8.0f), Vec3(0.0f));
+    EXPECT_GT(down.main.particles, 50u);
+    EXPECT_GT(down.main.rate, 0.0);
+    const OutletMeter::Summary back = run(Vec3(1.5f, top + 0.5f, 8.0f), Vec3(-8.0f, 2.0f, 0.0f));
+    EXPECT_GT(back.other.particles, 50u);
+    EXPECT_EQ(back.main.particles, 0u);
+}
+
+// The Simulation's main channel: from the main head for the automatic channel source,
+// from the channel cell nearest a placed source otherwise; to its outlet.
+TEST(ChannelCoverage, SimulationMainChannelStartsAtTheSource) {
+    SceneDef d = default_scene();
+    d.surface = false;
+    auto sim = Simulation::create(d);
+    ASSERT_TRUE(sim.ok()) << sim.error().message;
+    const ChannelMap& m = sim.value()->channel();
+    const auto path = sim.value()->main_channel();
+    ASSERT_GT(path.size(), 1u);
+    EXPECT_EQ(path.front(), m.main_head());
+    EXPECT_EQ(path.back(), std::pair(m.outlets()[0].row, m.outlets()[0].column));
+    EXPECT_EQ(sim.value()->channel_coverage(), 0.0f) << "no water yet";
+    d.spawn.auto_center = false;
+    const float s = sim.value()->terrain().area_scale();
+    const auto [i, j] = path[path.size() / 2];
+    d.spawn.center = Vec3(float(j) * s, sim.value()->terrain().sample(i, j) + 2.0f, float(i) * s);
+    auto mid = Simulation::create(d);
+    ASSERT_TRUE(mid.ok()) << mid.error().message;
+    const auto half = mid.value()->main_channel();
+    ASSERT_EQ(half.size(), path.size() - path.size() / 2);
+    EXPECT_TRUE(std::equal(half.begin(), half.end(), path.begin() + std::ptrdiff_t(path.size() / 2)));
 }
 
 }  // namespace
