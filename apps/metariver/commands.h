@@ -24,6 +24,9 @@ struct SceneOptions {
     std::string heightmap;
     std::optional<uint32_t> seed;
     std::string collision;
+    std::optional<double> area_scale;    ///< --area-scale: terrain.area_scale, wins over --real-scale
+    std::optional<double> height_scale;  ///< --height-scale: terrain.height_scale, wins over --real-scale
+    bool real_scale = false;             ///< --real-scale: both scales from the heightmap's JSON sidecar
 
     void add_to(CLI::App& cmd);
     /// The scene the options describe; errors are one line, naming the option or file.

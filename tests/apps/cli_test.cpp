@@ -2,13 +2,17 @@
 // (exit code 2, one line naming the file/option/key, nothing written).
 #include <gtest/gtest.h>
 #include "cli_fixture.h"
+#include "png_test_util.h"
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 #include <sstream>
 #include <string>
 #include <sys/wait.h>
@@ -270,6 +274,113 @@ TEST_F(Cli, BadPresetsScenesAndOptions) {
     expect_bad("run --frames many", "--frames");
     expect_bad("run --preset default --scene x.toml", "--preset");
     expect_bad("fly", "fly");
+}
+
+/// The box of the vertices of an OBJ file.
+struct ObjBox {
+    double min[3] = {1e30, 1e30, 1e30}, max[3] = {-1e30, -1e30, -1e30};
+};
+ObjBox obj_box(const fs::path& obj) {
+    ObjBox b;
+    std::istringstream lines(slurp(obj));
+    for (std::string line; std::getline(lines, line);) {
+        if (line.rfind("v ", 0) != 0) continue;
+        std::istringstream v(line.substr(2));
+        for (int k = 0; k < 3; ++k) {
+            double x = 0.0;
+            v >> x;
+            b.min[k] = std::min(b.min[k], x);
+            b.max[k] = std::max(b.max[k], x);
+        }
+    }
+    return b;
+}
+
+/// Heightmap scale options (issue 10): a 9 x 7 map from 0 to 255 (a ramp down its rows)
+/// and the terrain's extent in terrain.obj: (W-1) area_scale, height_scale, (H-1) area_scale.
+class CliScale : public Cli {
+protected:
+    fs::path map_;
+
+    void SetUp() override {
+        Cli::SetUp();
+        std::vector<uint16_t> px;
+        for (int r = 0; r < 7; ++r)
+            for (int c = 0; c < 9; ++c) px.push_back(static_cast<uint16_t>(255 - r * 40 - (c == 4 ? 15 : 0)));
+        px.back() = 0;
+        const auto png = mr::test::encode_png_raw(9, 7, 1, 8, px);
+        map_ = write("map.png", std::string(png.begin(), png.end()));
+    }
+
+    /// x, y and z extents of the terrain of `run --heightmap map.png OPTIONS` (one frame).
+    std::array<double, 3> extent(const std::string& options) {
+        const fs::path objs = dir_ / "objs";
+        fs::remove_all(objs);
+        CliResult r = run("run --frames 1 --heightmap " + map_.string() + " " + options + " --obj-dir " + objs.string());
+        EXPECT_EQ(r.code, 0) << options << "\n" << r.err;
+        const ObjBox b = obj_box(objs / "terrain.obj");
+        fs::remove_all(objs);
+        EXPECT_NEAR(b.min[0], 0.0, 1e-6);
+        EXPECT_NEAR(b.min[1], 0.0, 1e-6);
+        EXPECT_NEAR(b.min[2], 0.0, 1e-6);
+        return {b.max[0], b.max[1], b.max[2]};
+    }
+};
+
+/// x, y, z extents expected for area scale `a` and height scale `h` on the 9 x 7 map.
+std::array<double, 3> box_of(double a, double h) { return {8.0 * a, h, 6.0 * a}; }
+
+void expect_extent(const std::array<double, 3>& got, const std::array<double, 3>& want) {
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(got[k], want[k], 1e-4 * want[k]) << "axis " << k;
+}
+
+TEST_F(CliScale, OptionsSetTheScales) {
+    expect_extent(extent(""), box_of(1.0, 24.0));  // the default scene's scales
+    expect_extent(extent("--area-scale 2.5 --height-scale 60"), box_of(2.5, 60.0));
+    expect_extent(extent("--height-scale 5"), box_of(1.0, 5.0));
+    // Over a scene's keys.
+    const fs::path scene = write("s.toml", "[terrain]\nheightmap = \"map.png\"\narea_scale = 3.0\nheight_scale = 9.0\n");
+    expect_extent(extent("--scene " + scene.string()), box_of(3.0, 9.0));
+    expect_extent(extent("--scene " + scene.string() + " --area-scale 1.5"), box_of(1.5, 9.0));
+}
+
+TEST_F(CliScale, RealScaleReadsTheSidecar) {
+    // 2 m per sample and 120 m of relief; the explicit options win over the sidecar.
+    write("map.json", R"({"metres_min": -20, "metres_max": 100, "sample_spacing_m": 2.0, "width": 9, "height": 7})");
+    expect_extent(extent("--real-scale"), box_of(2.0, 120.0));
+    expect_extent(extent("--real-scale --area-scale 4"), box_of(4.0, 120.0));
+    expect_extent(extent("--real-scale --height-scale 30"), box_of(2.0, 30.0));
+    // From a latitude/longitude box on the equator: 0.0009 degrees over 8 and 6 samples.
+    write("map.json", R"({"metres_min": 0, "metres_max": 50, "lat": [0.0, 0.0009], "lon": [-0.0006, 0.0006],
+                          "width": 9, "height": 7})");
+    const double dz = 0.0009 * 111320.0 / 6.0, dx = 0.0012 * 111320.0 * std::cos(0.00045 * std::numbers::pi / 180.0) / 8.0;
+    expect_extent(extent("--real-scale"), box_of(0.5 * (dx + dz), 50.0));
+}
+
+TEST_F(CliScale, BadScaleOptions) {
+    const std::string run_map = "run --frames 1 --heightmap " + map_.string();
+    for (const char* bad : {"0", "-1", "10000.5", "1e9", "nan", "inf", "1e-60"})
+        expect_bad(run_map + " --area-scale " + bad, "--area-scale: must be in (0, 10000] metres");
+    for (const char* bad : {"0", "-3", "100001", "nan"})
+        expect_bad(run_map + " --height-scale " + bad, "--height-scale: must be in (0, 100000] metres");
+    expect_bad(run_map + " --area-scale wide", "--area-scale");
+    expect_bad("run --frames 1 --area-scale 0", "--area-scale");  // on the procedural valley too
+    // --real-scale: a heightmap and a good sidecar beside it.
+    expect_bad("run --frames 1 --real-scale", "--real-scale: needs a heightmap file");
+    expect_bad(run_map + " --real-scale", "map.json: no such file");
+    write("map.json", "{\"metres_min\": 0, \"metres_max\": }");
+    expect_bad(run_map + " --real-scale", "map.json: not valid JSON (line 1, column");
+    write("map.json", R"({"metres_min": 0, "sample_spacing_m": 1})");
+    expect_bad(run_map + " --real-scale", "map.json: metres_max: missing");
+    write("map.json", R"({"metres_min": 0, "metres_max": 10, "lat": [1, 2], "lon": [3, 4], "width": 9})");
+    expect_bad(run_map + " --real-scale", "map.json: height: missing");
+    write("map.json", R"({"metres_min": 5, "metres_max": 5, "sample_spacing_m": 1})");
+    expect_bad(run_map + " --real-scale", "map.json: metres_max - metres_min: must be in (0, 100000]");
+    write("map.json", R"({"metres_min": 0, "metres_max": 10, "sample_spacing_m": 1, "width": 10, "height": 7})");
+    expect_bad(run_map + " --real-scale", "map.json: width, height: 10 x 7 does not match the heightmap's 9 x 7");
+    // A bad explicit option is reported even where the sidecar would be fine.
+    write("map.json", R"({"metres_min": 0, "metres_max": 10, "sample_spacing_m": 1})");
+    expect_bad(run_map + " --real-scale --height-scale -1", "--height-scale: must be in (0, 100000]");
 }
 
 TEST_F(Cli, UnwritableStatsPathIsRefusedBeforeRunning) {
