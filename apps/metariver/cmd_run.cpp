@@ -86,6 +86,9 @@ int run(const RunOptions& o) {
     if (!sim_result) return fail(kExitBadInput, sim_result.error().message);
     Simulation& sim = *sim_result.value();
     for (const std::string& w : sim.warnings()) fmt::print(stderr, "metariver run: warning: {}\n", w);
+    if (const ConditionReport& c = sim.terrain().condition_report(); c.mode != TerrainCondition::None)
+        fmt::print("terrain.condition = {}: {} cells raised, {} lowered, largest change {:.2f} m ({:.0f} m^3)\n",
+                   to_string(c.mode), c.cells_raised, c.cells_lowered, c.max_change_m, c.volume_m3);
 
     // The OBJ folder: created if missing; everything this run writes there is recorded
     // so a failure can take it back.
@@ -183,9 +186,17 @@ int run(const RunOptions& o) {
         j["solver"] = std::string(to_string(d.solver));
         j["collision"] = std::string(to_string(d.collision.mode));
         j["field_kernel"] = std::string(to_string(d.field.kernel));
+        const ConditionReport& cond = sim.terrain().condition_report();
         j["terrain"] = {{"columns", sim.terrain().columns()},
                         {"rows", sim.terrain().rows()},
-                        {"triangles", sim.terrain().triangle_count()}};
+                        {"triangles", sim.terrain().triangle_count()},
+                        {"area_scale", sim.terrain().area_scale()},
+                        {"condition",
+                         {{"mode", std::string(to_string(cond.mode))},
+                          {"cells_raised", cond.cells_raised},
+                          {"cells_lowered", cond.cells_lowered},
+                          {"max_change_m", cond.max_change_m},
+                          {"volume_m3", cond.volume_m3}}}};
         j["particles_total"] = sim.particles().size();
         j["particles_active"] = sim.particles().active_count();
         j["triangles"] = sim.surface().triangle_count();

@@ -13,6 +13,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace mr {
@@ -53,12 +54,45 @@ Heightmap procedural_strict(int width, int height);
 /// The paper's 'bowl': radial, lowest at the centre.
 Heightmap procedural_bowl(int width, int height);
 
+/// Drainage conditioning of a terrain before its mesh is built (Barnes et al. 2014,
+/// Lindsay 2016): a depression has no way out for water running downhill.
+enum class TerrainCondition {
+    Auto,    ///< chosen by the scene (breach for a river: a flow-rate source with edge
+             ///< sinks; none otherwise); Terrain::build treats it as None
+    None,    ///< heights as given: water fills a depression and spills over its rim
+    Fill,    ///< priority-flood filling: every depression is raised to its spill height,
+             ///< with a slope of `kConditionSlope` towards the spill point
+    Breach,  ///< priority-flood breaching: a channel is carved from each depression's
+             ///< bottom through its rim, descending by `kConditionSlope` per metre
+};
+std::string_view to_string(TerrainCondition c);
+
+/// Slope (metres per metre) that filled surfaces and carved channels keep towards the
+/// terrain's edge, so every cell has a strictly lower neighbour on its way out.
+inline constexpr float kConditionSlope = 1e-3f;
+
+/// What conditioning changed.
+struct ConditionReport {
+    TerrainCondition mode = TerrainCondition::None;
+    uint64_t cells_raised = 0;   ///< cells whose height went up (fill)
+    uint64_t cells_lowered = 0;  ///< cells whose height went down (breach)
+    float max_change_m = 0.0f;   ///< largest |change| of one cell, metres
+    double volume_m3 = 0.0;      ///< sum of |change| x cell area, cubic metres
+};
+
+/// Conditions a grid of heights (metres, row-major, `columns` per row) in place.
+/// Deterministic (ties by cell index). O(n log n).
+ConditionReport condition_heights(std::vector<float>& heights, int columns, int rows, float area_scale,
+                                  TerrainCondition mode);
+
 struct TerrainDef {
     float area_scale = 1.0f;    ///< metres between neighbouring samples (x and z)
     float height_scale = 7.0f;  ///< metres for a normalised height of 1
     /// The paper's (Unity's) row orientation: image row r maps to z = (H-1-r)*area_scale.
     /// false: image row r maps to z = r*area_scale.
     bool paper_row_orientation = true;
+    /// Drainage conditioning applied to the heights before the mesh is built.
+    TerrainCondition condition = TerrainCondition::None;
 };
 
 /// The terrain mesh exactly as the paper's figure 2: one vertex per sample, vertex
@@ -99,6 +133,8 @@ public:
     Vec3 normal_mesh(float x, float z) const;
     /// Index of the mesh triangle under (x, z) (clamped into the rectangle).
     uint32_t triangle_at(float x, float z) const;
+    /// What TerrainDef::condition changed (mode None: nothing).
+    const ConditionReport& condition_report() const { return condition_; }
 
 private:
     /// Heights of the four corners of the cell under (x, z) (clamped into the rectangle):
@@ -114,6 +150,7 @@ private:
     std::vector<Vec3> vertices_;
     std::vector<uint32_t> indices_;
     Aabb bounds_;
+    ConditionReport condition_;
 };
 
 /// A ray/segment hit on a triangle.

@@ -170,8 +170,13 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def) {
     return create(def, map.value());
 }
 
-Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, const Heightmap& map) {
-    if (auto v = validate(def); !v) return v.error();
+Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& scene, const Heightmap& map) {
+    if (auto v = validate(scene); !v) return v.error();
+    SceneDef def = scene;
+    if (def.terrain.condition == TerrainCondition::Auto)  // a river drains its depressions; a pool keeps its basin
+        def.terrain.condition = def.spawn.particles_per_second() > 0.0f && def.sink.kind == SinkKind::Edges
+                                    ? TerrainCondition::Breach
+                                    : TerrainCondition::None;
     auto terrain = Terrain::build(map, def.terrain);
     if (!terrain) return terrain.error();
     auto bvh = Bvh::build(terrain.value(), BvhDef{.leaf_triangles = def.collision.leaf_triangles});

@@ -85,6 +85,16 @@ Result<Terrain> Terrain::build(const Heightmap& map, const TerrainDef& def) {
             t.bounds_.grow(p);
         }
     }
+    if (def.condition == TerrainCondition::Fill || def.condition == TerrainCondition::Breach) {
+        std::vector<float> h(n);
+        for (size_t k = 0; k < n; ++k) h[k] = t.vertices_[k].y;
+        t.condition_ = condition_heights(h, W, H, def.area_scale, def.condition);
+        t.bounds_ = Aabb{};
+        for (size_t k = 0; k < n; ++k) {
+            t.vertices_[k].y = h[k];
+            t.bounds_.grow(t.vertices_[k]);
+        }
+    }
     t.indices_.reserve(static_cast<size_t>(W - 1) * (H - 1) * 6);
     for (int i = 0; i + 1 < H; ++i) {
         for (int j = 0; j + 1 < W; ++j) {

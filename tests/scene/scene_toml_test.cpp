@@ -39,6 +39,7 @@ seed = 3
 area_scale = 2.5
 height_scale = 9
 paper_row_orientation = false
+condition = "breach"
 [particles]
 count = 77
 spawn_center = [1, 2, 3]
@@ -81,6 +82,7 @@ threshold = 0.4
     EXPECT_FLOAT_EQ(d.terrain.area_scale, 2.5f);
     EXPECT_FLOAT_EQ(d.terrain.height_scale, 9.0f);
     EXPECT_FALSE(d.terrain.paper_row_orientation);
+    EXPECT_EQ(d.terrain.condition, TerrainCondition::Breach);
     EXPECT_EQ(d.spawn.count, 77);
     EXPECT_EQ(d.spawn.center, Vec3(1, 2, 3));
     EXPECT_FALSE(d.spawn.auto_center);
@@ -127,6 +129,7 @@ TEST(SceneToml, WrongTypesAreErrors) {
     expect_error("[particles]\nspawn_half_extent = [1, 2]\n", "particles.spawn_half_extent: must be an array of 3");
     expect_error("terrain = 3\n", "terrain: must be a table");
     expect_error("[terrain]\npaper_row_orientation = 1\n", "terrain.paper_row_orientation: must be true or false");
+    expect_error("[terrain]\ncondition = \"flood\"\n", "terrain.condition");
 }
 
 TEST(SceneToml, OutOfRangeValuesNameTheKeyAndTheRange) {

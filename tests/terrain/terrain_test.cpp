@@ -254,3 +254,87 @@ TEST(Terrain, ProceduralMapsBuild) {
 
 }  // namespace
 }  // namespace mr
+
+namespace mr {
+namespace {
+
+/// Every interior cell has a strictly lower 8-neighbour: water running downhill from
+/// anywhere reaches the edge.
+bool drains(const Terrain& t) {
+    for (int i = 1; i + 1 < t.rows(); ++i)
+        for (int j = 1; j + 1 < t.columns(); ++j) {
+            bool lower = false;
+            for (int di = -1; di <= 1 && !lower; ++di)
+                for (int dj = -1; dj <= 1 && !lower; ++dj)
+                    if ((di || dj) && t.sample(i + di, j + dj) < t.sample(i, j)) lower = true;
+            if (!lower) return false;
+        }
+    return true;
+}
+
+Heightmap pit_map() {
+    // A ramp falling towards column 0 with a 0.3-deep pit in the middle of it.
+    Heightmap m = flat_heightmap(21, 17);
+    for (int r = 0; r < 17; ++r)
+        for (int c = 0; c < 21; ++c) {
+            const float d = std::hypot(float(c) - 10.0f, float(r) - 8.0f);
+            m.samples[size_t(r) * 21 + c] = 0.5f + 0.02f * float(c) - (d < 4.0f ? 0.3f * (1.0f - d / 4.0f) : 0.0f);
+        }
+    return m;
+}
+
+TEST(TerrainCondition, FillAndBreachMakeEveryCellDrainAndReportWhatChanged) {
+    const Heightmap m = pit_map();
+    auto none = Terrain::build(m, TerrainDef{.area_scale = 1.0f, .height_scale = 10.0f});
+    ASSERT_TRUE(none.ok());
+    EXPECT_FALSE(drains(none.value())) << "the pit holds water";
+    EXPECT_EQ(none->condition_report().cells_raised + none->condition_report().cells_lowered, 0u);
+
+    auto fill = Terrain::build(m, TerrainDef{.area_scale = 1.0f, .height_scale = 10.0f, .condition = TerrainCondition::Fill});
+    ASSERT_TRUE(fill.ok());
+    EXPECT_TRUE(drains(fill.value()));
+    const ConditionReport& f = fill->condition_report();
+    EXPECT_GT(f.cells_raised, 10u);
+    EXPECT_EQ(f.cells_lowered, 0u);
+    // Bottom 0.7 - 0.3 = 0.4; it spills over its downhill rim (column 6: 0.62): 2.2 m.
+    EXPECT_NEAR(f.max_change_m, 2.2f, 0.15f);
+    EXPECT_GT(f.volume_m3, 10.0);
+
+    auto breach = Terrain::build(m, TerrainDef{.area_scale = 1.0f, .height_scale = 10.0f, .condition = TerrainCondition::Breach});
+    ASSERT_TRUE(breach.ok());
+    EXPECT_TRUE(drains(breach.value()));
+    const ConditionReport& b = breach->condition_report();
+    EXPECT_GT(b.cells_lowered, 0u);
+    EXPECT_EQ(b.cells_raised, 0u);
+    EXPECT_LT(b.cells_lowered, f.cells_raised) << "a channel through the rim, not the whole pit";
+    // Nothing outside the pit and its breach channel moved: the far corner is untouched.
+    EXPECT_FLOAT_EQ(breach->sample(16, 20), none->sample(16, 20));
+    EXPECT_FLOAT_EQ(fill->sample(16, 20), none->sample(16, 20));
+}
+
+TEST(TerrainCondition, ATerrainThatAlreadyDrainsIsLeftAlone) {
+    Heightmap m = flat_heightmap(9, 7);
+    for (int r = 0; r < 7; ++r)
+        for (int c = 0; c < 9; ++c) m.samples[size_t(r) * 9 + c] = 0.1f * float(c) + 0.01f * float(r % 3);
+    for (const TerrainCondition mode : {TerrainCondition::Fill, TerrainCondition::Breach}) {
+        auto t = Terrain::build(m, TerrainDef{.area_scale = 1.0f, .height_scale = 10.0f, .condition = mode});
+        ASSERT_TRUE(t.ok());
+        EXPECT_EQ(t->condition_report().cells_raised + t->condition_report().cells_lowered, 0u) << to_string(mode);
+    }
+}
+
+TEST(TerrainCondition, RandomMapsOfOddSizesAllDrain) {
+    Lcg rng(11);
+    for (const auto [w, h] : {std::pair{2, 2}, std::pair{3, 7}, std::pair{31, 17}, std::pair{64, 65}}) {
+        Heightmap m = flat_heightmap(w, h);
+        for (float& v : m.samples) v = rng.uniform(0.0f, 1.0f);
+        for (const TerrainCondition mode : {TerrainCondition::Fill, TerrainCondition::Breach}) {
+            auto t = Terrain::build(m, TerrainDef{.area_scale = 2.0f, .height_scale = 50.0f, .condition = mode});
+            ASSERT_TRUE(t.ok());
+            EXPECT_TRUE(drains(t.value())) << w << " x " << h << " " << to_string(mode);
+        }
+    }
+}
+
+}  // namespace
+}  // namespace mr
