@@ -57,8 +57,6 @@ Heightmap procedural_bowl(int width, int height);
 /// Drainage conditioning of a terrain before its mesh is built (Barnes et al. 2014,
 /// Lindsay 2016): a depression has no way out for water running downhill.
 enum class TerrainCondition {
-    Auto,    ///< chosen by the scene (breach for a river: a flow-rate source with edge
-             ///< sinks; none otherwise); Terrain::build treats it as None
     None,    ///< heights as given: water fills a depression and spills over its rim
     Fill,    ///< priority-flood filling: every depression is raised to its spill height,
              ///< with a slope of `kConditionSlope` towards the spill point

@@ -14,10 +14,11 @@ LatticeSource LatticeSource::build(const Def& def, const Terrain& terrain) {
     LatticeSource s;
     s.def_ = def;
     const float d = def.spacing;
-    // Lattice points along one axis, centred on the source: n = floor(2 he / d) + 1.
+    // Lattice points along one axis through the source's centre: k d for |k| <= he / d
+    // (so the centre is always a slot, even in a source smaller than a spacing).
     auto axis = [d](float he) {
-        const int n = static_cast<int>(std::floor(2.0f * std::max(he, 0.0f) / d + 1e-4f)) + 1;
-        return std::pair<int, float>(n, -0.5f * float(n - 1) * d);
+        const int k = static_cast<int>(std::floor(std::max(he, 0.0f) / d + 1e-4f));
+        return std::pair<int, float>(2 * k + 1, -float(k) * d);
     };
     std::vector<Vec3> cand;
     if (def.shape == SourceShape::Point) {

@@ -178,8 +178,7 @@ Result<SceneDef> parse_scene_toml(std::string_view text, const std::string& orig
         r.allow(*t, p, {"source", "heightmap", "width", "height", "seed", "area_scale", "height_scale",
                         "paper_row_orientation", "condition"});
         r.choice(*t, p, "condition", d.terrain.condition,
-                 {{"auto", TerrainCondition::Auto},
-                  {"none", TerrainCondition::None},
+                 {{"none", TerrainCondition::None},
                   {"fill", TerrainCondition::Fill},
                   {"breach", TerrainCondition::Breach}});
         r.choice(*t, p, "source", d.source.kind,

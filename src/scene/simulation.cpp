@@ -65,7 +65,7 @@ void fit_auto_source(const Terrain& t, SpawnDef& spawn) {
     const float fx = std::min(rx, std::max(0.0f, 0.5f * size.x - margin));
     const float fz = std::min(rz, std::max(0.0f, 0.5f * size.z - margin));
     if (disc) {
-        he.x = std::min(fx, fz);
+        he.x = he.z = std::min(fx, fz);  // z too: the edge checks read the box of the disc
     } else if (spawn.shape == SourceShape::Box) {
         he.x = fx;
         he.z = fz;
@@ -94,7 +94,12 @@ void fit_auto_source(const Terrain& t, SpawnDef& spawn) {
     if (!ground.empty()) {
         std::nth_element(ground.begin(), ground.begin() + ground.size() / 2, ground.end());
         const float bottom = c.y - (spawn.shape == SourceShape::Point ? 0.0f : he.y);
-        const float need = ground[ground.size() / 2] + 0.5f;
+        float need = ground[ground.size() / 2] + 0.5f;
+        // The centre slot's own footprint (a quarter metre around it) is clear too, so
+        // even a source on a steep speck of terrain has a slot.
+        for (const float dx : {-0.25f, 0.25f})
+            for (const float dz : {-0.25f, 0.25f})
+                if (t.contains_xz(c.x + dx, c.z + dz)) need = std::max(need, t.height_mesh(c.x + dx, c.z + dz) + 0.5f);
         if (bottom < need) c.y += need - bottom;
     }
 }
@@ -170,13 +175,8 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def) {
     return create(def, map.value());
 }
 
-Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& scene, const Heightmap& map) {
-    if (auto v = validate(scene); !v) return v.error();
-    SceneDef def = scene;
-    if (def.terrain.condition == TerrainCondition::Auto)  // a river drains its depressions; a pool keeps its basin
-        def.terrain.condition = def.spawn.particles_per_second() > 0.0f && def.sink.kind == SinkKind::Edges
-                                    ? TerrainCondition::Breach
-                                    : TerrainCondition::None;
+Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, const Heightmap& map) {
+    if (auto v = validate(def); !v) return v.error();
     auto terrain = Terrain::build(map, def.terrain);
     if (!terrain) return terrain.error();
     auto bvh = Bvh::build(terrain.value(), BvhDef{.leaf_triangles = def.collision.leaf_triangles});

@@ -24,7 +24,6 @@ namespace mr {
 
 std::string_view to_string(TerrainCondition c) {
     switch (c) {
-        case TerrainCondition::Auto: return "auto";
         case TerrainCondition::None: return "none";
         case TerrainCondition::Fill: return "fill";
         case TerrainCondition::Breach: return "breach";
@@ -35,9 +34,9 @@ std::string_view to_string(TerrainCondition c) {
 ConditionReport condition_heights(std::vector<float>& heights, int columns, int rows, float area_scale,
                                   TerrainCondition mode) {
     ConditionReport rep;
-    rep.mode = mode == TerrainCondition::Auto ? TerrainCondition::None : mode;
+    rep.mode = mode;
     const size_t n = size_t(columns) * size_t(rows);
-    if (mode == TerrainCondition::None || mode == TerrainCondition::Auto || columns < 2 || rows < 2 || heights.size() != n) return rep;
+    if (mode == TerrainCondition::None || columns < 2 || rows < 2 || heights.size() != n) return rep;
     std::vector<double> h(heights.begin(), heights.end());
     const double eps_straight = double(kConditionSlope) * area_scale;
     const double eps_diagonal = eps_straight * std::sqrt(2.0);

@@ -1,0 +1,83 @@
+#!/usr/bin/env bash
+# Runs the default scene (the PBF river) with only --heightmap on every map of the set
+# and prints one markdown row per map from the stats of `metariver run`:
+#   sound: the sound-water table (issue 9): particle-steps, tunneled, guarded,
+#          respawned, max speed, final speed p95, spray fraction; plus the still pool.
+#   river: the river table (issue 10): scale, particles, channel coverage,
+#          outflow/inflow (main outlet), steady, time to outlet, spray, tunneled,
+#          guarded, frame median.
+# Maps: the procedural terrains, the tunneling test's torture terrains and random maps
+# (scripts/torture_maps.py), the paper's maps and the real DEMs in ../shared.
+# Usage: bash scripts/map_table.sh sound|river [FRAMES] [OUT_DIR]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+MODE=${1:?usage: map_table.sh sound|river [FRAMES] [OUT_DIR]}
+case "$MODE" in sound) DEFAULT_FRAMES=1800 ;; river) DEFAULT_FRAMES=7200 ;; *) echo "mode: sound or river" >&2; exit 2 ;; esac
+B=build/default/apps/metariver
+FRAMES=${2:-$DEFAULT_FRAMES}
+OUT=${3:-out/${MODE}_table}
+SHARED=../shared/heightmaps
+mkdir -p "$OUT"
+python3 scripts/torture_maps.py "$OUT/maps"
+row() {  # name, stats file
+  python3 - "$MODE" "$1" "$2" <<'PY'
+import json, sys
+mode, name, path = sys.argv[1:4]
+j = json.load(open(path)); p = j["plausibility"]; t = j["terrain"]
+size = f"{t['columns']} x {t['rows']}"
+if mode == "sound":
+    print(f"| {name} | {size} | {j['particles_active']} | {j['particle_steps']:,} | {j['tunneled']} | {j['guarded']} | "
+          f"{j['respawned']} | {p['max_speed']:.1f} | {p['final_speed']['p95']:.3f} | {p['spray_fraction']:.4f} |")
+else:
+    main = [o for o in p.get("outlets", []) if o.get("main")]
+    steady = "yes" if p.get("outflow_steady") else "no"
+    print(f"| {name} | {size} | {t.get('area_scale', 0):g} | {j['particles_active']} | {p['channel_coverage']:.2f} | "
+          f"{p['outflow_over_inflow']:.3f} | {steady} | {p['time_to_outlet_s']:.1f} | {p['spray_fraction']:.4f} | "
+          f"{j['tunneled']} | {j['guarded']} | {j['stage_ms']['total']['median']:.1f} |")
+PY
+}
+if [ "$MODE" = sound ]; then
+  echo "| map | size | active | particle-steps | tunneled | guarded | respawned | max speed m/s | final speed p95 m/s | spray fraction |"
+  echo "|---|---|---|---|---|---|---|---|---|---|"
+else
+  echo "| map | size | area scale m | active | channel coverage | outflow / inflow | steady | time to outlet s | spray | tunneled | guarded | frame ms |"
+  echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
+fi
+run_map() {  # name, extra args...
+  local name=$1; shift
+  local s="$OUT/$(echo "$name" | tr '/ ,' '___').json"
+  "$B" run --frames "$FRAMES" --stats "$s" "$@" >/dev/null 2>"$OUT/last_stderr.txt" || { echo "| $name | failed: $(tail -1 "$OUT/last_stderr.txt") |"; return; }
+  row "$name" "$s"
+}
+run_map "valley (default scene)"
+for src in strict bowl flat; do
+  printf 'name = "%s"\n[terrain]\nsource = "%s"\n' "$src" "$src" > "$OUT/$src.toml"
+  run_map "procedural $src" --scene "$OUT/$src.toml"
+done
+for f in "$OUT"/maps/spikes.png "$OUT"/maps/cliffs.png "$OUT"/maps/random_*.png; do run_map "$(basename "$f")" --heightmap "$f"; done
+for f in "$SHARED"/metawater/*.png "$SHARED"/real/*.png; do
+  [ -f "$f" ] && run_map "$(basename "$(dirname "$f")")/$(basename "$f")" --heightmap "$f"
+done
+if [ "$MODE" = sound ]; then
+  cat > "$OUT/pool.toml" <<'TOML'
+name = "still pool"
+solver = "pbf"
+[terrain]
+source = "bowl"
+width = 33
+height = 33
+height_scale = 7.0
+[particles]
+count = 2500
+spawn_center = [16.0, 6.0, 16.0]
+spawn_half_extent = [5.0, 2.0, 5.0]
+spawn_interval = 0
+flow_rate = 0.0
+source_shape = "box"
+[sink]
+kind = "none"
+TOML
+  FRAMES=900 run_map "still pool (defaults, 900 frames)" --scene "$OUT/pool.toml"
+  printf '[collision]\ndamping = 0.02\n' | cat "$OUT/pool.toml" - > "$OUT/pool_still.toml"
+  FRAMES=900 run_map "still pool, collision.damping 0.02 (900 frames)" --scene "$OUT/pool_still.toml"
+fi
