@@ -221,7 +221,9 @@ TEST(LatticeSource, SlotsAreALatticeAtTheSpacingAboveTheTerrainDownstreamFirst) 
         EXPECT_NEAR(o.y, std::round(o.y), 1e-4f);
         EXPECT_NEAR(o.z, std::round(o.z), 1e-4f);
         EXPECT_GE(q.y, w.terrain.height_mesh(q.x, q.z) + def.clearance) << "slot under the ground";
-        if (i > 0) EXPECT_GE(q.y, slots[i - 1].y) << "downstream (the bottom, for an inflow going down) first";
+        if (i > 0) {
+            EXPECT_GE(q.y, slots[i - 1].y) << "downstream (the bottom, for an inflow going down) first";
+        }
     }
     // Rate: slots * speed / (extent along the inflow + d).
     const float extent = slots.back().y - slots.front().y;

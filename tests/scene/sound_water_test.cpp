@@ -146,7 +146,9 @@ TEST(SoundWater, SpawningIntoAFullVolumeAndPouringOntoWaterNeverThrowParticles) 
     for (int f = 0; f < 300; ++f) {
         s.step(1.0f / 60.0f);
         vmax = std::max(vmax, s.counters().max_speed);
-        if (f == 0) EXPECT_LT(s.particles().active_count(), 4500u) << "the box holds fewer slots than that";
+        if (f == 0) {
+            EXPECT_LT(s.particles().active_count(), 4500u) << "the box holds fewer slots than that";
+        }
     }
     const float bound = speed_bound(s);
     s.pour(Vec3(16, 4.5f, 16), 500);

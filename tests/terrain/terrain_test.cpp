@@ -325,7 +325,7 @@ TEST(TerrainCondition, ATerrainThatAlreadyDrainsIsLeftAlone) {
 
 TEST(TerrainCondition, RandomMapsOfOddSizesAllDrain) {
     Lcg rng(11);
-    for (const auto [w, h] : {std::pair{2, 2}, std::pair{3, 7}, std::pair{31, 17}, std::pair{64, 65}}) {
+    for (const auto& [w, h] : {std::pair{2, 2}, std::pair{3, 7}, std::pair{31, 17}, std::pair{64, 65}}) {
         Heightmap m = flat_heightmap(w, h);
         for (float& v : m.samples) v = rng.uniform(0.0f, 1.0f);
         for (const TerrainCondition mode : {TerrainCondition::Fill, TerrainCondition::Breach}) {
