@@ -8,6 +8,7 @@
 #include <stb_image_write.h>
 
 #include <cstring>
+#include <filesystem>
 #include <string_view>
 
 namespace mr::render {
@@ -35,6 +36,11 @@ Status write_png(const std::string& path, std::span<const uint8_t> pixels, int w
 }
 
 Result<Image> load_image(const std::string& path, int channels) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec))  // a FIFO or a device would block or never end
+        return Error{fmt::format("{}: not a regular file", path)};
+    if (std::filesystem::file_size(path, ec) > (uintmax_t{512} << 20))
+        return Error{fmt::format("{}: larger than 512 MiB", path)};
     int w = 0, h = 0, n = 0;
     stbi_uc* data = stbi_load(path.c_str(), &w, &h, &n, channels);
     if (!data) {

@@ -269,7 +269,7 @@ Status validate(const SceneDef& d) {
     c.range("particles.flow_rate", d.spawn.flow_rate, 0.0, 1e7);
     c.range("particles.litres_per_particle", d.spawn.litres_per_particle, 0.0, 1e9);
     if (d.solver == SolverKind::Pbf) {
-        c.positive("pbf.spacing", d.pbf.spacing, 1e3);
+        c.range("pbf.spacing", d.pbf.spacing, 1e-3, 1e3);  // below 1 mm the kernel constants overflow float
         if (c.error.empty() && !(d.pbf.kernel_radius > d.pbf.spacing && d.pbf.kernel_radius <= 4.0f * d.pbf.spacing))
             c.error = fmt::format("pbf.kernel_radius: must be in (pbf.spacing, 4 pbf.spacing] = ({}, {}] (got {})",
                                   d.pbf.spacing, 4.0f * d.pbf.spacing, d.pbf.kernel_radius);

@@ -21,10 +21,12 @@ HeightfieldQuery intersect_segment_heightfield(const Terrain& terrain, const Vec
     const float x0 = std::min(from.x, to.x) * inv - eps, x1 = std::max(from.x, to.x) * inv + eps;
     const float z0 = std::min(from.z, to.z) * inv - eps, z1 = std::max(from.z, to.z) * inv + eps;
     if (!(x1 >= 0.0f && z1 >= 0.0f && x0 <= float(W - 1) && z0 <= float(H - 1))) return q;  // also NaN
-    const int j0 = std::max(0, static_cast<int>(std::floor(x0)));
-    const int j1 = std::min(W - 2, static_cast<int>(std::floor(x1)));
-    const int i0 = std::max(0, static_cast<int>(std::floor(z0)));
-    const int i1 = std::min(H - 2, static_cast<int>(std::floor(z1)));
+    // Clamp in float before converting: an exploding coordinate (1e30) must not reach
+    // the int conversion (undefined behaviour).
+    const int j0 = static_cast<int>(std::floor(std::max(x0, 0.0f)));
+    const int j1 = static_cast<int>(std::floor(std::min(x1, float(W - 2))));
+    const int i0 = static_cast<int>(std::floor(std::max(z0, 0.0f)));
+    const int i1 = static_cast<int>(std::floor(std::min(z1, float(H - 2))));
     if (static_cast<int64_t>(j1 - j0 + 1) * (i1 - i0 + 1) > max_cells) {
         q.too_long = true;
         return q;

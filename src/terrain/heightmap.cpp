@@ -159,6 +159,11 @@ Result<Heightmap> load_heightmap_png(const std::string& path) {
     std::error_code ec;
     if (!std::filesystem::exists(path, ec)) return fail(path, "no such file");
     if (std::filesystem::is_directory(path, ec)) return fail(path, "is a directory, not a PNG file");
+    // Only regular files: a FIFO or a device would block or never end.
+    if (!std::filesystem::is_regular_file(path, ec)) return fail(path, "not a regular file");
+    constexpr uintmax_t kMaxPngBytes = uintmax_t{512} << 20;
+    if (const uintmax_t size = std::filesystem::file_size(path, ec); !ec && size > kMaxPngBytes)
+        return fail(path, fmt::format("file is {} bytes; a heightmap PNG may have at most {}", size, kMaxPngBytes));
 
     std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"), std::fclose);
     if (!file) return fail(path, fmt::format("cannot open ({})", std::strerror(errno)));

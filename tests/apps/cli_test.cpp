@@ -4,6 +4,7 @@
 #include "cli_fixture.h"
 #include "png_test_util.h"
 #include <nlohmann/json.hpp>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <array>
@@ -99,6 +100,14 @@ TEST_F(Cli, RunObjEveryWritesEveryNthAndTheLastFrame) {
                                         "surface_00011.obj", "terrain.obj"};
     EXPECT_EQ(names, want);
     EXPECT_NE(r.out.find("wrote 5 OBJ files"), std::string::npos) << r.out;
+}
+
+TEST_F(Cli, AHeightmapThatIsNotARegularFileIsRefusedAtOnce) {
+    // Issue 13: a FIFO hung `run` forever (it was read before anything checked it).
+    const fs::path fifo = dir_ / "map.png";
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+    expect_bad("run --frames 1 --heightmap " + fifo.string(), "not a regular file");
+    fs::remove(fifo);
 }
 
 TEST_F(Cli, BadObjEvery) {

@@ -133,6 +133,9 @@ TEST(SceneToml, WrongTypesAreErrors) {
 }
 
 TEST(SceneToml, OutOfRangeValuesNameTheKeyAndTheRange) {
+    // Issue 13: a micron spacing overflowed the kernel constants and respawned every
+    // particle every step in silence.
+    expect_error("solver = \"pbf\"\n[pbf]\nspacing = 1e-6\nkernel_radius = 2e-6\n", "pbf.spacing: must be in [0.001, 1000]");
     expect_error("[field]\nresolution = -2\n", "field.resolution: must be in (0, 64]");
     expect_error("[field]\nresolution = 0\n", "field.resolution: must be in (0, 64]");
     expect_error("[field]\nresolution = nan\n", "field.resolution");

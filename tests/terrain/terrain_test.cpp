@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <filesystem>
 
 namespace mr {
@@ -333,6 +334,30 @@ TEST(TerrainCondition, RandomMapsOfOddSizesAllDrain) {
             ASSERT_TRUE(t.ok());
             EXPECT_TRUE(drains(t.value())) << w << " x " << h << " " << to_string(mode);
         }
+    }
+}
+
+}  // namespace
+}  // namespace mr
+
+namespace mr {
+namespace {
+
+TEST(HeightfieldQuery, ExplodingCoordinatesNeitherCrashNorHit) {
+    // Issue 13: floor(x) was converted to int before clamping (undefined for 1e30; the
+    // UBSan build reports it). Segments from far outside, or with inf/NaN ends, must come
+    // back without a hit or as too long for the cell walk.
+    auto t = Terrain::build(flat_heightmap(9, 9), TerrainDef{.area_scale = 1.0f, .height_scale = 1.0f});
+    ASSERT_TRUE(t.ok());
+    const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
+    for (const auto& [from, to] : {std::pair{Vec3(-1e30f, 5, 2), Vec3(3, 5, 2)}, std::pair{Vec3(2, 5, -1e30f), Vec3(2, 5, 3)},
+                                    std::pair{Vec3(-inf, 1, 1), Vec3(1, 1, 1)}, std::pair{Vec3(nan, 1, 1), Vec3(1, -1, 1)},
+                                    std::pair{Vec3(1e30f, 1, 1e30f), Vec3(2e30f, -1, 2e30f)}}) {
+        const HeightfieldQuery q = intersect_segment_heightfield(t.value(), from, to);
+        if (q.hit) {
+            EXPECT_TRUE(std::isfinite(q.hit->point.y));
+        }
+        EXPECT_FALSE(q.hit && !q.too_long && q.hit->point.y < -1.0f);
     }
 }
 
