@@ -76,6 +76,12 @@ std::vector<std::string> preset_names();
 /// supplies it (--heightmap); see resolve_heightmap().
 Result<SceneDef> preset(std::string_view name);
 
+/// Sizes above which the reference paths would not finish a frame in bounded time;
+/// validate() refuses them and names the fast alternative.
+inline constexpr int kMaxPairsParticles = 20'000;    ///< springs.mode = "pairs" (O(N^2), serial)
+inline constexpr int kMaxDenseFieldBalls = 5'000;    ///< the paper's field kernels (O(balls x samples))
+inline constexpr int kMaxBulletBodies = 200'000;     ///< solver = "bullet"
+
 /// Checks every field against its documented range. The message names the field
 /// ("particles.count: must be in [1, 10000000] (got 0)").
 Status validate(const SceneDef& def);

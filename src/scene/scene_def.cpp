@@ -257,6 +257,22 @@ Status validate(const SceneDef& d) {
     c.positive("field.radius", d.field.radius, 1e4);
     c.range("field.bounds_offset", d.field.bounds_offset, 0.0, 1e4);
     c.positive("field.threshold", d.field.threshold, 1e9);
+    // Accepted input must finish a frame in bounded time: the O(N^2) and O(balls x
+    // samples) reference paths are refused above a size, naming the fast alternative.
+    if (c.error.empty() && d.solver == SolverKind::Springs && d.springs.stiffness > 0.0f &&
+        d.springs.mode == SpringMode::Pairs && d.spawn.count > kMaxPairsParticles)
+        c.error = fmt::format("springs.mode: \"pairs\" (the paper's O(N^2) serial loop) is limited to {} particles "
+                              "(got particles.count = {}): use springs.mode = \"grid\" (same forces)",
+                              kMaxPairsParticles, d.spawn.count);
+    if (c.error.empty() && d.surface && d.field.kernel != FieldKernel::Poly6 && d.spawn.count > kMaxDenseFieldBalls)
+        c.error = fmt::format("field.kernel: the paper's kernels reach every grid sample (O(balls x samples)) and are "
+                              "limited to {} balls (got particles.count = {}): use field.kernel = \"poly6\" or "
+                              "surface = false",
+                              kMaxDenseFieldBalls, d.spawn.count);
+    if (c.error.empty() && d.solver == SolverKind::Bullet && d.spawn.count > kMaxBulletBodies)
+        c.error = fmt::format("particles.count: solver = \"bullet\" is limited to {} rigid bodies (got {}); use "
+                              "solver = \"pbf\" or \"springs\" for more",
+                              kMaxBulletBodies, d.spawn.count);
     if (c.error.empty() && d.field.bounds == FieldBounds::Terrain && d.field.kernel != FieldKernel::Poly6)
         c.error = "field.bounds: \"terrain\" needs a compact kernel (field.kernel = \"poly6\"); the paper's kernels reach every sample";
     c.positive("bullet.sphere_radius", d.bullet.sphere_radius, 1e3);

@@ -132,6 +132,16 @@ TEST(SceneToml, WrongTypesAreErrors) {
     expect_error("[terrain]\ncondition = \"flood\"\n", "terrain.condition");
 }
 
+TEST(SceneToml, SizesTheReferencePathsCannotFinishAreRefusedNamingTheAlternative) {
+    // Issue 13: accepted input that effectively hung.
+    expect_error("solver = \"springs\"\n[particles]\ncount = 1000000\n[springs]\nstiffness = 4.0\nmode = \"pairs\"\n",
+                 "springs.mode = \"grid\"");
+    expect_error("solver = \"springs\"\n[particles]\ncount = 100000\n[springs]\nmode = \"grid\"\n[field]\n"
+                 "kernel = \"inverse_square\"\n",
+                 "field.kernel = \"poly6\"");
+    expect_error("solver = \"bullet\"\n[particles]\ncount = 3000000\n", "particles.count: solver = \"bullet\" is limited");
+}
+
 TEST(SceneToml, OutOfRangeValuesNameTheKeyAndTheRange) {
     // Issue 13: a micron spacing overflowed the kernel constants and respawned every
     // particle every step in silence.
