@@ -30,6 +30,8 @@ struct RunOptions {
 };
 
 constexpr long long kMaxFrames = 100'000'000;
+/// Stage-time samples kept per stage (32 MiB for the four stages at most).
+constexpr size_t kMaxTimingSamples = size_t{1} << 20;
 constexpr long long kMaxObjEvery = 1'000'000'000;
 
 int fail(int code, const std::string& message) {
@@ -122,11 +124,13 @@ int run(const RunOptions& o) {
         }
     }
 
+    // Stage times: every frame up to kMaxTimingSamples, then every 2nd, 4th, ... frame
+    // (the kept samples are halved each time the limit is reached), so memory stays
+    // bounded for runs of up to 1e8 frames; percentiles come from the kept samples.
     std::vector<double> sim_ms, field_ms, surface_ms, total_ms;
-    sim_ms.reserve(static_cast<size_t>(o.frames));
-    field_ms.reserve(static_cast<size_t>(o.frames));
-    surface_ms.reserve(static_cast<size_t>(o.frames));
-    total_ms.reserve(static_cast<size_t>(o.frames));
+    long long timing_stride = 1;
+    const size_t reserve = static_cast<size_t>(std::min<long long>(o.frames, kMaxTimingSamples));
+    for (auto* v : {&sim_ms, &field_ms, &surface_ms, &total_ms}) v->reserve(reserve);
     const int digits = std::max(5, static_cast<int>(std::to_string(o.frames - 1).size()));
     // Plausibility: outflow at the sinks, wet-channel and spray fractions (sampled every
     // 10 frames over the second half; spray also at the last frame), largest speed and
@@ -155,10 +159,21 @@ int run(const RunOptions& o) {
             ++spray_n;
         }
         const FrameTimings& t = sim.last_timings();
-        sim_ms.push_back(t.simulate_ms);
-        field_ms.push_back(t.field_ms);
-        surface_ms.push_back(t.surface_ms);
-        total_ms.push_back(t.simulate_ms + t.field_ms + t.surface_ms);
+        if (f % timing_stride == 0) {
+            if (sim_ms.size() == kMaxTimingSamples) {
+                for (auto* v : {&sim_ms, &field_ms, &surface_ms, &total_ms}) {
+                    for (size_t k = 0; 2 * k < v->size(); ++k) (*v)[k] = (*v)[2 * k];
+                    v->resize((v->size() + 1) / 2);
+                }
+                timing_stride *= 2;
+            }
+            if (f % timing_stride == 0) {
+                sim_ms.push_back(t.simulate_ms);
+                field_ms.push_back(t.field_ms);
+                surface_ms.push_back(t.surface_ms);
+                total_ms.push_back(t.simulate_ms + t.field_ms + t.surface_ms);
+            }
+        }
         if (!o.obj_dir.empty() && (f % obj_every == 0 || f == o.frames - 1)) {
             const std::string path = (fs::path(o.obj_dir) / fmt::format("surface_{:0{}}.obj", f, digits)).string();
             if (auto s = write_surface_obj(path, sim.surface(), fmt::format("metariver water surface, frame {}", f)); !s) {

@@ -25,7 +25,7 @@ struct Error {
 
 /// A value or an Error. Minimal stand-in for std::expected (C++23, not in g++ 12).
 template <class T>
-class Result {
+class [[nodiscard]] Result {
 public:
     Result(T value) : data_(std::move(value)) {}
     Result(Error error) : data_(std::move(error)) {}
