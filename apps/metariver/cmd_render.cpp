@@ -230,7 +230,12 @@ int render(const RenderOptions& o) {
         }
     }
 
-    if (texture) renderer.set_terrain_texture(texture->pixels, texture->width, texture->height);
+    if (texture) {
+        if (auto s = renderer.set_terrain_texture(texture->pixels, texture->width, texture->height); !s) {
+            cleanup();
+            return fail(kExitBadInput, fmt::format("--texture {}: {}", o.texture, s.error().message));
+        }
+    }
     render::Camera camera = render::frame_terrain(sim->terrain());
     if (!o.camera.empty()) (void)render::parse_camera(o.camera, camera);  // checked above
     render::RenderSettings settings;

@@ -299,7 +299,11 @@ int view(const ViewOptions& o) {
             code = fail(kExitFailure, renderer_result.error().message);
         } else {
             render::Renderer& renderer = *renderer_result.value();
-            if (texture) renderer.set_terrain_texture(texture->pixels, texture->width, texture->height);
+            if (texture) {
+                if (auto s = renderer.set_terrain_texture(texture->pixels, texture->width, texture->height); !s)
+                    fmt::print(stderr, "metariver view: --texture {}: {} (drawing without it)\n", o.texture,
+                               s.error().message);
+            }
             renderer.set_scene(*sim);
             render::Camera camera = render::frame_terrain(sim->terrain());
             render::RenderSettings settings;

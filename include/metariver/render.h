@@ -127,7 +127,9 @@ public:
     void update(const Simulation& sim);
     /// An RGBA8 image draped over the terrain's x/z rectangle (image row 0 at the far
     /// end, as the heightmap); an empty span removes it.
-    void set_terrain_texture(std::span<const uint8_t> rgba, int width, int height);
+    /// An error (nothing uploaded) when the buffer is not width x height x 4 bytes or a
+    /// side exceeds GL_MAX_TEXTURE_SIZE; empty input turns the texture off.
+    Status set_terrain_texture(std::span<const uint8_t> rgba, int width, int height);
 
     /// Draws a frame of width x height pixels into the renderer's own framebuffer.
     void draw(const Camera& camera, int width, int height, const RenderSettings& settings);

@@ -191,6 +191,10 @@ public:
     static Result<std::unique_ptr<Simulation>> create(const SceneDef& def);
     /// The same with a heightmap the caller already has.
     static Result<std::unique_ptr<Simulation>> create(const SceneDef& def, const Heightmap& map);
+    /// The solver and the tree refer to this object's own terrain: a copy or a move
+    /// would leave them pointing at the old one.
+    Simulation(const Simulation&) = delete;
+    Simulation& operator=(const Simulation&) = delete;
 
     /// One frame: spawning and `substeps` solver steps, then field and surface.
     void step(float frame_dt);

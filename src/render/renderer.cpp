@@ -441,12 +441,21 @@ void Renderer::update(const Simulation& sim) {
     r.upload_dynamic(sim);
 }
 
-void Renderer::set_terrain_texture(std::span<const uint8_t> rgba, int width, int height) {
+Status Renderer::set_terrain_texture(std::span<const uint8_t> rgba, int width, int height) {
     Impl& r = *impl_;
     if (rgba.empty() || width <= 0 || height <= 0) {
         r.has_texture = false;
-        return;
+        return Ok{};
     }
+    const uint64_t expected = uint64_t(width) * uint64_t(height) * 4u;
+    if (rgba.size() != expected)
+        return Error{fmt::format("texture: the pixel buffer has {} bytes; {} x {} RGBA needs {}", rgba.size(), width,
+                                 height, expected)};
+    GLint max_size = 0;
+    glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_size);
+    if (width > max_size || height > max_size)
+        return Error{fmt::format("texture: {} x {} is larger than this OpenGL's GL_MAX_TEXTURE_SIZE ({})", width,
+                                 height, max_size)};
     glBindTexture(GL_TEXTURE_2D, r.terrain_tex);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
     glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, width, height, 0, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
@@ -454,6 +463,7 @@ void Renderer::set_terrain_texture(std::span<const uint8_t> rgba, int width, int
     glBindTexture(GL_TEXTURE_2D, 0);
     r.stats.bytes_uploaded += rgba.size();
     r.has_texture = true;
+    return Ok{};
 }
 
 void Renderer::draw(const Camera& camera, int width, int height, const RenderSettings& s) {

@@ -234,6 +234,23 @@ TEST(Renderer, ReportsGlVersion) {
 
 // ---- camera and picking (no GL needed) ----
 
+TEST(Renderer, TerrainTextureChecksItsBufferAndTheGlLimit) {
+    // Issue 13: the pixel buffer's size and GL_MAX_TEXTURE_SIZE were not checked.
+    REQUIRE_GL();
+    auto r = render::Renderer::create();
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    std::vector<uint8_t> px(4 * 4 * 4, 200);
+    EXPECT_TRUE(r.value()->set_terrain_texture(px, 4, 4).ok());
+    const auto short_buffer = r.value()->set_terrain_texture(std::span(px).first(60), 4, 4);
+    ASSERT_FALSE(short_buffer.ok());
+    EXPECT_NE(short_buffer.error().message.find("needs 64"), std::string::npos) << short_buffer.error().message;
+    std::vector<uint8_t> wide(size_t(4) * 100'000, 1);
+    const auto too_wide = r.value()->set_terrain_texture(wide, 100'000, 1);
+    ASSERT_FALSE(too_wide.ok());
+    EXPECT_NE(too_wide.error().message.find("GL_MAX_TEXTURE_SIZE"), std::string::npos) << too_wide.error().message;
+    EXPECT_TRUE(r.value()->set_terrain_texture({}, 0, 0).ok()) << "empty turns it off";
+}
+
 TEST(Camera, PickingRayHitsTheTerrainUnderTheScreenCentre) {
     auto sim = Simulation::create(small_valley());
     ASSERT_TRUE(sim.ok());

@@ -2,11 +2,17 @@
 
 #include <gtest/gtest.h>
 
+#include <type_traits>
+
 #include <map>
 #include <utility>
 
 namespace mr {
 namespace {
+
+// Issue 13: Simulation's solver and tree hold references into its own terrain.
+static_assert(!std::is_copy_constructible_v<Simulation> && !std::is_move_constructible_v<Simulation> &&
+              !std::is_copy_assignable_v<Simulation> && !std::is_move_assignable_v<Simulation>);
 
 SceneDef paper_full_procedural() {
     SceneDef d = preset("paper-full").value();
