@@ -81,6 +81,7 @@ Result<SceneDef> preset(std::string_view name);
 inline constexpr int kMaxPairsParticles = 20'000;    ///< springs.mode = "pairs" (O(N^2), serial)
 inline constexpr int kMaxDenseFieldBalls = 5'000;    ///< the paper's field kernels (O(balls x samples))
 inline constexpr int kMaxBulletBodies = 200'000;     ///< solver = "bullet"
+inline constexpr int kMaxFieldAxisSamples = 1'000'000;  ///< field.bounds = "terrain": samples along one axis
 
 /// Checks every field against its documented range. The message names the field
 /// ("particles.count: must be in [1, 10000000] (got 0)").

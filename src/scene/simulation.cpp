@@ -138,7 +138,10 @@ Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh)
     if (def_.field.bounds == FieldBounds::Terrain) {
         const Aabb b = terrain_.bounds();
         const float h = 1.0f / def_.field.resolution;
-        const auto samples = [&](float e) { return static_cast<int>(std::ceil(e / h)) + 1; };
+        // In double, clamped: create() refused counts beyond kMaxFieldAxisSamples already.
+        const auto samples = [&](float e) {
+            return static_cast<int>(std::min(std::ceil(double(e) / double(h)) + 1.0, double(kMaxFieldAxisSamples)));
+        };
         sparse_def_.domain = DomainMode::FixedBox;
         sparse_def_.box = SampleGrid{.origin = b.min, .spacing = h, .nx = samples(b.extent().x),
                                      .ny = samples(b.extent().y + 2.0f * def_.field.bounds_offset),
@@ -179,6 +182,17 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, cons
     if (auto v = validate(def); !v) return v.error();
     auto terrain = Terrain::build(map, def.terrain);
     if (!terrain) return terrain.error();
+    if (def.field.bounds == FieldBounds::Terrain) {
+        // The fixed field box spans the terrain: its samples per axis must fit an int
+        // (4096 samples x 1e4 m x 64 per metre would not).
+        const Vec3 e = terrain->bounds().extent() + Vec3(0.0f, 2.0f * def.field.bounds_offset, 0.0f);
+        const double most = double(std::max({e.x, e.y, e.z})) * double(def.field.resolution) + 1.0;
+        if (!(most <= double(kMaxFieldAxisSamples)))
+            return Error{fmt::format("field.resolution: with field.bounds = \"terrain\" the field would have {:.3g} "
+                                     "samples along the terrain's longest side; at most {} (lower field.resolution "
+                                     "or terrain.area_scale, or use field.bounds = \"particles\")",
+                                     most, kMaxFieldAxisSamples)};
+    }
     auto bvh = Bvh::build(terrain.value(), BvhDef{.leaf_triangles = def.collision.leaf_triangles});
     if (!bvh) return bvh.error();
     std::unique_ptr<Simulation> sim(new Simulation(def, std::move(terrain.value()), std::move(bvh.value())));

@@ -105,3 +105,29 @@ TEST(Simulation, BadScenesAreErrorsNotCrashes) {
 
 }  // namespace
 }  // namespace mr
+
+namespace mr {
+namespace {
+
+TEST(Simulation, ATerrainFieldBoxTooLargeForAnIntIsRefusedNamingTheKey) {
+    // Issue 13: the fixed field box's samples per axis were computed in int: 4096 samples
+    // x 1e4 m x 64 per metre = 2.6e9 overflowed.
+    SceneDef d = default_scene();
+    d.surface = true;
+    d.field.kernel = FieldKernel::Poly6;
+    d.field.bounds = FieldBounds::Terrain;
+    d.field.resolution = 64.0f;
+    d.terrain.area_scale = 1e4f;
+    d.spawn.auto_center = false;
+    d.spawn.center = Vec3(1e4f, 30.0f, 5e3f);
+    d.spawn.half_extent = Vec3(1.0f);
+    d.sink.kind = SinkKind::None;
+    auto sim = Simulation::create(d, flat_heightmap(4097, 2));
+    ASSERT_FALSE(sim.ok());
+    EXPECT_NE(sim.error().message.find("field.resolution"), std::string::npos) << sim.error().message;
+    d.field.resolution = 0.001f;  // 41 samples along x: fine
+    EXPECT_TRUE(Simulation::create(d, flat_heightmap(4097, 2)).ok());
+}
+
+}  // namespace
+}  // namespace mr
