@@ -153,6 +153,36 @@ private:
     std::string error_;
 };
 
+/// Options solver = "bullet" does not use: a key that asks for something it does not
+/// do is an error naming the key; what a Bullet scene would otherwise inherit
+/// from the default river (its flow-rate source, edge sinks and spawn-all-at-once) is
+/// replaced by the paper's engine scene's spawning.
+void apply_solver_scope(const toml::table& root, Reader& r, SceneDef& d) {
+    if (d.solver != SolverKind::Bullet) return;
+    const toml::table* pt = root["particles"].as_table();
+    auto given = [&](const char* key) { return pt && pt->get(key) != nullptr; };
+    if (root.get("pbf")) r.fail("pbf", "only solver = \"pbf\" reads [pbf]");
+    const std::string why = "solver = \"bullet\" does not use it (spheres spawn in the box every "
+                            "particles.spawn_interval frames, collide through Bullet and respawn below or outside the terrain)";
+    if (given("flow_rate") && d.spawn.flow_rate > 0.0f) r.fail("particles.flow_rate", why + "; remove it or set 0");
+    if (given("litres_per_particle") && d.spawn.litres_per_particle > 0.0f) r.fail("particles.litres_per_particle", why);
+    if (given("source_shape") && d.spawn.shape != SourceShape::Box) r.fail("particles.source_shape", why + "; only \"box\"");
+    if (root.get("collision")) r.fail("collision", why + " ([bullet] has its contact settings)");
+    if (const toml::table* st = root["sink"].as_table(); st && d.sink.kind != SinkKind::None)
+        r.fail("sink.kind", why + "; only \"none\"");
+    if (const toml::table* sp = root["springs"].as_table(); sp && sp->get("mode"))
+        r.fail("springs.mode", "solver = \"bullet\" applies the springs itself (bullet.springs); remove springs.mode");
+    // Not inherited from the default river:
+    if (!given("flow_rate")) d.spawn.flow_rate = 0.0f;
+    if (!given("litres_per_particle")) d.spawn.litres_per_particle = 0.0f;
+    if (!given("source_shape")) d.spawn.shape = SourceShape::Box;
+    if (!root.get("sink")) d.sink = SinkDef{};
+    if (!given("spawn_interval")) {
+        auto engine = preset("paper-engine");
+        if (engine) d.spawn.interval = engine->spawn.interval;
+    }
+}
+
 }  // namespace
 
 Result<SceneDef> parse_scene_toml(std::string_view text, const std::string& origin, const SceneDef& base) {
@@ -313,6 +343,7 @@ Result<SceneDef> parse_scene_toml(std::string_view text, const std::string& orig
         r.boolean(*t, p, "sleep", d.bullet.sleep);
         r.boolean(*t, p, "springs", d.bullet.springs);
     }
+    if (!r.failed()) apply_solver_scope(root, r, d);
     if (r.failed()) return Error{r.error()};
     if (d.source.kind == TerrainSource::File && d.source.heightmap.empty())
         return Error{fmt::format("{}: terrain.heightmap: required when terrain.source = \"file\"", origin)};

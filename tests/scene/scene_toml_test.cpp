@@ -226,6 +226,26 @@ TEST(Presets, PaperScenesCarryTheirExactParameters) {
     EXPECT_NE(bad.error().message.find("paper-nile"), std::string::npos) << "lists the known presets";
 }
 
+TEST(SceneToml, OptionsBulletIgnoresAreErrorsAndItDoesNotInheritTheRiversSpawning) {
+    // Issue 13: solver = "bullet" silently ignored flow_rate, source_shape, [sink],
+    // springs.mode and [collision], and inherited the river's 420/s, interval 0 (all
+    // 4000 spheres at frame 0).
+    auto bare = parse("solver = \"bullet\"\n");
+    ASSERT_TRUE(bare.ok()) << bare.error().message;
+    EXPECT_EQ(bare->spawn.flow_rate, 0.0f);
+    EXPECT_EQ(bare->sink.kind, SinkKind::None);
+    EXPECT_EQ(bare->spawn.interval, preset("paper-engine")->spawn.interval);
+    EXPECT_GT(bare->spawn.interval, 0);
+    expect_error("solver = \"bullet\"\n[particles]\nflow_rate = 100.0\n", "particles.flow_rate: solver = \"bullet\" does not use it");
+    expect_error("solver = \"bullet\"\n[particles]\nsource_shape = \"disc\"\n", "particles.source_shape");
+    expect_error("solver = \"bullet\"\n[sink]\nkind = \"edges\"\n", "sink.kind");
+    expect_error("solver = \"bullet\"\n[springs]\nmode = \"grid\"\n", "springs.mode");
+    expect_error("solver = \"bullet\"\n[collision]\nmode = \"robust\"\n", "collision: solver = \"bullet\"");
+    expect_error("solver = \"bullet\"\n[pbf]\nxsph = 0.1\n", "pbf: only solver = \"pbf\"");
+    // What matches what Bullet does is fine (the docs/bullet scenes pin it).
+    EXPECT_TRUE(parse("solver = \"bullet\"\n[particles]\nflow_rate = 0.0\n[sink]\nkind = \"none\"\n").ok());
+}
+
 TEST(SceneToml, BulletTableIsRead) {
     auto r = parse(R"(
 solver = "bullet"
