@@ -227,8 +227,6 @@ public:
 
     /// Places particle i at a random point of the spawn volume with the initial velocity.
     void spawn(size_t i);
-    /// Depth of p below the terrain mesh (> 0 below), or 0 outside the rectangle.
-    float depth_below_surface(const Vec3& p) const;
 
     /// The neighbour grid of the latest step (grid spring mode, PBF).
     const NeighborGrid& grid() const { return grid_; }

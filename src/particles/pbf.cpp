@@ -182,21 +182,19 @@ void ParticleSolver::collide_fluid(size_t i, StepCounts& c) {
 // vertical lift out of a narrow pit or off a spike's flank would fling it.
 bool ParticleSolver::push_out_of_terrain(Vec3& x, const Vec3& fallback) const {
     const float lift = collision_.radius + collision_.offset;
-    // Deeper under the ground than the step moved it: it did not sink through the
-    // surface it was on, it ran into a cliff face between two samples. Lifting it onto
-    // the ground above would launch it up the cliff (tens of m/s): it stops at the face.
-    if (terrain_.contains_xz(x.x, x.z)) {
-        const float deficit = terrain_.height_mesh(x.x, x.z) + lift - x.y;
-        if (deficit > glm::length(x - fallback) + lift) {
-            x = fallback;
-            return true;
-        }
-    }
     bool pushed = false;
     for (int round = 0; round < 3; ++round) {
         if (!terrain_.contains_xz(x.x, x.z)) return pushed;
         const float h = terrain_.height_mesh(x.x, x.z) + lift;
         if (x.y >= h) return pushed;
+        // Deeper under the ground than the step moved it: it did not sink through the
+        // surface it was on, it ran into a cliff face between two samples. Lifting it
+        // onto the ground above would launch it up the cliff (tens of m/s): it stops at
+        // the face.
+        if (round == 0 && h - x.y > glm::length(x - fallback) + lift) {
+            x = fallback;
+            return true;
+        }
         const Vec3 nrm = terrain_.normal_mesh(x.x, x.z);
         x += ((h - x.y) * nrm.y) * nrm;
         pushed = true;

@@ -236,36 +236,26 @@ void ParticleSolver::step_frame(float frame_dt) {
         const size_t pool = particles_.size() - next_to_activate_;
         if (!by_rate && spawn_.interval == 0) emit_credit_ = std::max(emit_credit_, double(pool));
         else if (!by_rate && due) emit_credit_ += 1.0;
-        const float dt = integrator_.fixed_dt > 0.0f ? integrator_.fixed_dt : frame_dt;
-        const int sub = std::max(integrator_.substeps, 1);
-        const float h = dt / static_cast<float>(sub);
         if (frame_ == 0) emit_lattice();
-        for (int s = 0; s < sub; ++s) {
-            step(h);
-            if (by_rate) emit_credit_ += double(emit_rate()) * h;
-            emit_lattice();
-        }
-        ++frame_;
-        return;
-    }
-    if (due && !by_rate) {
+    } else if (due && !by_rate) {
         const size_t n = spawn_.interval == 0 ? particles_.size() : 1;
         for (size_t k = 0; k < n && next_to_activate_ < particles_.size(); ++k) spawn(next_to_activate_++);
     }
     const float dt = integrator_.fixed_dt > 0.0f ? integrator_.fixed_dt : frame_dt;
     const int sub = std::max(integrator_.substeps, 1);
+    const float h = dt / static_cast<float>(sub);
     for (int s = 0; s < sub; ++s) {
         // Emit after the step: particles a sink took out this step are back at once
         // when the rate allows, so the budget stays in the river.
-        step(dt / static_cast<float>(sub));
-        if (by_rate) emit(dt / static_cast<float>(sub));
+        step(h);
+        if (lattice_) {
+            if (by_rate) emit_credit_ += double(emit_rate()) * h;
+            emit_lattice();
+        } else if (by_rate) {
+            emit(h);
+        }
     }
     ++frame_;
-}
-
-float ParticleSolver::depth_below_surface(const Vec3& p) const {
-    if (!terrain_.contains_xz(p.x, p.z)) return 0.0f;
-    return terrain_.height_mesh(p.x, p.z) - p.y;
 }
 
 bool ParticleSolver::out_of_bounds(const Vec3& p) const {

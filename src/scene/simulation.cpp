@@ -4,10 +4,10 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <vector>
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <vector>
 
 namespace mr {
 
@@ -59,19 +59,16 @@ void fit_auto_source(const Terrain& t, SpawnDef& spawn) {
     const float margin = 0.25f * s;
     const Vec3 size = t.bounds().extent();
     Vec3& he = spawn.half_extent;
-    const bool disc = spawn.shape == SourceShape::Disc;
-    const float rx = spawn.shape == SourceShape::Point ? 0.0f : he.x;
-    const float rz = spawn.shape == SourceShape::Point ? 0.0f : (disc ? he.x : he.z);
-    const float fx = std::min(rx, std::max(0.0f, 0.5f * size.x - margin));
-    const float fz = std::min(rz, std::max(0.0f, 0.5f * size.z - margin));
-    if (disc) {
-        he.x = he.z = std::min(fx, fz);  // z too: the edge checks read the box of the disc
-    } else if (spawn.shape == SourceShape::Box) {
-        he.x = fx;
-        he.z = fz;
+    const bool disc = spawn.shape == SourceShape::Disc, point = spawn.shape == SourceShape::Point;
+    // The footprint's half sizes (a disc's radius on both axes), shrunk to the terrain.
+    float ex = point ? 0.0f : he.x, ez = point ? 0.0f : (disc ? he.x : he.z);
+    ex = std::min(ex, std::max(0.0f, 0.5f * size.x - margin));
+    ez = std::min(ez, std::max(0.0f, 0.5f * size.z - margin));
+    if (disc) ex = ez = std::min(ex, ez);
+    if (!point) {
+        he.x = ex;
+        he.z = ez;  // a disc's z too: the edge checks read the box of the disc
     }
-    const float ex = spawn.shape == SourceShape::Point ? 0.0f : he.x;
-    const float ez = spawn.shape == SourceShape::Point ? 0.0f : (disc ? he.x : he.z);
     const float x0 = t.bounds().min.x, z0 = t.bounds().min.z;
     Vec3& c = spawn.center;
     c.x = std::clamp(c.x, x0 + ex + margin, std::max(x0 + ex + margin, x0 + size.x - ex - margin));
@@ -93,7 +90,7 @@ void fit_auto_source(const Terrain& t, SpawnDef& spawn) {
         }
     if (!ground.empty()) {
         std::nth_element(ground.begin(), ground.begin() + ground.size() / 2, ground.end());
-        const float bottom = c.y - (spawn.shape == SourceShape::Point ? 0.0f : he.y);
+        const float bottom = c.y - (point ? 0.0f : he.y);
         float need = ground[ground.size() / 2] + 0.5f;
         // The centre slot's own footprint (a quarter metre around it) is clear too, so
         // even a source on a steep speck of terrain has a slot.
