@@ -34,6 +34,10 @@ struct Particles {
     std::vector<Vec3> force;          ///< accumulated acceleration this step, m/s^2 (unit mass)
     std::vector<uint8_t> active;      ///< 1 once spawned
     std::vector<uint32_t> id;         ///< stable particle id
+    /// Solver frame at the particle's latest emission (spawn, respawn or recycle), so
+    /// exporters can give its age: (frame() - birth_frame) frames. Cold data, moved with
+    /// the particle when the arrays are reordered.
+    std::vector<uint32_t> birth_frame;
 
     size_t size() const { return position.size(); }
     void resize(size_t n);

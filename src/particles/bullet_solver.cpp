@@ -278,6 +278,7 @@ void BulletSolver::Impl::spawn(size_t i) {
     particles.last_position[i] = p;
     particles.velocity[i] = spawn_def.initial_velocity;
     particles.active[i] = 1;
+    particles.birth_frame[i] = static_cast<uint32_t>(frame);
 
     btRigidBody& b = *bodies[i];
     btTransform xf;

@@ -9,6 +9,7 @@ void Particles::resize(size_t n) {
     force.assign(n, Vec3(0.0f));
     active.assign(n, 0);
     id.resize(n);
+    birth_frame.assign(n, 0);
     for (size_t i = 0; i < n; ++i) id[i] = static_cast<uint32_t>(i);
 }
 

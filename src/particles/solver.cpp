@@ -93,6 +93,7 @@ void ParticleSolver::spawn(size_t i) {
     particles_.last_position[i] = p;
     particles_.velocity[i] = spawn_.initial_velocity;
     particles_.active[i] = 1;
+    particles_.birth_frame[i] = static_cast<uint32_t>(frame_);
 }
 
 size_t ParticleSolver::slot_of_id(uint32_t id) const {
@@ -109,6 +110,7 @@ void ParticleSolver::place(std::span<const Vec3> positions) {
         particles_.last_position[i] = q;
         particles_.velocity[i] = spawn_.initial_velocity;
         particles_.active[i] = 1;
+        particles_.birth_frame[i] = static_cast<uint32_t>(frame_);
     }
 }
 
@@ -153,6 +155,7 @@ void ParticleSolver::deactivate(size_t i) {
         std::swap(p.velocity[i], p.velocity[j]);
         std::swap(p.force[i], p.force[j]);
         std::swap(p.id[i], p.id[j]);
+        std::swap(p.birth_frame[i], p.birth_frame[j]);
     }
     p.active[j] = 0;
 }
@@ -220,6 +223,7 @@ void ParticleSolver::emit_lattice() {
         particles_.last_position[i] = q;
         particles_.velocity[i] = spawn_.initial_velocity;
         particles_.active[i] = 1;
+        particles_.birth_frame[i] = static_cast<uint32_t>(frame_);
         ++counters_.emitted;
     }
     emit_credit_ -= double(emit_slots_.size());
@@ -346,6 +350,8 @@ void ParticleSolver::sort_by_cell(float cell) {
     scratch_id_.resize(n);
     for (size_t k = 0; k < n; ++k) scratch_id_[k] = p.id[perm_[k]];
     p.id.swap(scratch_id_);
+    for (size_t k = 0; k < n; ++k) scratch_id_[k] = p.birth_frame[perm_[k]];  // same scratch: no allocation
+    p.birth_frame.swap(scratch_id_);
     // active stays a prefix of the same length: nothing to move.
     grid_.relabel_identity();
 }
