@@ -6,6 +6,8 @@
 #include <metariver/surface.h>
 #include <metariver/terrain.h>
 
+#include <glm/vec2.hpp>
+
 #include <string>
 #include <string_view>
 #include <vector>
@@ -15,9 +17,12 @@ namespace mr {
 /// Writes `contents` to `path` atomically (temporary file in the same folder, then rename).
 Status write_file_atomic(const std::string& path, std::string_view contents);
 
-/// Wavefront OBJ text of an indexed mesh (positions, normals, 1-based faces "f a//a b//b c//c").
+/// Wavefront OBJ text of an indexed mesh: positions, normals and texture coordinates
+/// (each used when it holds one entry per position; vt v is flipped to OBJ's upward v),
+/// 1-based faces ("f a//a b//b c//c", or "f a/a/a ..." with texture coordinates).
 std::string obj_text(std::span<const Vec3> positions, std::span<const Vec3> normals,
-                     std::span<const uint32_t> indices, std::string_view comment);
+                     std::span<const uint32_t> indices, std::string_view comment,
+                     std::span<const glm::vec2> uvs = {});
 Status write_surface_obj(const std::string& path, const SurfaceMesh& mesh, std::string_view comment);
 /// The terrain mesh as OBJ, with per-vertex normals of the bilinear surface.
 Status write_terrain_obj(const std::string& path, const Terrain& terrain);

@@ -26,6 +26,20 @@ inline std::string slurp(const std::filesystem::path& p) {
     return ss.str();
 }
 
+/// Runs `cmd` in a shell, capturing its exit code, stdout and stderr (through files in
+/// `scratch`, removed afterwards).
+inline CliResult run_shell(const std::string& cmd, const std::filesystem::path& scratch) {
+    const std::filesystem::path out = scratch / "stdout.txt", err = scratch / "stderr.txt";
+    const int status = std::system((cmd + " >" + out.string() + " 2>" + err.string()).c_str());
+    CliResult r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = slurp(out);
+    r.err = slurp(err);
+    std::filesystem::remove(out);
+    std::filesystem::remove(err);
+    return r;
+}
+
 class CliFixture : public ::testing::Test {
 protected:
     void SetUp() override {
@@ -39,17 +53,7 @@ protected:
 
     /// Runs `prefix METARIVER_EXE args` in a shell (prefix: environment or `cd DIR &&`).
     CliResult run(const std::string& args, const std::string& prefix = "") {
-        const std::filesystem::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-        const std::string cmd =
-            prefix + " " + std::string(METARIVER_EXE) + " " + args + " >" + out.string() + " 2>" + err.string();
-        const int status = std::system(cmd.c_str());
-        CliResult r;
-        r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-        r.out = slurp(out);
-        r.err = slurp(err);
-        std::filesystem::remove(out);
-        std::filesystem::remove(err);
-        return r;
+        return run_shell(prefix + " " + std::string(METARIVER_EXE) + " " + args, dir_);
     }
 
     std::filesystem::path dir_;
