@@ -1,9 +1,13 @@
 // `metariver render`: headless rendering of a scene to a numbered PNG sequence or an
 // MP4 (raw RGB frames piped to the ffmpeg program). OpenGL 4.5 core on EGL's
-// surfaceless platform (no display), the same renderer as the viewer. Every option is
-// checked before anything is written; a failure part-way removes what this run wrote.
+// surfaceless platform (no display), the same renderer as the viewer; --export writes the
+// rendered frames' water and particles too (docs/export.md). Every option is checked
+// before anything is written; a failure part-way removes what this run wrote.
 #include "commands.h"
+#include "export_options.h"
+#include "progress.h"
 
+#include <metariver/export.h>
 #include <metariver/io.h>
 #include <metariver/render.h>
 
@@ -45,6 +49,7 @@ struct RenderOptions {
     std::string texture;
     std::string stats;
     bool progress = true;
+    ExportOptions exp;  ///< --export DIR --format ... --every N --range A:B (image numbers)
 };
 
 constexpr long long kMaxFrames = 1'000'000;
@@ -102,17 +107,6 @@ bool folder_writable(const fs::path& dir) {
     return true;
 }
 
-/// Draws "[#####.....] 12/60 frames, 3.1 fps" on one terminal line.
-void print_progress(long long done, long long total, double elapsed_s) {
-    constexpr int kWidth = 30;
-    const int filled = static_cast<int>(kWidth * done / std::max(total, 1LL));
-    const double fps = elapsed_s > 0.0 ? static_cast<double>(done) / elapsed_s : 0.0;
-    const double eta = fps > 0.0 ? static_cast<double>(total - done) / fps : 0.0;
-    fmt::print(stderr, "\r[{}{}] {}/{} frames, {:.1f} fps, {:.0f} s left   ", std::string(static_cast<size_t>(filled), '#'),
-               std::string(static_cast<size_t>(kWidth - filled), '.'), done, total, fps, eta);
-    std::fflush(stderr);
-}
-
 int render(const RenderOptions& o) {
     // ---- every input is checked before anything is written ----
     if (o.frames < 1 || o.frames > kMaxFrames)
@@ -153,6 +147,14 @@ int render(const RenderOptions& o) {
     }
     auto def = o.scene.resolve();
     if (!def) return fail(kExitBadInput, def.error().message);
+    std::optional<ExportDef> export_def;
+    if (o.exp.given()) {  // exported frames are the images: water_00042 is frame_00042.png's
+        auto e = o.exp.resolve(o.frames, def.value());
+        if (!e) return fail(kExitBadInput, e.error().message);
+        export_def = std::move(e.value());
+        export_def->frame_rate = 1.0 / (o.dt * double(o.steps));
+        export_def->solver_dt = o.dt;
+    }
 
     const bool mp4 = ends_with_mp4(o.out);
     std::string ffmpeg;
@@ -230,6 +232,21 @@ int render(const RenderOptions& o) {
         }
     }
 
+    std::unique_ptr<Exporter> exporter;  // removes its files unless finish() succeeds
+    if (export_def) {
+        std::signal(SIGXFSZ, SIG_IGN);  // a file size limit: an error from write(), not a kill
+        auto e = Exporter::begin(*export_def);
+        if (!e) {
+            cleanup();
+            return fail(kExitBadInput, e.error().message);
+        }
+        exporter = std::move(e.value());
+        if (auto s = exporter->write_terrain(sim->terrain()); !s) {
+            cleanup();
+            return fail(kExitFailure, s.error().message);
+        }
+    }
+
     if (texture) {
         if (auto s = renderer.set_terrain_texture(texture->pixels, texture->width, texture->height); !s) {
             cleanup();
@@ -250,7 +267,7 @@ int render(const RenderOptions& o) {
     for (long long i = 0; i < o.warmup; ++i) sim->step(dt);
     renderer.set_scene(*sim);
 
-    const bool show_progress = o.progress && isatty(STDERR_FILENO) && o.frames >= 10;
+    const bool show_progress = progress_wanted(o.progress, o.frames);
     const int digits = std::max(5, static_cast<int>(std::to_string(o.frames - 1).size()));
     std::vector<double> sim_ms, render_ms, write_ms;
     std::vector<uint8_t> rgb;
@@ -273,22 +290,30 @@ int render(const RenderOptions& o) {
         if (mp4) {
             if (std::fwrite(rgb.data(), 1, rgb.size(), pipe) != rgb.size()) {
                 cleanup();
-                if (show_progress) fmt::print(stderr, "\n");
+                if (show_progress) end_progress();
                 return fail(kExitFailure, fmt::format("--out {}: ffmpeg stopped accepting frames", o.out));
             }
         } else {
             const std::string path = (fs::path(o.out) / fmt::format("frame_{:0{}}.png", f, digits)).string();
             if (auto s = render::write_png(path, rgb, width, height, 3); !s) {
                 cleanup();
-                if (show_progress) fmt::print(stderr, "\n");
+                if (show_progress) end_progress();
                 return fail(kExitFailure, s.error().message);
             }
             written.push_back(path);
         }
+        if (exporter && exporter->due(f)) {
+            const double time_s = double(o.warmup + (f + 1) * o.steps) * o.dt;
+            if (auto s = exporter->write_frame(f, time_s, sim->surface(), sim->particles(), sim->frame()); !s) {
+                cleanup();
+                if (show_progress) end_progress();
+                return fail(kExitFailure, s.error().message);
+            }
+        }
         write_ms.push_back(ms_since(t0));
         if (show_progress) print_progress(f + 1, o.frames, ms_since(t_start) / 1000.0);
     }
-    if (show_progress) fmt::print(stderr, "\n");
+    if (show_progress) end_progress();
     if (mp4) {
         const int status = pclose(pipe);
         pipe = nullptr;
@@ -326,6 +351,15 @@ int render(const RenderOptions& o) {
             return fail(kExitFailure, s.error().message);
         }
     }
+    if (exporter) {  // the manifest last: once it is there, the export is complete
+        if (auto s = exporter->finish(); !s) {
+            cleanup();
+            std::error_code ec;
+            if (mp4) fs::remove(o.out, ec);
+            if (!o.stats.empty()) fs::remove(o.stats, ec);
+            return fail(kExitFailure, s.error().message);
+        }
+    }
     fmt::print("{}: {} frames {}x{} in {:.1f} s; per frame median: render {:.2f} ms (draw + read back), "
                "simulate {:.2f} ms, write {:.2f} ms; water {} triangles; {}\n",
                sim->def().name, o.frames, width, height, total_s, pr.median, ps.median, pw.median,
@@ -333,6 +367,7 @@ int render(const RenderOptions& o) {
     if (mp4) fmt::print("wrote {}\n", o.out);
     else fmt::print("wrote {} PNG frames to {} (frame_{:0{}}.png .. frame_{:0{}}.png)\n", written.size(), o.out, 0, digits,
                     o.frames - 1, digits);
+    if (exporter) print_export_summary(*exporter);
     if (!o.stats.empty()) fmt::print("wrote stats to {}\n", o.stats);
     return kExitOk;
 }
@@ -360,6 +395,7 @@ void register_render(CLI::App& app, std::function<int()>& action) {
     cmd->add_option("--texture", opts->texture, "image draped over the terrain (PNG/JPEG)");
     cmd->add_option("--stats", opts->stats, "write render timings as JSON to this file");
     cmd->add_flag("!--no-progress", opts->progress, "no progress bar");
+    opts->exp.add_to(*cmd);
     cmd->callback([opts, &action] { action = [opts] { return render(*opts); }; });
 }
 

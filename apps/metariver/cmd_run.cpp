@@ -1,14 +1,21 @@
-// `metariver run`: headless simulation of a scene for N frames; optional OBJ export of
-// every N-th frame and a JSON stats file. Deterministic for a seed. All inputs are checked
-// before anything is written; a failure part-way removes what this run wrote.
+// `metariver run`: headless simulation of a scene for N frames; optional export of the
+// water and particles (--export: obj, ply, glb, vdb; docs/export.md), the earlier
+// water-only OBJ sequence (--obj-dir) and a JSON stats file. Deterministic for a seed.
+// All inputs are checked before anything is written; a failure part-way removes what
+// this run wrote.
 #include "commands.h"
+#include "export_options.h"
+#include "progress.h"
 
+#include <metariver/export.h>
 #include <metariver/io.h>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <chrono>
 #include <cmath>
+#include <csignal>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -27,6 +34,8 @@ struct RunOptions {
     std::string stats;
     std::string obj_dir;
     std::optional<long long> obj_every;  ///< --obj-every; unset = every frame
+    ExportOptions exp;                   ///< --export DIR --format ... --every N --range A:B
+    bool progress = true;                ///< --no-progress: no bar on a terminal
 };
 
 constexpr long long kMaxFrames = 100'000'000;
@@ -83,6 +92,14 @@ int run(const RunOptions& o) {
     const long long obj_every = o.obj_every.value_or(1);
     auto def = o.scene.resolve();
     if (!def) return fail(kExitBadInput, def.error().message);
+    std::optional<ExportDef> export_def;
+    if (o.exp.given()) {
+        auto e = o.exp.resolve(o.frames, def.value());
+        if (!e) return fail(kExitBadInput, e.error().message);
+        export_def = std::move(e.value());
+        export_def->frame_rate = 1.0 / o.dt;
+        export_def->solver_dt = o.dt;
+    }
 
     auto sim_result = Simulation::create(def.value());
     if (!sim_result) return fail(kExitBadInput, sim_result.error().message);
@@ -123,6 +140,24 @@ int run(const RunOptions& o) {
             return fail(kExitBadInput, s.error().message);
         }
     }
+    // The export: its folder now (bad input), the terrain once; if the run fails, every
+    // file it wrote goes (the Exporter removes them unless finish() succeeded).
+    std::unique_ptr<Exporter> exporter;
+    if (export_def) {
+        std::signal(SIGXFSZ, SIG_IGN);  // a file size limit: an error from write(), not a kill
+        auto e = Exporter::begin(*export_def);
+        if (!e) {
+            cleanup();
+            return fail(kExitBadInput, e.error().message);
+        }
+        exporter = std::move(e.value());
+        if (auto s = exporter->write_terrain(sim.terrain()); !s) {
+            cleanup();
+            return fail(kExitFailure, s.error().message);
+        }
+    }
+    const bool show_progress = progress_wanted(o.progress, o.frames);
+    const auto t_start = std::chrono::steady_clock::now();
 
     // Stage times: every frame up to kMaxTimingSamples, then every 2nd, 4th, ... frame
     // (the kept samples are halved each time the limit is reached), so memory stays
@@ -177,12 +212,24 @@ int run(const RunOptions& o) {
         if (!o.obj_dir.empty() && (f % obj_every == 0 || f == o.frames - 1)) {
             const std::string path = (fs::path(o.obj_dir) / fmt::format("surface_{:0{}}.obj", f, digits)).string();
             if (auto s = write_surface_obj(path, sim.surface(), fmt::format("metariver water surface, frame {}", f)); !s) {
+                if (show_progress) end_progress();
                 cleanup();
                 return fail(kExitFailure, s.error().message);
             }
             written.push_back(path);
         }
+        if (exporter && exporter->due(f)) {
+            if (auto s = exporter->write_frame(f, double(f + 1) * o.dt, sim.surface(), sim.particles(), sim.frame()); !s) {
+                if (show_progress) end_progress();
+                cleanup();
+                return fail(kExitFailure, s.error().message);
+            }
+        }
+        if (show_progress)
+            print_progress(f + 1, o.frames,
+                           std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count());
     }
+    if (show_progress) end_progress();
 
     const SolverCounters& c = sim.counters();
     const SceneDef& d = sim.def();
@@ -256,6 +303,14 @@ int run(const RunOptions& o) {
             return fail(kExitFailure, s.error().message);
         }
     }
+    if (exporter) {  // the manifest last: once it is there, the export is complete
+        if (auto s = exporter->finish(); !s) {
+            cleanup();
+            std::error_code ec;
+            if (!o.stats.empty()) fs::remove(o.stats, ec);
+            return fail(kExitFailure, s.error().message);
+        }
+    }
     const Percentiles tot = percentiles(total_ms);
     fmt::print("{}: {} frames, {}/{} particles active, surface {} triangles / {} vertices, "
                "tunneled {}, guarded {}, respawned {}, outflow {:.1f}/s ({}), main outlet {:.1f}/s = {:.2f} of "
@@ -267,6 +322,7 @@ int run(const RunOptions& o) {
                os.main.first_s, 100.0 * coverage, 100.0 * (wet_n ? wet_sum / double(wet_n) : 0.0), 100.0 * spray,
                final_speed.p95, tot.median, tot.p95);
     if (!o.obj_dir.empty()) fmt::print("wrote {} OBJ files to {}\n", written.size(), o.obj_dir);
+    if (exporter) print_export_summary(*exporter);
     if (!o.stats.empty()) fmt::print("wrote stats to {}\n", o.stats);
     return kExitOk;
 }
@@ -283,6 +339,8 @@ void register_run(CLI::App& app, std::function<int()>& action) {
     cmd->add_option("--obj-dir", opts->obj_dir, "write the water surface (and the terrain) as OBJ to this folder");
     cmd->add_option("--obj-every", opts->obj_every,
                     "with --obj-dir: write every N-th frame's surface (0, N, 2N, ... and the last), [1, 1e9]; default 1");
+    opts->exp.add_to(*cmd);
+    cmd->add_flag("!--no-progress", opts->progress, "no progress bar (it is shown on a terminal only)");
     cmd->callback([opts, &action] { action = [opts] { return run(*opts); }; });
 }
 
