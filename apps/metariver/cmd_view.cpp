@@ -2,10 +2,13 @@
 // ImGui: orbit / pan / zoom, pause / step / reset, every scene parameter editable live
 // (the Simulation is rebuilt from the edited SceneDef; the heightmap is reloaded only
 // when the terrain changed), click on the terrain to pour water, drop a heightmap file
-// on the window to load it, a screenshot key, and a stats overlay. The simulation runs
-// at a fixed time step, decoupled from the display rate.
+// on the window to load it, a screenshot key, a Record button that exports the frames
+// (docs/export.md), and a stats overlay. The simulation runs at a fixed time step,
+// decoupled from the display rate.
 #include "commands.h"
+#include "export_options.h"
 
+#include <metariver/export.h>
 #include <metariver/io.h>
 #include <metariver/render.h>
 
@@ -46,6 +49,47 @@ struct ViewOptions {
     bool paused = false;
     bool particles = false;
     std::optional<int> bvh_level;
+    ExportOptions exp;    ///< Record (E): --export DIR (default metariver_export) --format ...
+    bool record = false;  ///< --record: start recording at once
+};
+
+/// Frame numbers a recording may reach (its --range is checked against them).
+constexpr long long kMaxRecordFrames = 1'000'000'000;
+
+/// A recording in the viewer: an export session fed every simulation step while it runs,
+/// frame numbers counted from its start.
+struct Recording {
+    std::unique_ptr<Exporter> exporter;
+    long long next_frame = 0;
+
+    bool on() const { return exporter != nullptr; }
+    /// Starts an export session (folder, terrain); the message says what happened.
+    std::string start(const ExportDef& def, const Simulation& sim) {
+        auto e = Exporter::begin(def);
+        if (!e) return e.error().message;
+        if (auto s = e.value()->write_terrain(sim.terrain()); !s) return s.error().message;
+        exporter = std::move(e.value());
+        next_frame = 0;
+        return fmt::format("recording to {}", def.dir);
+    }
+    /// Writes the step just taken when it is due; an error ends the recording (its files go).
+    std::string step(const Simulation& sim, double dt) {
+        const long long f = next_frame++;
+        if (!exporter->due(f)) return {};
+        if (auto s = exporter->write_frame(f, double(f + 1) * dt, sim.surface(), sim.particles(), sim.frame()); !s) {
+            exporter.reset();
+            return s.error().message;
+        }
+        return {};
+    }
+    /// Writes the manifest; the files stay.
+    std::string stop() {
+        if (!exporter) return {};
+        std::string message = fmt::format("exported {} frames to {}", exporter->frames().size(), exporter->def().dir);
+        if (auto s = exporter->finish(); !s) message = s.error().message;
+        exporter.reset();
+        return message;
+    }
 };
 
 int fail(int code, const std::string& message) {
@@ -231,6 +275,15 @@ int view(const ViewOptions& o) {
     auto resolved = o.scene.resolve();
     if (!resolved) return fail(kExitBadInput, resolved.error().message);
     SceneDef def = resolved.value();  // the scene as the user describes it (auto centre kept)
+    // What Record writes: the export options, checked now; without --export, the folder
+    // metariver_export (and the default format).
+    ExportOptions exp = o.exp;
+    if (!exp.enabled()) exp.dir = "metariver_export";
+    auto record_def = exp.resolve(kMaxRecordFrames, def);
+    if (!record_def) return fail(kExitBadInput, record_def.error().message);
+    record_def->frame_rate = 1.0 / o.dt;
+    record_def->solver_dt = o.dt;
+    record_def->digits = 5;
     auto map_result = load_scene_heightmap(def);
     if (!map_result) return fail(kExitBadInput, map_result.error().message);
     Heightmap map = std::move(map_result.value());
@@ -324,6 +377,8 @@ int view(const ViewOptions& o) {
             uint64_t steps_total = 0, steps_dropped = 0;
             int steps_this_frame = 0;
             bool want_screenshot = false;
+            Recording recording;
+            bool toggle_recording = o.record;
             std::deque<double> recent_ms;   // for the fps readout
             std::vector<double> frame_ms;   // every frame, for the summary
             double press_x = 0, press_y = 0;
@@ -332,6 +387,7 @@ int view(const ViewOptions& o) {
 
             // Rebuilds the Simulation from `next` (terrain and heightmap only if they changed).
             auto apply = [&](const SceneDef& next) -> bool {
+                if (recording.on()) status = recording.stop();  // a new simulation: the recording ends
                 if (auto v = validate(next); !v) {
                     error = v.error().message;
                     return false;
@@ -361,9 +417,28 @@ int view(const ViewOptions& o) {
                 return true;
             };
 
+            // Exports the step just taken (Record); an error ends the recording, on screen.
+            auto record_step = [&] {
+                if (std::string e = recording.step(*sim, sim_dt); !e.empty()) {
+                    error = e;
+                    fmt::print(stderr, "metariver view: {}\n", e);
+                }
+            };
+
             auto t_last = std::chrono::steady_clock::now();
             for (long long frame = 0; !glfwWindowShouldClose(window); ++frame) {
                 glfwPollEvents();
+                if (toggle_recording) {  // before this frame's steps, so they are recorded
+                    toggle_recording = false;
+                    if (recording.on()) {
+                        status = recording.stop();
+                    } else {
+                        record_def->solver_dt = sim_dt;
+                        record_def->frame_rate = 1.0 / double(sim_dt);
+                        status = recording.start(*record_def, *sim);
+                    }
+                    fmt::print("{}\n", status);
+                }
                 const auto now = std::chrono::steady_clock::now();
                 const double elapsed = std::chrono::duration<double>(now - t_last).count();
                 t_last = now;
@@ -380,6 +455,7 @@ int view(const ViewOptions& o) {
                     accumulator += std::min(elapsed, 0.25);
                     while (accumulator >= sim_dt && steps_this_frame < max_steps) {
                         sim->step(sim_dt);
+                        if (recording.on()) record_step();
                         accumulator -= sim_dt;
                         ++steps_this_frame;
                     }
@@ -389,6 +465,7 @@ int view(const ViewOptions& o) {
                     }
                 } else if (step_once) {
                     sim->step(sim_dt);
+                    if (recording.on()) record_step();
                     ++steps_this_frame;
                 }
                 step_once = false;
@@ -449,6 +526,7 @@ int view(const ViewOptions& o) {
                             case GLFW_KEY_R: apply(def); break;
                             case GLFW_KEY_F12:
                             case GLFW_KEY_P: want_screenshot = true; break;
+                            case GLFW_KEY_E: toggle_recording = true; break;
                             case GLFW_KEY_F: camera = render::frame_terrain(sim->terrain()); break;
                             case GLFW_KEY_G:
                                 settings.shading = settings.shading == render::WaterShading::Gouraud
@@ -494,6 +572,13 @@ int view(const ViewOptions& o) {
                 if (ImGui::Button("Reset (R)")) apply(def);
                 ImGui::SameLine();
                 if (ImGui::Button("Shot (P)")) want_screenshot = true;
+                if (ImGui::Button(recording.on() ? "Stop recording (E)" : "Record (E)")) toggle_recording = true;
+                ImGui::SameLine();
+                if (recording.on())
+                    ImGui::TextColored(ImVec4(1.0f, 0.35f, 0.3f, 1.0f), "REC %zu frames -> %s", recording.exporter->frames().size(),
+                                       record_def->dir.c_str());
+                else
+                    ImGui::TextDisabled("exports to %s", record_def->dir.c_str());
                 ImGui::DragFloat("sim step (s)", &sim_dt, 0.0005f, 0.001f, 0.1f, "%.4f", ImGuiSliderFlags_AlwaysClamp);
                 ImGui::DragInt("max steps/frame", &max_steps, 0.1f, 1, 64, "%d", ImGuiSliderFlags_AlwaysClamp);
                 ImGui::DragInt("pour count", &pour_count, 0.5f, 1, 10000, "%d", ImGuiSliderFlags_AlwaysClamp);
@@ -580,6 +665,7 @@ int view(const ViewOptions& o) {
                 glfwSwapBuffers(window);
                 if (last) glfwSetWindowShouldClose(window, GLFW_TRUE);
             }
+            if (recording.on()) fmt::print("{}\n", recording.stop());
             const Percentiles p = percentiles(frame_ms);
             fmt::print("view: {} display frames, frame time median {:.2f} ms ({:.1f} fps), p95 {:.2f} ms; "
                        "{} simulation steps of {:.4f} s; {}\n",
@@ -612,6 +698,8 @@ void register_view(CLI::App& app, std::function<int()>& action) {
     cmd->add_flag("--paused", opts->paused, "start paused");
     cmd->add_flag("--particles", opts->particles, "debug: draw the particles as spheres");
     cmd->add_option("--bvh", opts->bvh_level, "debug: draw the AABB tree's boxes at this depth (-1: the leaves)");
+    opts->exp.add_to(*cmd);  // what Record (E) writes; frame numbers count from the start of a recording
+    cmd->add_flag("--record", opts->record, "start recording (the export options) at once; it stops when the window closes");
     cmd->callback([opts, &action] { action = [opts] { return view(*opts); }; });
 }
 

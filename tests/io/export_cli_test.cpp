@@ -141,5 +141,30 @@ TEST_F(ExportCli, RenderExportsTheWaterOfEveryImage) {
                "--range: expected FIRST:LAST frame numbers with 0 <= FIRST <= LAST <= 2");
 }
 
+TEST_F(ExportCli, TheViewersRecordExportsEveryStepWhileItRuns) {
+    const std::string xvfb = test::find_program("xvfb-run");
+    if (xvfb.empty()) GTEST_SKIP() << "xvfb-run is not installed (apt-get install xvfb): the viewer's Record not run";
+    const fs::path out = dir_ / "rec";
+    const CliResult r = run("view --preset paper-bowl --frames 8 --record --export " + out.string() + " --format ply",
+                            "XDG_RUNTIME_DIR=/tmp " + xvfb + " -a -s '-screen 0 1024x768x24'");
+    if (r.code != 0 && r.err.find("cannot") != std::string::npos) GTEST_SKIP() << "no OpenGL 4.5 window here: " << r.err;
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("recording to " + out.string()), std::string::npos) << r.out;
+    const auto j = nlohmann::json::parse(test::slurp(out / "export.json"));
+    const size_t frames = j["frame_files"].size();
+    EXPECT_GE(frames, 1u) << "the simulation steps at least once in 8 display frames";
+    EXPECT_NE(r.out.find(fmt::format("exported {} frames to {}", frames, out.string())), std::string::npos) << r.out;
+    // Frames count from the start of the recording, one per simulation step.
+    for (size_t k = 0; k < frames; ++k) {
+        EXPECT_EQ(j["frame_files"][k]["frame"].get<size_t>(), k);
+        EXPECT_TRUE(fs::exists(out / fmt::format("water_{:05}.ply", k)));
+    }
+    const CliResult bad = run("view --preset paper-bowl --frames 2 --format stl",
+                              "XDG_RUNTIME_DIR=/tmp " + xvfb + " -a -s '-screen 0 1024x768x24'");
+    EXPECT_EQ(bad.code, 2) << bad.err;
+    EXPECT_NE(bad.err.find("--format: unknown format 'stl'"), std::string::npos) << bad.err;
+    EXPECT_FALSE(fs::exists("metariver_export")) << "nothing recorded";
+}
+
 }  // namespace
 }  // namespace mr
