@@ -2,10 +2,12 @@
 // the installed peers on the same workloads in the same run, side by side.
 // Scenarios: the paper's scenes (own physics, as the paper), the default river at
 // 1k/10k/50k/100k particles (fast pipeline), W1 and W2 exactly as
-// ../shared/peers/README.md defines them. Medians and p95 over measured frames.
+// ../shared/peers/README.md defines them, and the export of the default river in each
+// format (docs/export.md). Medians and p95 over measured frames.
 #include "commands.h"
 #include "bench_peers.h"
 
+#include <metariver/export.h>
 #include <metariver/io.h>
 #include <metariver/sparse_field.h>
 #include <metariver/surface.h>
@@ -24,6 +26,7 @@
 #include <memory>
 #include <sstream>
 #include <thread>
+#include <unistd.h>
 
 namespace mr::app {
 
@@ -233,6 +236,51 @@ ScenarioResult bench_w2(int n) {
     return r;
 }
 
+/// Export cost by format: the default river (or `particles` of it) after `warmup` frames,
+/// then every frame written in every format (water + particles, encode + write) into a
+/// temporary folder that the unfinished export removes again. Stages: ms per frame by
+/// format; quality: MB per frame by format.
+ScenarioResult bench_export(int particles, int warmup, int frames) {
+    ScenarioResult r;
+    r.name = "export (default river)";
+    SceneDef def = default_scene();
+    if (particles) def.spawn.count = particles;
+    auto sim = Simulation::create(def);
+    if (!sim) {
+        r.note = "skipped: " + sim.error().message;
+        return r;
+    }
+    Simulation& s = *sim.value();
+    const fs::path dir = fs::temp_directory_path() / fmt::format("metariver-bench-export-{}", ::getpid());
+    auto e = Exporter::begin(ExportDef{.dir = dir.string(),
+                                       .formats = {kExportFormats.begin(), kExportFormats.end()},
+                                       .voxel_size = 1.0f / def.field.resolution,
+                                       .scene = def.name});
+    if (!e) {
+        r.note = "skipped: " + e.error().message;
+        return r;
+    }
+    for (int f = 0; f < warmup; ++f) s.step(1.0f / 60.0f);
+    for (int f = 0; f < frames; ++f) {
+        s.step(1.0f / 60.0f);
+        if (auto st = e.value()->write_frame(f, double(warmup + f + 1) / 60.0, s.surface(), s.particles(), s.frame()); !st) {
+            r.note = "failed: " + st.error().message;
+            return r;
+        }
+    }
+    json bytes = json::object();
+    for (const ExportFormatStats& st : e.value()->stats()) {
+        for (double ms : st.ms) r.sample(std::string(to_string(st.format)), ms);
+        bytes[std::string(to_string(st.format))] = double(st.bytes) / double(std::max(frames, 1)) / 1e6;
+    }
+    r.particles = s.particles().active_count();
+    r.triangles = s.surface().triangle_count();
+    r.params = {{"scene", def.name}, {"particles", def.spawn.count}, {"warmup", warmup}, {"frames", frames},
+                {"voxel_size", 1.0 / def.field.resolution}};
+    r.quality = {{"mb_per_frame", bytes}};
+    return r;  // the export is not finished: its files go with it
+}
+
 // --- output ----------------------------------------------------------------------
 
 json result_json(const ScenarioResult& r, int threads) {
@@ -278,9 +326,9 @@ int run_bench(const BenchOptions& o) {
         fmt::print(stderr, "metariver bench: --threads: must be in [0, 256] (got {})\n", o.threads);
         return kExitBadInput;
     }
-    const std::vector<std::string> known = {"paper", "river", "w1", "w2"};
+    const std::vector<std::string> known = {"paper", "river", "w1", "w2", "export"};
     if (!o.scenario.empty() && std::find(known.begin(), known.end(), o.scenario) == known.end()) {
-        fmt::print(stderr, "metariver bench: --scenario: must be one of paper, river, w1, w2 (got '{}')\n", o.scenario);
+        fmt::print(stderr, "metariver bench: --scenario: must be one of paper, river, w1, w2, export (got '{}')\n", o.scenario);
         return kExitBadInput;
     }
     if (o.balls < 0 || o.balls > 10'000'000 || o.res < 0 || (o.res != 0 && o.res < 2) || o.res > 1024) {
@@ -356,6 +404,8 @@ int run_bench(const BenchOptions& o) {
         peer_request.w2_sizes = sizes;
     }
 
+    if (want("export")) results.push_back(bench_export(o.particles, 600, frames ? frames : 30));
+
     print_table(results);
     json peers_json;
     if (o.peers) {  // bench_peers.cpp: run the installed peers on the same sizes, print side by side
@@ -395,11 +445,11 @@ int run_bench(const BenchOptions& o) {
 void register_bench(CLI::App& app, std::function<int()>& action) {
     auto o = std::make_shared<BenchOptions>();
     CLI::App* cmd = app.add_subcommand("bench", "time every stage on the project's workloads (and peers with --peers)");
-    cmd->add_option("--scenario", o->scenario, "one of paper, river, w1, w2 (default: all)");
+    cmd->add_option("--scenario", o->scenario, "one of paper, river, w1, w2, export (default: all)");
     cmd->add_option("--balls", o->balls, "W1: number of balls");
     cmd->add_option("--res", o->res, "W1: samples per axis");
     cmd->add_option("--spheres", o->spheres, "W2: number of spheres");
-    cmd->add_option("--particles", o->particles, "river: number of particles");
+    cmd->add_option("--particles", o->particles, "river, export: number of particles");
     cmd->add_option("--frames", o->frames, "measured frames per scenario (default: per scenario)");
     cmd->add_option("--threads", o->threads, "worker threads (default: all cores)");
     cmd->add_option("--json", o->json_path, "write the results as JSON");

@@ -76,6 +76,24 @@ TEST_F(Bench, RiverQualityHasGuardedSprayAndFinalSpeed) {
     EXPECT_NE(r.out.find("\"guarded\""), std::string::npos) << "the table shows it too";
 }
 
+// Export cost by format (issue 15): a stage per format, the bytes beside.
+TEST_F(Bench, ExportTimesEveryFormatWithItsSize) {
+    const fs::path out = dir_ / "bench.json";
+    const BenchRun r = run("--scenario export --particles 300 --frames 2 --json " + out.string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    const json res = json::parse(slurp(out))["results"][0];
+    ASSERT_FALSE(res.contains("note")) << res.dump();
+    EXPECT_GT(res["particles"].get<int>(), 0);
+    for (const char* format : {"obj", "ply", "glb", "vdb"}) {
+        ASSERT_TRUE(res["stages"].contains(format)) << format << " in " << res["stages"].dump();
+        EXPECT_EQ(res["stages"][format]["samples"].get<int>(), 2) << format;
+        EXPECT_GT(res["stages"][format]["median_ms"].get<double>(), 0.0) << format;
+        EXPECT_GT(res["quality"]["mb_per_frame"][format].get<double>(), 0.0) << format;
+    }
+    // Text OBJ is larger than the binary PLY of the same mesh and points.
+    EXPECT_GT(res["quality"]["mb_per_frame"]["obj"].get<double>(), res["quality"]["mb_per_frame"]["ply"].get<double>());
+}
+
 TEST_F(Bench, BadOptionsExitTwoWithOneLine) {
     expect_bad("--scenario nope", "--scenario");
     expect_bad("--balls -1", "--balls");
