@@ -13,7 +13,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 MODE=${1:?usage: map_table.sh sound|river [FRAMES] [OUT_DIR]}
 case "$MODE" in sound) DEFAULT_FRAMES=1800 ;; river) DEFAULT_FRAMES=7200 ;; *) echo "mode: sound or river" >&2; exit 2 ;; esac
-B=build/default/apps/metariver
+B=${METARIVER:-build/default/apps/metariver}  # METARIVER=path: another build
 FRAMES=${2:-$DEFAULT_FRAMES}
 OUT=${3:-out/${MODE}_table}
 SHARED=../shared/heightmaps
@@ -43,15 +43,21 @@ else
   echo "| map | size | area scale m | active | channel coverage | outflow / inflow | steady | time to outlet s | spray | tunneled | guarded | frame ms |"
   echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
 fi
+# NO_SURFACE=1: the default scene with surface = false (the same physics, no field or
+# mesh: the frame ms column is then the simulation alone).
+BASE=()
+if [ "${NO_SURFACE:-0}" = 1 ]; then printf 'surface = false\n' > "$OUT/no_surface.toml"; BASE=(--scene "$OUT/no_surface.toml"); fi
 run_map() {  # name, extra args...
   local name=$1; shift
+  if [ ${#BASE[@]} -gt 0 ] && [[ " $* " != *" --scene "* ]]; then set -- "${BASE[@]}" "$@"; fi
   local s="$OUT/$(echo "$name" | tr '/ ,' '___').json"
   "$B" run --frames "$FRAMES" --stats "$s" "$@" >/dev/null 2>"$OUT/last_stderr.txt" || { echo "| $name | failed: $(tail -1 "$OUT/last_stderr.txt") |"; return; }
   row "$name" "$s"
 }
 run_map "valley (default scene)"
 for src in strict bowl flat; do
-  printf 'name = "%s"\n[terrain]\nsource = "%s"\n' "$src" "$src" > "$OUT/$src.toml"
+  printf 'name = "%s"\n%s[terrain]\nsource = "%s"\n' "$src" "$([ "${NO_SURFACE:-0}" = 1 ] && echo 'surface = false
+')" "$src" > "$OUT/$src.toml"
   run_map "procedural $src" --scene "$OUT/$src.toml"
 done
 for f in "$OUT"/maps/spikes.png "$OUT"/maps/cliffs.png "$OUT"/maps/random_*.png; do run_map "$(basename "$f")" --heightmap "$f"; done

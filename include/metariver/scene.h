@@ -98,6 +98,14 @@ Result<SceneDef> load_scene_file(const std::string& path);
 /// Checks a scene against its terrain (source inside the terrain's rectangle, sinks
 /// that do not swallow the source); the message names the field.
 Status validate_on_terrain(const SceneDef& def, const Terrain& terrain);
+
+/// terrain.condition with Auto resolved: Carve for a PBF river (a continuous source,
+/// sink = edges), None for everything else (a still pool keeps its basin).
+TerrainCondition resolved_condition(const SceneDef& def);
+/// The carved channel's cross-section for a scene (condition Carve): a flat bed
+/// max(3 samples, 4 pbf.spacing) wide, walls max(1.5 samples, 2 pbf.spacing) wide on
+/// each side, the bed 2 pbf.spacing deep.
+CarveDef carve_def(const SceneDef& def, float area_scale);
 /// Non-fatal advice about a valid scene (e.g. a flow rate the particle budget cannot
 /// sustain for long), one line each, naming the field.
 std::vector<std::string> scene_warnings(const SceneDef& def);
@@ -140,10 +148,11 @@ private:
 };
 
 /// Outflow per outlet (issue 10): each exit position a solver reports (Solver::last_exits)
-/// goes to the nearest of the terrain's outlets (ChannelMap::outlets(), plus the main
-/// channel's outlet cell if it is not one of them): the exit projected onto the terrain's
-/// rectangle, within max(3 samples, 3 m) of the outlet cell's centre; else to "other"
-/// (spray over an edge, ...).
+/// goes to an outlet (ChannelMap::outlets(), plus the main channel's outlet cell if it is
+/// not one of them): the exit projected onto the terrain's rectangle, within max(3
+/// samples, 3 m) of the outlet cell's centre: the main outlet when it is within that
+/// radius (a river's mouth spans several outlet cells), else the nearest; else to
+/// "other" (spray over an edge, ...).
 class OutletMeter {
 public:
     struct Outlet {

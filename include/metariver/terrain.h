@@ -9,6 +9,7 @@
 
 #include <metariver/core.h>
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -39,6 +40,12 @@ inline constexpr int kMaxHeightmapSide = 4097;
 Result<Heightmap> load_heightmap_png(const std::string& path);
 /// The same from bytes in memory; `name` is used in error messages.
 Result<Heightmap> load_heightmap_png_memory(std::span<const uint8_t> bytes, const std::string& name);
+/// A PNG's structure, checked before any decoder sees it: the signature, every chunk's
+/// length within the bytes, the CRC of every critical chunk, IHDR first, up to IEND.
+/// Returns IHDR's width and height; errors (truncated, corrupt) name `name`. The heightmap
+/// and the image loader run it (stb_image alone takes a file cut inside IEND, and
+/// allocates what a chunk's length field claims before reading it).
+Result<std::array<uint32_t, 2>> check_png_structure(std::span<const uint8_t> bytes, const std::string& name);
 
 /// A width x height map with every sample = value (procedural, bit_depth 32);
 /// negative sizes count as 0. Callers shape it from there.
@@ -62,6 +69,12 @@ enum class TerrainCondition {
              ///< with a slope of `kConditionSlope` towards the spill point
     Breach,  ///< priority-flood breaching: a channel is carved from each depression's
              ///< bottom through its rim, descending by `kConditionSlope` per metre
+    Carve,   ///< breaching, then the river's main channel is carved into the terrain
+             ///< (Terrain::carve_channel; the scene supplies the channel): a bed that
+             ///< descends all the way from the source to the outlet, with banks
+    Auto,    ///< resolved by the scene before the terrain is built: carve for a PBF
+             ///< river (a continuous source and an edge sink), none otherwise;
+             ///< Terrain::build treats it as none
 };
 std::string_view to_string(TerrainCondition c);
 
@@ -69,11 +82,28 @@ std::string_view to_string(TerrainCondition c);
 /// terrain's edge, so every cell has a strictly lower neighbour on its way out.
 inline constexpr float kConditionSlope = 1e-3f;
 
+/// The cross-section of a carved channel (Terrain::carve_channel).
+struct CarveDef {
+    float width_m = 6.0f;  ///< bank to bank, metres, > 0
+    /// Width of the flat bed, metres, [0, width_m]: at least three samples, or a path's
+    /// diagonal step would cross the mesh's cell diagonal as a dam.
+    float floor_m = 3.0f;
+    float depth_m = 1.0f;  ///< bed below the path's ground (at least), metres, > 0
+    /// A basin under the source (radius 0: none): centre (x, z; y ignored) and radius,
+    /// metres, its bottom the channel's first bed, so a source wider than the channel
+    /// does not spill beside it.
+    Vec3 basin_center{0.0f};
+    float basin_radius_m = 0.0f;
+};
+
+/// The steepest least slope a carved bed keeps (Terrain::carve_channel).
+inline constexpr float kCarveMaxSlope = 0.02f;
+
 /// What conditioning changed.
 struct ConditionReport {
     TerrainCondition mode = TerrainCondition::None;
     uint64_t cells_raised = 0;   ///< cells whose height went up (fill)
-    uint64_t cells_lowered = 0;  ///< cells whose height went down (breach)
+    uint64_t cells_lowered = 0;  ///< cells whose height went down (breach, carve)
     float max_change_m = 0.0f;   ///< largest |change| of one cell, metres
     double volume_m3 = 0.0;      ///< sum of |change| x cell area, cubic metres
 };
@@ -134,6 +164,19 @@ public:
     /// What TerrainDef::condition changed (mode None: nothing).
     const ConditionReport& condition_report() const { return condition_; }
 
+    /// Carves a river bed along `path` (grid cells (row, column), source to outlet,
+    /// neighbours 8-connected): the bed under path cell k is the lower of its ground
+    /// minus `depth_m` and the previous bed minus a least slope per metre (half the
+    /// path's mean ground slope, within [kConditionSlope, kCarveMaxSlope]), so it
+    /// descends all the way; every sample within width_m / 2 of a path cell is lowered
+    /// to at most the bed (within floor_m / 2) or bed + depth_m u^2, u rising from 0 at
+    /// the floor's edge to 1 at the bank (parabolic walls); the samples just outside
+    /// the banks (1.5 samples) are raised to bed + depth_m where lower (levees); the basin (if any) likewise around its centre with the
+    /// first bed as its bottom. Heights only go down; the condition report (mode Carve)
+    /// then counts every change against the heights as given. Cells outside the grid
+    /// are ignored; an empty path changes nothing.
+    void carve_channel(std::span<const std::pair<int, int>> path, const CarveDef& def);
+
 private:
     /// Heights of the four corners of the cell under (x, z) (clamped into the rectangle):
     /// h00 at (i, j), h01 at (i, j+1), h10 at (i+1, j), h11 at (i+1, j+1), and the
@@ -149,6 +192,9 @@ private:
     std::vector<uint32_t> indices_;
     Aabb bounds_;
     ConditionReport condition_;
+    std::vector<float> given_heights_;  ///< the heights before conditioning (when conditioned)
+
+    void update_condition_report();
 };
 
 /// A ray/segment hit on a triangle.

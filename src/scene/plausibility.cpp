@@ -109,6 +109,13 @@ int OutletMeter::assign(const Vec3& exit) const {
     const float x = std::clamp(exit.x, x0_, x1_), z = std::clamp(exit.z, z0_, z1_);
     int best = -1;
     float best_d2 = radius_ * radius_;
+    // The river's mouth first: an exit within the radius of the main outlet is the
+    // river's even where a smaller outlet cell lies nearer (a wide mouth spans several).
+    for (size_t k = 0; k < outlets_.size(); ++k)
+        if (outlets_[k].main) {
+            const float dx = x - outlets_[k].x, dz = z - outlets_[k].z;
+            if (dx * dx + dz * dz <= best_d2) return int(k);
+        }
     for (size_t k = 0; k < outlets_.size(); ++k) {
         const float dx = x - outlets_[k].x, dz = z - outlets_[k].z;
         const float d2 = dx * dx + dz * dz;

@@ -53,9 +53,9 @@ SceneDef default_scene() {
                .flow_rate = 420.0f,
                .litres_per_particle = 0.0f};
     d.pbf = PbfDef{};
-    // Heights as given: breaching did not raise the channel coverage or the main
-    // outlet's outflow where measured (docs/river.md, "Depressions").
-    d.terrain.condition = TerrainCondition::None;
+    // The river's channel is carved from the source to the outlet (a scene without a
+    // continuous source and an edge sink keeps its heights): docs/river.md, "Depressions".
+    d.terrain.condition = TerrainCondition::Auto;
     d.sink = SinkDef{.kind = SinkKind::Edges};
     d.collision = {.mode = CollisionMode::Robust, .damping = 0.002f, .offset = 0.005f, .leaf_triangles = 8,
                    .radius = 0.1f, .query = CollisionQuery::Heightfield};

@@ -210,7 +210,9 @@ Result<SceneDef> parse_scene_toml(std::string_view text, const std::string& orig
         r.choice(*t, p, "condition", d.terrain.condition,
                  {{"none", TerrainCondition::None},
                   {"fill", TerrainCondition::Fill},
-                  {"breach", TerrainCondition::Breach}});
+                  {"breach", TerrainCondition::Breach},
+                  {"carve", TerrainCondition::Carve},
+                  {"auto", TerrainCondition::Auto}});
         r.choice(*t, p, "source", d.source.kind,
                  {{"valley", TerrainSource::Valley},
                   {"strict", TerrainSource::Strict},

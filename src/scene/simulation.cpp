@@ -101,6 +101,16 @@ void fit_auto_source(const Terrain& t, SpawnDef& spawn) {
     }
 }
 
+/// Places an automatic source (auto_center) over the terrain and clears auto_center;
+/// returns whether it did.
+bool resolve_source(const Terrain& t, const ChannelMap& m, SpawnDef& spawn) {
+    if (!spawn.auto_center) return false;
+    spawn.center = spawn.auto_channel ? channel_spawn_center(t, m, spawn.auto_height) : auto_spawn_center(t, spawn.auto_height);
+    fit_auto_source(t, spawn);
+    spawn.auto_center = false;
+    return true;
+}
+
 /// The main channel from the source: from the main head for the automatic channel
 /// source, else from the channel cell nearest the source's centre, to where it leaves.
 std::vector<std::pair<int, int>> main_channel_path(const Terrain& t, const ChannelMap& m, const SpawnDef& asked,
@@ -119,13 +129,7 @@ std::vector<std::pair<int, int>> main_channel_path(const Terrain& t, const Chann
 Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh)
     : def_(def), terrain_(std::move(terrain)), bvh_(std::move(bvh)), channel_(ChannelMap::build(terrain_)) {
     SpawnDef spawn = def_.spawn;
-    if (spawn.auto_center) {
-        spawn.center = spawn.auto_channel ? channel_spawn_center(terrain_, channel_, spawn.auto_height)
-                                          : auto_spawn_center(terrain_, spawn.auto_height);
-        fit_auto_source(terrain_, spawn);
-        spawn.auto_center = false;
-        def_.spawn = spawn;
-    }
+    if (resolve_source(terrain_, channel_, spawn)) def_.spawn = spawn;
     main_path_ = main_channel_path(terrain_, channel_, def.spawn, def_.spawn.center);
     coverage_ = ChannelCoverage(terrain_, main_path_);
     // Compact kernel: the sparse field over the particles' box or the terrain's.
@@ -175,10 +179,42 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def) {
     return create(def, map.value());
 }
 
+TerrainCondition resolved_condition(const SceneDef& def) {
+    if (def.terrain.condition != TerrainCondition::Auto) return def.terrain.condition;
+    const bool river = def.solver == SolverKind::Pbf && def.sink.kind == SinkKind::Edges &&
+                       def.spawn.particles_per_second() > 0.0;
+    return river ? TerrainCondition::Carve : TerrainCondition::None;
+}
+
+CarveDef carve_def(const SceneDef& def, float area_scale) {
+    // A flat bed three samples (or four spacings) wide, walls 1.5 samples (or two
+    // spacings) wide on each side, two spacings deep.
+    const float d = def.pbf.spacing;
+    const float floor = std::max(3.0f * area_scale, 4.0f * d);
+    return CarveDef{.width_m = floor + 2.0f * std::max(1.5f * area_scale, 2.0f * d), .floor_m = floor, .depth_m = 2.0f * d};
+}
+
 Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, const Heightmap& map) {
     if (auto v = validate(def); !v) return v.error();
-    auto terrain = Terrain::build(map, def.terrain);
+    SceneDef resolved = def;
+    resolved.terrain.condition = resolved_condition(def);
+    auto terrain = Terrain::build(map, resolved.terrain);
     if (!terrain) return terrain.error();
+    if (resolved.terrain.condition == TerrainCondition::Carve) {
+        // The main channel of the breached terrain from where the source will sit, and
+        // a basin under the source (resolved as the constructor will: x and z do not
+        // depend on the heights the carve changes).
+        const ChannelMap m = ChannelMap::build(terrain.value());
+        SpawnDef spawn = def.spawn;
+        resolve_source(terrain.value(), m, spawn);
+        const auto path = main_channel_path(terrain.value(), m, def.spawn, spawn.center);
+        CarveDef carve = carve_def(def, terrain->area_scale());
+        carve.basin_center = spawn.center;
+        carve.basin_radius_m = spawn.shape == SourceShape::Point ? 0.0f
+                               : std::max(spawn.half_extent.x, spawn.shape == SourceShape::Disc ? 0.0f : spawn.half_extent.z) +
+                                     def.pbf.spacing;
+        terrain->carve_channel(path, carve);
+    }
     if (def.field.bounds == FieldBounds::Terrain) {
         // The fixed field box spans the terrain: its samples per axis must fit an int
         // (4096 samples x 1e4 m x 64 per metre would not).
@@ -192,7 +228,7 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, cons
     }
     auto bvh = Bvh::build(terrain.value(), BvhDef{.leaf_triangles = def.collision.leaf_triangles});
     if (!bvh) return bvh.error();
-    std::unique_ptr<Simulation> sim(new Simulation(def, std::move(terrain.value()), std::move(bvh.value())));
+    std::unique_ptr<Simulation> sim(new Simulation(resolved, std::move(terrain.value()), std::move(bvh.value())));
     if (auto v = validate_on_terrain(sim->def(), sim->terrain()); !v) return v.error();  // resolved source
     return sim;
 }

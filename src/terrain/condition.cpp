@@ -27,6 +27,8 @@ std::string_view to_string(TerrainCondition c) {
         case TerrainCondition::None: return "none";
         case TerrainCondition::Fill: return "fill";
         case TerrainCondition::Breach: return "breach";
+        case TerrainCondition::Carve: return "carve";
+        case TerrainCondition::Auto: return "auto";
     }
     return "?";
 }
@@ -36,7 +38,7 @@ ConditionReport condition_heights(std::vector<float>& heights, int columns, int 
     ConditionReport rep;
     rep.mode = mode;
     const size_t n = size_t(columns) * size_t(rows);
-    if (mode == TerrainCondition::None || columns < 2 || rows < 2 || heights.size() != n) return rep;
+    if (mode == TerrainCondition::None || mode == TerrainCondition::Auto || columns < 2 || rows < 2 || heights.size() != n) return rep;
     std::vector<double> h(heights.begin(), heights.end());
     const double eps_straight = double(kConditionSlope) * area_scale;
     const double eps_diagonal = eps_straight * std::sqrt(2.0);
@@ -66,7 +68,7 @@ ConditionReport condition_heights(std::vector<float>& heights, int columns, int 
             parent[nb] = int64_t(c);
             const double eps = (kDi[k] != 0 && kDj[k] != 0) ? eps_diagonal : eps_straight;
             if (h[nb] < h[c] + eps) {
-                if (mode == TerrainCondition::Fill) {
+                if (mode == TerrainCondition::Fill) {  // (Carve breaches here; the scene carves later)
                     h[nb] = h[c] + eps;
                 } else {
                     // Lower the flood path from c back to the edge until it descends
@@ -101,6 +103,108 @@ ConditionReport condition_heights(std::vector<float>& heights, int columns, int 
         heights[k] = v;
     }
     return rep;
+}
+
+void Terrain::carve_channel(std::span<const std::pair<int, int>> path, const CarveDef& def) {
+    if (path.empty() || !(def.width_m > 0.0f) || !(def.depth_m > 0.0f)) return;
+    if (given_heights_.empty()) {
+        given_heights_.resize(vertices_.size());
+        for (size_t k = 0; k < vertices_.size(); ++k) given_heights_[k] = vertices_[k].y;
+    }
+    const double s = area_scale_, half = 0.5 * double(def.width_m), depth = def.depth_m;
+    const double inner = std::clamp(0.5 * double(def.floor_m), 0.0, half);  // the flat bed's half width
+    auto inside = [&](int i, int j) { return i >= 0 && j >= 0 && i < rows_ && j < columns_; };
+    // The ground under the path as it was before this carve (a path cell beside the
+    // previous one is already in that one's cross-section).
+    std::vector<float> before(vertices_.size());
+    for (size_t k = 0; k < vertices_.size(); ++k) before[k] = vertices_[k].y;
+    // The bed's least slope: half the path's mean slope (ground at the head to ground
+    // at the outlet over the path's length), within [kConditionSlope, kCarveMaxSlope]:
+    // water crosses a breached flat at walking pace instead of creeping over it.
+    double length = 0.0, head_ground = 0.0, end_ground = 0.0;
+    {
+        std::pair<int, int> a{-1, -1};
+        for (const auto& [pi, pj] : path) {
+            if (!inside(pi, pj)) continue;
+            if (a.first < 0) head_ground = before[size_t(pi) * columns_ + pj];
+            else length += s * std::hypot(double(pi - a.first), double(pj - a.second));
+            end_ground = before[size_t(pi) * columns_ + pj];
+            a = {pi, pj};
+        }
+    }
+    const double mean_slope = length > 0.0 ? (head_ground - end_ground) / length : 0.0;
+    const double slope = std::clamp(0.5 * mean_slope, double(kConditionSlope), double(kCarveMaxSlope));
+    double bed = 0.0;
+    std::pair<int, int> prev{-1, -1};
+    // Lowers every sample within `half` metres of (cx, cz) (metres) to its parabola.
+    auto lower_around = [&](double cx, double cz, double floor, double half) {
+        const int r = int(std::ceil(half / s)), ci = int(std::lround(cz / s)), cj = int(std::lround(cx / s));
+        for (int i = ci - r; i <= ci + r; ++i)
+            for (int j = cj - r; j <= cj + r; ++j) {
+                if (!inside(i, j)) continue;
+                const double d = std::hypot(double(j) * s - cx, double(i) * s - cz);
+                if (d > half) continue;
+                const double u = std::max(0.0, (d - inner) / std::max(half - inner, 1e-9));
+                float& y = vertices_[size_t(i) * columns_ + j].y;
+                y = std::min(y, float(floor + depth * u * u));
+            }
+    };
+    // Pass 1 finds the beds; pass 2 raises levees (bed + depth) on the samples just
+    // outside the banks where the ground is lower, pass 3 lowers the channel, so a
+    // levee never stands in the channel of a neighbouring path cell.
+    std::vector<std::tuple<double, double, double>> beds;  // (x, z, bed)
+    for (const auto& [pi, pj] : path) {
+        if (!inside(pi, pj)) continue;
+        const double ground = before[size_t(pi) * columns_ + pj];
+        if (prev.first < 0) {
+            bed = ground - depth;
+        } else {
+            const double step = s * std::hypot(double(pi - prev.first), double(pj - prev.second));
+            bed = std::min(ground - depth, bed - slope * step);
+        }
+        prev = {pi, pj};
+        beds.emplace_back(double(pj) * s, double(pi) * s, bed);
+    }
+    if (beds.empty()) return;
+    const double levee = half + 1.5 * s;
+    for (const auto& [x, z, b] : beds) {
+        const int r = int(std::ceil(levee / s)), ci = int(std::lround(z / s)), cj = int(std::lround(x / s));
+        for (int i = ci - r; i <= ci + r; ++i)
+            for (int j = cj - r; j <= cj + r; ++j) {
+                if (!inside(i, j)) continue;
+                const double d = std::hypot(double(j) * s - x, double(i) * s - z);
+                if (d <= half || d > levee) continue;
+                float& y = vertices_[size_t(i) * columns_ + j].y;
+                y = std::max(y, float(b + depth));
+            }
+    }
+    // The source's basin: its bottom is the head's bed, so it drains into the channel.
+    if (def.basin_radius_m > 0.0f)
+        lower_around(def.basin_center.x, def.basin_center.z, std::get<2>(beds.front()),
+                     std::max(half, double(def.basin_radius_m)));
+    for (const auto& [x, z, b] : beds) lower_around(x, z, b, half);
+    condition_.mode = TerrainCondition::Carve;
+    update_condition_report();
+}
+
+void Terrain::update_condition_report() {
+    condition_.cells_raised = condition_.cells_lowered = 0;
+    condition_.max_change_m = 0.0f;
+    condition_.volume_m3 = 0.0;
+    const double cell_area = double(area_scale_) * double(area_scale_);
+    Aabb b;
+    for (size_t k = 0; k < vertices_.size(); ++k) {
+        const double d = double(vertices_[k].y) - double(given_heights_[k]);
+        if (d > 0.0) ++condition_.cells_raised;
+        if (d < 0.0) ++condition_.cells_lowered;
+        condition_.max_change_m = std::max(condition_.max_change_m, float(std::abs(d)));
+        condition_.volume_m3 += std::abs(d) * cell_area;
+        b.grow(vertices_[k]);
+    }
+    // The paper's terrain box: the mesh bounds grown by 1 m up and down.
+    b.min.y -= 1.0f;
+    b.max.y += 1.0f;
+    bounds_ = b;
 }
 
 }  // namespace mr

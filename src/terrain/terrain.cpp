@@ -85,10 +85,15 @@ Result<Terrain> Terrain::build(const Heightmap& map, const TerrainDef& def) {
             t.bounds_.grow(p);
         }
     }
-    if (def.condition == TerrainCondition::Fill || def.condition == TerrainCondition::Breach) {
+    if (def.condition == TerrainCondition::Fill || def.condition == TerrainCondition::Breach ||
+        def.condition == TerrainCondition::Carve) {
+        // Carve breaches here; the scene carves its channel afterwards (carve_channel).
         std::vector<float> h(n);
         for (size_t k = 0; k < n; ++k) h[k] = t.vertices_[k].y;
-        t.condition_ = condition_heights(h, W, H, def.area_scale, def.condition);
+        t.given_heights_ = h;
+        const TerrainCondition mode = def.condition == TerrainCondition::Carve ? TerrainCondition::Breach : def.condition;
+        t.condition_ = condition_heights(h, W, H, def.area_scale, mode);
+        t.condition_.mode = def.condition;
         t.bounds_ = Aabb{};
         for (size_t k = 0; k < n; ++k) {
             t.vertices_[k].y = h[k];

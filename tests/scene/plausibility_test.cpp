@@ -249,7 +249,7 @@ TEST(ChannelCoverage, OneAlongTheWholePathNoneWithoutWaterHalfForHalf) {
     EXPECT_EQ(cov.measure(deep, on), 1.0f);
 }
 
-TEST(OutletMeter, ExitsGoToTheNearestOutletAlongTheBorderOrToOther) {
+TEST(OutletMeter, ExitsGoToTheMainOutletWithinItsRadiusElseTheNearestOrToOther) {
     // The plane: every low-edge cell is an outlet; the main channel from (8, 1) leaves at (8, 32).
     const Terrain plane = ramp_terrain(0.0f);
     const ChannelMap pm = ChannelMap::build(plane);
@@ -264,6 +264,9 @@ TEST(OutletMeter, ExitsGoToTheNearestOutletAlongTheBorderOrToOther) {
     ASSERT_GE(beside, 0);
     EXPECT_EQ(cell(p, beside), std::pair(2, 32)) << "another outlet, not the main one";
     EXPECT_FALSE(p.outlets()[size_t(beside)].main);
+    EXPECT_EQ(cell(p, p.assign(Vec3(32.3f, 0.0f, 9.9f))), std::pair(8, 32))
+        << "nearer the outlet cell (10, 32), but within the main mouth's 3 m: the river's";
+    EXPECT_EQ(cell(p, p.assign(Vec3(32.3f, 0.0f, 11.2f))), std::pair(11, 32)) << "beyond the mouth's 3 m";
     EXPECT_EQ(p.assign(Vec3(-0.3f, 5.0f, 8.0f)), -1) << "over the upstream edge";
     EXPECT_EQ(p.assign(Vec3(5.0f, 5.0f, -0.3f)), -1) << "over a side edge, far from the outlets";
     EXPECT_EQ(cell(p, p.assign(Vec3(31.0f, 5.0f, -0.3f))), std::pair(0, 32)) << "over a side edge, at the corner outlet";

@@ -337,6 +337,64 @@ TEST(TerrainCondition, RandomMapsOfOddSizesAllDrain) {
     }
 }
 
+TEST(TerrainCondition, CarveLaysABedThatDescendsFromSourceToOutletWithBanksAndLevees) {
+    // The pit map, breached, then a channel carved along row 8 from column 18 to the
+    // edge at column 0: through the pit's rim and its bottom.
+    const Heightmap m = pit_map();
+    auto given = Terrain::build(m, TerrainDef{.area_scale = 1.0f, .height_scale = 10.0f});
+    auto t = Terrain::build(m, TerrainDef{.area_scale = 1.0f, .height_scale = 10.0f, .condition = TerrainCondition::Carve});
+    ASSERT_TRUE(given.ok() && t.ok());
+    EXPECT_EQ(t->condition_report().mode, TerrainCondition::Carve);
+    EXPECT_TRUE(drains(t.value())) << "carve breaches first";
+    const float breached_far = t->sample(16, 20);
+    std::vector<std::pair<int, int>> path;
+    for (int j = 18; j >= 0; --j) path.emplace_back(8, j);
+    const CarveDef def{.width_m = 6.0f, .floor_m = 3.0f, .depth_m = 1.0f};
+    Terrain carved = t.value();
+    carved.carve_channel(path, def);
+    // The bed never rises along the path and falls from source to outlet (by at least
+    // kConditionSlope per metre), at least depth_m below the ground as given.
+    for (size_t k = 0; k < path.size(); ++k) {
+        const auto [i, j] = path[k];
+        EXPECT_LE(carved.sample(i, j), given->sample(i, j) - def.depth_m + 1e-4f) << "cell " << j;
+        if (k > 0) EXPECT_LE(carved.sample(i, j), carved.sample(path[k - 1].first, path[k - 1].second)) << "cell " << j;
+    }
+    EXPECT_LT(carved.sample(8, 0), carved.sample(8, 18) - kConditionSlope * 17.0f);
+    // The floor: the rows beside the path are cut as deep (symmetric, depth_m below the ground).
+    for (int j = 2; j <= 16; ++j) {
+        EXPECT_FLOAT_EQ(carved.sample(7, j), carved.sample(9, j)) << "column " << j;
+        EXPECT_LE(carved.sample(7, j), given->sample(7, j) - 0.5f * def.depth_m) << "column " << j;
+    }
+    // The banks (3 m out) stand depth_m above the bed, or higher where the ground is.
+    EXPECT_GE(carved.sample(5, 12), carved.sample(8, 12) + def.depth_m - 1e-4f);
+    EXPECT_GE(carved.sample(11, 12), carved.sample(8, 12) + def.depth_m - 1e-4f);
+    // Far from the channel nothing moved; the report counts against the heights as given.
+    EXPECT_FLOAT_EQ(carved.sample(16, 20), breached_far);
+    const ConditionReport& r = carved.condition_report();
+    uint64_t lowered = 0, raised = 0;
+    for (int i = 0; i < carved.rows(); ++i)
+        for (int j = 0; j < carved.columns(); ++j) {
+            lowered += carved.sample(i, j) < given->sample(i, j);
+            raised += carved.sample(i, j) > given->sample(i, j);
+        }
+    EXPECT_EQ(r.cells_lowered, lowered);
+    EXPECT_EQ(r.cells_raised, raised);
+    EXPECT_GT(r.cells_lowered, 3u * path.size() - 4u) << "at least the floor, three cells wide";
+    EXPECT_GE(r.max_change_m, def.depth_m);
+    EXPECT_LT(r.max_change_m, 4.5f) << "a channel, not a gorge (the breach, the pit 3 m deep, plus 1 m)";
+}
+
+TEST(TerrainCondition, CarveWithAnEmptyPathOrOutsideTheGridChangesNothing) {
+    auto t = Terrain::build(pit_map(), TerrainDef{.area_scale = 1.0f, .height_scale = 10.0f});
+    ASSERT_TRUE(t.ok());
+    Terrain c = t.value();
+    c.carve_channel({}, CarveDef{});
+    const std::vector<std::pair<int, int>> outside{{-5, -5}, {100, 3}};
+    c.carve_channel(outside, CarveDef{});
+    for (int i = 0; i < c.rows(); ++i)
+        for (int j = 0; j < c.columns(); ++j) ASSERT_EQ(c.sample(i, j), t->sample(i, j));
+}
+
 }  // namespace
 }  // namespace mr
 
