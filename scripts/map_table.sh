@@ -56,8 +56,8 @@ run_map() {  # name, extra args...
 }
 run_map "valley (default scene)"
 for src in strict bowl flat; do
-  printf 'name = "%s"\n%s[terrain]\nsource = "%s"\n' "$src" "$([ "${NO_SURFACE:-0}" = 1 ] && echo 'surface = false
-')" "$src" > "$OUT/$src.toml"
+  extra=""; [ "${NO_SURFACE:-0}" = 1 ] && extra='surface = false\n'
+  printf "name = \"%s\"\n${extra}[terrain]\nsource = \"%s\"\n" "$src" "$src" > "$OUT/$src.toml"
   run_map "procedural $src" --scene "$OUT/$src.toml"
 done
 for f in "$OUT"/maps/spikes.png "$OUT"/maps/cliffs.png "$OUT"/maps/random_*.png; do run_map "$(basename "$f")" --heightmap "$f"; done
