@@ -126,7 +126,6 @@ struct ExportDef {
     double solver_dt = 1.0 / 60.0;                    ///< seconds one solver frame simulates (particle ages)
     int digits = 5;                                   ///< width of the zero-padded frame number, [5, 12]
     std::string scene;                                ///< scene name (manifest)
-    std::string command;                              ///< the command line that made the export (manifest)
 };
 
 /// Cost and size of one format over an export: encode + write time per frame.

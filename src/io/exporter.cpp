@@ -199,7 +199,6 @@ Status Exporter::finish() {
     j["generator"] = "metariver";
     j["manifest_version"] = 1;
     j["scene"] = def_.scene;
-    if (!def_.command.empty()) j["command"] = def_.command;
     j["units"] = {{"length", "metre"},
                   {"time", "second"},
                   {"velocity", "metre per second"},
@@ -226,7 +225,7 @@ Status Exporter::finish() {
                 "with POSITION, _VELOCITY (vec3), _ID (float), _AGE (float); terrain: + TEXCOORD_0"},
         {"vdb", {{"water", {{"grid", "surface"}, {"class", "level set"}, {"half_width_voxels", kVdbHalfWidth}}},
                  {"particles", {{"grid", "points"}, {"attributes", {"P", "v", "id", "age"}}}},
-                 {"voxel_size", def_.voxel_size}}},
+                 {"voxel_size", std::stod(fmt::format("{}", def_.voxel_size))}}},  // 0.33333334, not the double of the float
         {"age", "seconds since the particle's latest emission by the source"}};
     json per_format = json::object();
     for (const ExportFormatStats& st : stats_) {
