@@ -82,7 +82,10 @@ TEST(River, DefaultSceneIsAPbfRiverFromTheValleyHead) {
     Simulation& s = *sim.value();
     EXPECT_EQ(s.def().solver, SolverKind::Pbf);
     for (int f = 0; f < 600; ++f) s.step(1.0f / 60.0f);
-    EXPECT_GE(s.particles().active_count(), 3500u) << "thousands of particles (420 per second)";
+    // Delivered: the ones on the terrain and the ones the carved channel already took
+    // to an edge (the sink returns them to the pool).
+    EXPECT_GE(s.particles().active_count() + s.counters().sunk, 3500u) << "thousands of particles (420 per second)";
+    EXPECT_GE(s.particles().active_count(), 3000u);
     EXPECT_EQ(s.counters().tunneled, 0u);
     EXPECT_LT(s.counters().density_error_max, 0.5f);
     EXPECT_GT(s.wet_fraction(), 0.6f);
