@@ -325,7 +325,10 @@ protected:
     std::array<double, 3> extent(const std::string& options) {
         const fs::path objs = dir_ / "objs";
         fs::remove_all(objs);
-        CliResult r = run("run --frames 1 --heightmap " + map_.string() + " " + options + " --obj-dir " + objs.string());
+        // The heights as given: the default river would carve its channel (below y = 0 at the outlet).
+        const fs::path scene = write("as_given.toml", "[terrain]\ncondition = \"none\"\n");
+        CliResult r = run("run --frames 1 --scene " + scene.string() + " --heightmap " + map_.string() + " " + options +
+                          " --obj-dir " + objs.string());
         EXPECT_EQ(r.code, 0) << options << "\n" << r.err;
         const ObjBox b = obj_box(objs / "terrain.obj");
         fs::remove_all(objs);

@@ -69,7 +69,9 @@ TEST(Simulation, DefaultSceneRunsAndKeepsEveryParticleAboveGround) {
     ASSERT_TRUE(sim.ok()) << sim.error().message;
     Simulation& s = *sim.value();
     for (int f = 0; f < 700; ++f) s.step(1.0f / 60.0f);
-    EXPECT_EQ(s.particles().active_count(), s.particles().size());  // one every 2 frames: all by frame 598
+    // All emitted by frame 598 (420 per second): on the terrain, or already taken to the
+    // outlet by the carved channel (and waiting in the pool).
+    EXPECT_GE(s.particles().active_count() + s.counters().sunk, s.particles().size());
     EXPECT_EQ(s.counters().tunneled, 0u) << "robust collision";
     EXPECT_GT(s.surface().triangle_count(), 100u);
     // The auto spawn sits over the valley's upstream end (high z).
