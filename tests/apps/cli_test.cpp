@@ -326,9 +326,10 @@ protected:
         const fs::path objs = dir_ / "objs";
         fs::remove_all(objs);
         // The heights as given: the default river would carve its channel (below y = 0 at the outlet).
+        const bool own_scene = options.find("--scene") != std::string::npos;
         const fs::path scene = write("as_given.toml", "[terrain]\ncondition = \"none\"\n");
-        CliResult r = run("run --frames 1 --scene " + scene.string() + " --heightmap " + map_.string() + " " + options +
-                          " --obj-dir " + objs.string());
+        CliResult r = run("run --frames 1 " + (own_scene ? std::string() : "--scene " + scene.string() + " ") +
+                          "--heightmap " + map_.string() + " " + options + " --obj-dir " + objs.string());
         EXPECT_EQ(r.code, 0) << options << "\n" << r.err;
         const ObjBox b = obj_box(objs / "terrain.obj");
         fs::remove_all(objs);
@@ -351,7 +352,8 @@ TEST_F(CliScale, OptionsSetTheScales) {
     expect_extent(extent("--area-scale 2.5 --height-scale 60"), box_of(2.5, 60.0));
     expect_extent(extent("--height-scale 5"), box_of(1.0, 5.0));
     // Over a scene's keys.
-    const fs::path scene = write("s.toml", "[terrain]\nheightmap = \"map.png\"\narea_scale = 3.0\nheight_scale = 9.0\n");
+    const fs::path scene =
+        write("s.toml", "[terrain]\nheightmap = \"map.png\"\narea_scale = 3.0\nheight_scale = 9.0\ncondition = \"none\"\n");
     expect_extent(extent("--scene " + scene.string()), box_of(3.0, 9.0));
     expect_extent(extent("--scene " + scene.string() + " --area-scale 1.5"), box_of(1.5, 9.0));
 }
