@@ -223,8 +223,8 @@ def main():
     cam = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
     cam.data.lens = 35
     cam.data.clip_end = size * 10
-    # From the terrain's low-y side (downstream for the default valley), raised 40 degrees.
-    cam.location = centre + mathutils.Vector((0.35 * size, -0.95 * size, 0.85 * size))
+    # From the +x side, a little downstream of the middle, looking down about 35 degrees.
+    cam.location = centre + mathutils.Vector((0.85 * size, -0.45 * size, 0.75 * size))
     cam.rotation_euler = (centre - cam.location).to_track_quat("-Z", "Y").to_euler()
     scene.collection.objects.link(cam)
     scene.camera = cam
