@@ -6,8 +6,10 @@
 #include "commands.h"
 #include "export_options.h"
 #include "progress.h"
+#include "report.h"
 
 #include <metariver/export.h>
+#include <metariver/checkpoints.h>
 #include <metariver/io.h>
 #include <metariver/render.h>
 
@@ -50,6 +52,7 @@ struct RenderOptions {
     std::string stats;
     bool progress = true;
     ExportOptions exp;  ///< --export DIR --format ... --every N --range A:B (image numbers)
+    long long report_every = 0;  ///< --report-every: a report line every N frames (0: none)
 };
 
 constexpr long long kMaxFrames = 1'000'000;
@@ -117,6 +120,8 @@ int render(const RenderOptions& o) {
         return fail(kExitBadInput, fmt::format("--steps: must be in [1, 1000] (got {})", o.steps));
     if (!std::isfinite(o.dt) || o.dt <= 0.0 || o.dt > 1.0)
         return fail(kExitBadInput, fmt::format("--dt: must be in (0, 1] seconds (got {})", o.dt));
+    if (o.report_every < 0 || o.report_every > kMaxFrames)
+        return fail(kExitBadInput, fmt::format("--report-every: must be in [0, {}] (got {})", kMaxFrames, o.report_every));
     if (o.fps < 1 || o.fps > 240) return fail(kExitBadInput, fmt::format("--fps: must be in [1, 240] (got {})", o.fps));
     if (!std::isfinite(o.orbit_deg) || std::abs(o.orbit_deg) > 36000.0)
         return fail(kExitBadInput, fmt::format("--orbit: must be in [-36000, 36000] degrees (got {})", o.orbit_deg));
@@ -269,14 +274,15 @@ int render(const RenderOptions& o) {
 
     const bool show_progress = progress_wanted(o.progress, o.frames);
     const int digits = std::max(5, static_cast<int>(std::to_string(o.frames - 1).size()));
-    std::vector<double> sim_ms, render_ms, write_ms;
+    // Per-frame times (simulate, render, write): constant memory however many frames.
+    Checkpoints frame_ms(size_t{1} << 13, 3);
     std::vector<uint8_t> rgb;
     const float yaw0 = camera.yaw_deg;
     const auto t_start = Clock::now();
     for (long long f = 0; f < o.frames; ++f) {
         auto t0 = Clock::now();
         for (long long s = 0; s < o.steps; ++s) sim->step(dt);
-        sim_ms.push_back(ms_since(t0));
+        const double sim_t = ms_since(t0);
 
         t0 = Clock::now();
         camera.yaw_deg = yaw0 + static_cast<float>(o.orbit_deg * static_cast<double>(f) / static_cast<double>(o.frames));
@@ -284,7 +290,7 @@ int render(const RenderOptions& o) {
         renderer.update(*sim);
         renderer.draw(camera, width, height, settings);
         renderer.read_rgb(rgb);  // waits for the GPU: the time covers the whole frame
-        render_ms.push_back(ms_since(t0));
+        const double render_t = ms_since(t0);
 
         t0 = Clock::now();
         if (mp4) {
@@ -310,7 +316,12 @@ int render(const RenderOptions& o) {
                 return fail(kExitFailure, s.error().message);
             }
         }
-        write_ms.push_back(ms_since(t0));
+        const double frame_t[3] = {sim_t, render_t, ms_since(t0)};
+        frame_ms.push(frame_t);
+        if (o.report_every > 0 && (f + 1) % o.report_every == 0) {
+            fmt::print("{}\n", report_line(*sim, o.warmup + (f + 1) * o.steps));
+            std::fflush(stdout);
+        }
         if (show_progress) print_progress(f + 1, o.frames, ms_since(t_start) / 1000.0);
     }
     if (show_progress) end_progress();
@@ -330,7 +341,8 @@ int render(const RenderOptions& o) {
         mp4_tmp.clear();
     }
     const double total_s = ms_since(t_start) / 1000.0;
-    const Percentiles pr = percentiles(render_ms), ps = percentiles(sim_ms), pw = percentiles(write_ms);
+    const Percentiles pr = percentiles(frame_ms.column(1)), ps = percentiles(frame_ms.column(0)),
+                      pw = percentiles(frame_ms.column(2));
     if (!o.stats.empty()) {
         auto stage = [](const Percentiles& p) {
             return nlohmann::json{{"median", p.median}, {"p95", p.p95}, {"mean", p.mean}, {"max", p.max}};
@@ -396,6 +408,9 @@ void register_render(CLI::App& app, std::function<int()>& action) {
     cmd->add_option("--stats", opts->stats, "write render timings as JSON to this file");
     cmd->add_flag("!--no-progress", opts->progress, "no progress bar");
     opts->exp.add_to(*cmd);
+    cmd->add_option("--report-every", opts->report_every,
+                    "print a report line (resident memory, particle counters, non-finite values) every N frames; "
+                    "scripts/soak.sh reads them");
     cmd->callback([opts, &action] { action = [opts] { return render(*opts); }; });
 }
 

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 #include "cli_fixture.h"
+#include "small_disk.h"
 
 #include <cstdlib>
 #include <filesystem>
@@ -57,6 +58,27 @@ int count_lines(const std::string& s) {
     int n = 0;
     for (char c : s) n += c == '\n';
     return n;
+}
+
+TEST_F(RenderCli, AFullDiskPartWayLeavesNoFrameAndNamesThePath) {
+    // Issue 13: PNG frames onto a small tmpfs (root only) that fills after about half of them.
+    REQUIRE_GL();
+    const std::string args = "render --preset paper-bowl --frames 8 --size 64x48 --warmup 40 --out ";
+    const fs::path probe = dir_ / "probe";
+    CliResult p = run(args + probe.string());
+    ASSERT_EQ(p.code, 0) << p.err;
+    size_t room = 0;
+    for (int f = 0; f < 4; ++f)
+        room += mr::test::SmallDisk::charged(fs::file_size(probe / ("frame_0000" + std::to_string(f) + ".png")));
+    mr::test::SmallDisk disk(dir_ / "disk", room);
+    if (!disk.mounted()) GTEST_SKIP() << disk.why();
+    const fs::path out = disk.dir() / "frames";
+    const CliResult r = run(args + out.string());
+    EXPECT_EQ(r.code, 1) << r.err;
+    EXPECT_EQ(count_lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find(out.string() + "/frame_0000"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("No space left on device"), std::string::npos) << r.err;
+    EXPECT_EQ(entries(disk.dir()), 0u) << "no frame, temporary or folder of the run left";
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <string>
 #include <sys/wait.h>
+#include <unistd.h>
 
 namespace mr::test {
 
@@ -44,8 +45,11 @@ class CliFixture : public ::testing::Test {
 protected:
     void SetUp() override {
         const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+        // The pid keeps two suites (e.g. the default and the asan build) run at the same
+        // time on one machine out of each other's folders.
         dir_ = std::filesystem::temp_directory_path() /
-               ("metariver_" + std::string(info->test_suite_name()) + "_" + std::string(info->name()));
+               ("metariver_" + std::string(info->test_suite_name()) + "_" + std::string(info->name()) + "_" +
+                std::to_string(::getpid()));
         std::filesystem::remove_all(dir_);
         std::filesystem::create_directories(dir_);
     }
