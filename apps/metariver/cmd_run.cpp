@@ -6,8 +6,10 @@
 #include "commands.h"
 #include "export_options.h"
 #include "progress.h"
+#include "report.h"
 
 #include <metariver/export.h>
+#include <metariver/checkpoints.h>
 #include <metariver/io.h>
 
 #include <fmt/format.h>
@@ -16,6 +18,7 @@
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -36,11 +39,13 @@ struct RunOptions {
     std::optional<long long> obj_every;  ///< --obj-every; unset = every frame
     ExportOptions exp;                   ///< --export DIR --format ... --every N --range A:B
     bool progress = true;                ///< --no-progress: no bar on a terminal
+    long long report_every = 0;          ///< --report-every: a report line every N frames (0: none)
 };
 
 constexpr long long kMaxFrames = 100'000'000;
-/// Stage-time samples kept per stage (32 MiB for the four stages at most).
-constexpr size_t kMaxTimingSamples = size_t{1} << 20;
+/// Stage-time samples kept per stage (evenly spaced frames beyond; 256 KiB for the four
+/// stages, allocated before the first frame).
+constexpr size_t kTimingSamples = size_t{1} << 13;
 constexpr long long kMaxObjEvery = 1'000'000'000;
 
 int fail(int code, const std::string& message) {
@@ -89,6 +94,8 @@ int run(const RunOptions& o) {
         return fail(kExitBadInput, "--obj-every: needs --obj-dir (the folder to write to)");
     if (o.obj_every && (*o.obj_every < 1 || *o.obj_every > kMaxObjEvery))
         return fail(kExitBadInput, fmt::format("--obj-every: must be in [1, {}] (got {})", kMaxObjEvery, *o.obj_every));
+    if (o.report_every < 0 || o.report_every > kMaxObjEvery)
+        return fail(kExitBadInput, fmt::format("--report-every: must be in [0, {}] (got {})", kMaxObjEvery, o.report_every));
     const long long obj_every = o.obj_every.value_or(1);
     auto def = o.scene.resolve();
     if (!def) return fail(kExitBadInput, def.error().message);
@@ -159,13 +166,10 @@ int run(const RunOptions& o) {
     const bool show_progress = progress_wanted(o.progress, o.frames);
     const auto t_start = std::chrono::steady_clock::now();
 
-    // Stage times: every frame up to kMaxTimingSamples, then every 2nd, 4th, ... frame
-    // (the kept samples are halved each time the limit is reached), so memory stays
-    // bounded for runs of up to 1e8 frames; percentiles come from the kept samples.
-    std::vector<double> sim_ms, field_ms, surface_ms, total_ms;
-    long long timing_stride = 1;
-    const size_t reserve = static_cast<size_t>(std::min<long long>(o.frames, kMaxTimingSamples));
-    for (auto* v : {&sim_ms, &field_ms, &surface_ms, &total_ms}) v->reserve(reserve);
+    // Stage times (simulate, field, surface, total): every frame up to kTimingSamples,
+    // then evenly spaced frames (Checkpoints), so memory stays constant for runs of up
+    // to 1e8 frames; percentiles come from the kept samples.
+    Checkpoints stage_ms(kTimingSamples, 4);
     const int digits = std::max(5, static_cast<int>(std::to_string(o.frames - 1).size()));
     // Plausibility: outflow at the sinks, wet-channel and spray fractions (sampled every
     // 10 frames over the second half; spray also at the last frame), largest speed and
@@ -179,6 +183,10 @@ int run(const RunOptions& o) {
     float max_speed = 0.0f, density_max = 0.0f;
     for (long long f = 0; f < o.frames; ++f) {
         sim.step(static_cast<float>(o.dt));
+        if (o.report_every > 0 && (f + 1) % o.report_every == 0) {
+            fmt::print("{}\n", report_line(sim, f + 1));
+            std::fflush(stdout);
+        }
         flow.record(double(f + 1) * o.dt, sim.counters().sunk);
         outlets.record(double(f + 1) * o.dt, sim.last_exits());
         max_speed = std::max(max_speed, sim.counters().max_speed);
@@ -194,21 +202,8 @@ int run(const RunOptions& o) {
             ++spray_n;
         }
         const FrameTimings& t = sim.last_timings();
-        if (f % timing_stride == 0) {
-            if (sim_ms.size() == kMaxTimingSamples) {
-                for (auto* v : {&sim_ms, &field_ms, &surface_ms, &total_ms}) {
-                    for (size_t k = 0; 2 * k < v->size(); ++k) (*v)[k] = (*v)[2 * k];
-                    v->resize((v->size() + 1) / 2);
-                }
-                timing_stride *= 2;
-            }
-            if (f % timing_stride == 0) {
-                sim_ms.push_back(t.simulate_ms);
-                field_ms.push_back(t.field_ms);
-                surface_ms.push_back(t.surface_ms);
-                total_ms.push_back(t.simulate_ms + t.field_ms + t.surface_ms);
-            }
-        }
+        const double times[4] = {t.simulate_ms, t.field_ms, t.surface_ms, t.simulate_ms + t.field_ms + t.surface_ms};
+        stage_ms.push(times);
         if (!o.obj_dir.empty() && (f % obj_every == 0 || f == o.frames - 1)) {
             const std::string path = (fs::path(o.obj_dir) / fmt::format("surface_{:0{}}.obj", f, digits)).string();
             if (auto s = write_surface_obj(path, sim.surface(), fmt::format("metariver water surface, frame {}", f)); !s) {
@@ -294,10 +289,10 @@ int run(const RunOptions& o) {
             {"outlets", outlets_json(outlets, os)},
             {"outlet_other", {{"particles", os.other.particles}, {"rate_per_s", os.other.rate}}}};
         j["state_hash"] = fmt::format("{:016x}", sim.state_hash());
-        j["stage_ms"] = {{"simulate", stage_json(sim_ms)},
-                         {"field", stage_json(field_ms)},
-                         {"surface", stage_json(surface_ms)},
-                         {"total", stage_json(total_ms)}};
+        j["stage_ms"] = {{"simulate", stage_json(stage_ms.column(0))},
+                         {"field", stage_json(stage_ms.column(1))},
+                         {"surface", stage_json(stage_ms.column(2))},
+                         {"total", stage_json(stage_ms.column(3))}};
         if (auto s = write_file_atomic(o.stats, j.dump(2) + "\n"); !s) {
             cleanup();
             return fail(kExitFailure, s.error().message);
@@ -311,7 +306,7 @@ int run(const RunOptions& o) {
             return fail(kExitFailure, s.error().message);
         }
     }
-    const Percentiles tot = percentiles(total_ms);
+    const Percentiles tot = percentiles(stage_ms.column(3));
     fmt::print("{}: {} frames, {}/{} particles active, surface {} triangles / {} vertices, "
                "tunneled {}, guarded {}, respawned {}, outflow {:.1f}/s ({}), main outlet {:.1f}/s = {:.2f} of "
                "inflow (first at {:.2f} s), channel coverage {:.0f} %, wet {:.0f} %, spray {:.1f} %, "
@@ -341,6 +336,9 @@ void register_run(CLI::App& app, std::function<int()>& action) {
                     "with --obj-dir: write every N-th frame's surface (0, N, 2N, ... and the last), [1, 1e9]; default 1");
     opts->exp.add_to(*cmd);
     cmd->add_flag("!--no-progress", opts->progress, "no progress bar (it is shown on a terminal only)");
+    cmd->add_option("--report-every", opts->report_every,
+                    "print a report line (resident memory, particle counters, non-finite values) every N frames; "
+                    "scripts/soak.sh reads them");
     cmd->callback([opts, &action] { action = [opts] { return run(*opts); }; });
 }
 

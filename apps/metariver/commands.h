@@ -42,4 +42,14 @@ void register_render(CLI::App& app, std::function<int()>& action);
 /// Registers `bench`.
 void register_bench(CLI::App& app, std::function<int()>& action);
 
+/// A parsed command line: `action` runs the chosen command (checking its options first);
+/// without one, `exit_code` is the result (help printed, or the one-line parse error
+/// already on stderr).
+struct CommandLine {
+    std::function<int()> action;
+    int exit_code = kExitOk;
+};
+/// Parses `argv` (argv[0] is the program) for every command; runs nothing.
+CommandLine parse_command_line(int argc, const char* const* argv);
+
 }  // namespace mr::app

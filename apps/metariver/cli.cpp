@@ -1,0 +1,45 @@
+// The metariver command line: every subcommand registered on one CLI11 app, parsed
+// into the action to run. main() runs it; fuzz/cli_fuzz.cpp fuzzes the parsing.
+#include "commands.h"
+
+#include <fmt/format.h>
+
+#include <cstdio>
+
+namespace mr::app {
+
+CommandLine parse_command_line(int argc, const char* const* argv) {
+    CLI::App app{"metariver: real-time river simulation with metaballs"};
+    app.require_subcommand(1);
+    CommandLine result;
+    register_run(app, result.action);
+    register_view(app, result.action);
+    register_render(app, result.action);
+    register_bench(app, result.action);
+    if (argc > 1 && argv[1][0] != '-') {
+        std::string known;
+        bool found = false;
+        for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+            known += (known.empty() ? "" : ", ") + sub->get_name();
+            found |= sub->get_name() == argv[1];
+        }
+        if (!found) {
+            fmt::print(stderr, "metariver: unknown command '{}' (known: {})\n", argv[1], known);
+            return {{}, kExitBadInput};
+        }
+    }
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::CallForHelp& e) {
+        return {{}, app.exit(e)};
+    } catch (const CLI::CallForAllHelp& e) {
+        return {{}, app.exit(e)};
+    } catch (const CLI::ParseError& e) {
+        fmt::print(stderr, "metariver: {}\n", e.what());
+        return {{}, kExitBadInput};
+    }
+    if (!result.action) result.exit_code = kExitBadInput;
+    return result;
+}
+
+}  // namespace mr::app
