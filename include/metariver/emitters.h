@@ -8,6 +8,7 @@
 // turns the sink counter into an outflow rate and a steady-state verdict.
 #pragma once
 
+#include <metariver/checkpoints.h>
 #include <metariver/core.h>
 #include <metariver/terrain.h>
 
@@ -142,9 +143,12 @@ struct WetChannelDef {
 float wet_channel_fraction(const Terrain& t, const ChannelMap& m, std::span<const Vec3> positions,
                            std::span<const uint8_t> active, const WetChannelDef& def = {});
 
-/// Outflow measurement: feed the cumulative sink count after every frame.
+/// Outflow measurement: feed the cumulative sink count after every frame. Constant memory
+/// (kFlowRecords checkpoints): exact for runs of up to kFlowRecords frames; beyond, the
+/// second half and its quarters start within a checkpoint stride of the exact frames.
 class FlowMeter {
 public:
+    static constexpr size_t kFlowRecords = 4096;
     void record(double time_s, uint64_t sunk_total);
     struct Summary {
         double rate = 0.0;              ///< particles per second over the second half of the run
@@ -155,8 +159,8 @@ public:
     Summary summary() const;
 
 private:
-    std::vector<double> t_;
-    std::vector<uint64_t> n_;
+    Checkpoints records_{kFlowRecords, 2};  ///< (time, sunk_total)
+    double first_outflow_s_ = -1.0;
 };
 
 }  // namespace mr

@@ -165,8 +165,12 @@ public:
     std::span<const Outlet> outlets() const { return outlets_; }
     /// Index into outlets() of the outlet an exit belongs to, -1 for other.
     int assign(const Vec3& exit) const;
-    /// Feed after every frame: its end time and its exits.
+    /// Feed after every frame: its end time and its exits. Constant memory
+    /// (kOutletRecords checkpoints of the running counts): exact for runs of up to
+    /// kOutletRecords frames; beyond, the second half starts within a checkpoint stride
+    /// of its exact frame.
     void record(double time_s, std::span<const Vec3> exits);
+    static constexpr size_t kOutletRecords = 2048;
     struct Count {
         uint64_t particles = 0;   ///< over the whole run
         double rate = 0.0;        ///< particles per second over the second half (FlowMeter's window; 0 under 8 frames)
@@ -182,8 +186,10 @@ public:
 private:
     std::vector<Outlet> outlets_;
     float x0_ = 0, x1_ = 0, z0_ = 0, z1_ = 0, radius_ = 3.0f;
-    std::vector<double> t_;
-    std::vector<std::pair<uint32_t, int32_t>> exits_;  ///< (frame record, outlet or -1)
+    Checkpoints records_;          ///< (time, running exits per outlet..., other) per frame
+    std::vector<double> total_;    ///< running exits per outlet, "other" last
+    std::vector<double> first_s_;  ///< end time of the frame of the first exit, per outlet, other last
+    std::vector<double> row_;      ///< scratch for one record
 };
 
 /// Per-frame times of the three stages, milliseconds.

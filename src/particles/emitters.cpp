@@ -204,20 +204,21 @@ float wet_channel_fraction(const Terrain& t, const ChannelMap& m, std::span<cons
 }
 
 void FlowMeter::record(double time_s, uint64_t sunk_total) {
-    t_.push_back(time_s);
-    n_.push_back(sunk_total);
+    if (first_outflow_s_ < 0.0 && sunk_total > 0) first_outflow_s_ = time_s;
+    const double r[2] = {time_s, double(sunk_total)};
+    records_.push(r);
 }
 
 FlowMeter::Summary FlowMeter::summary() const {
     Summary s;
-    for (size_t k = 0; k < n_.size(); ++k)
-        if (n_[k] > 0) {
-            s.first_outflow_s = t_[k];
-            break;
-        }
-    if (t_.size() < 8) return s;
-    const size_t last = t_.size() - 1, k0 = t_.size() / 2;
-    auto rate = [&](size_t a, size_t b) { return t_[b] > t_[a] ? double(n_[b] - n_[a]) / (t_[b] - t_[a]) : 0.0; };
+    s.first_outflow_s = first_outflow_s_;
+    const size_t size = records_.size();
+    if (size < 8) return s;
+    const size_t last = size - 1, k0 = size / 2;
+    auto rate = [&](size_t a, size_t b) {
+        const double ta = records_[a][0], tb = records_[b][0];
+        return tb > ta ? (records_[b][1] - records_[a][1]) / (tb - ta) : 0.0;
+    };
     s.rate = rate(k0, last);
     bool steady = s.rate > 0.0;
     for (int q = 0; q < 4; ++q) {

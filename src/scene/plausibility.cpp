@@ -101,6 +101,10 @@ OutletMeter::OutletMeter(const Terrain& t, const ChannelMap& m, std::pair<int, i
     z0_ = t.bounds().min.z;
     z1_ = t.bounds().max.z;
     radius_ = std::max(3.0f * s, 3.0f);
+    records_ = Checkpoints(kOutletRecords, outlets_.size() + 2);
+    total_.assign(outlets_.size() + 1, 0.0);
+    first_s_.assign(outlets_.size() + 1, -1.0);
+    row_.assign(outlets_.size() + 2, 0.0);
 }
 
 int OutletMeter::assign(const Vec3& exit) const {
@@ -128,26 +132,29 @@ int OutletMeter::assign(const Vec3& exit) const {
 }
 
 void OutletMeter::record(double time_s, std::span<const Vec3> exits) {
-    for (const Vec3& e : exits) exits_.emplace_back(uint32_t(t_.size()), int32_t(assign(e)));
-    t_.push_back(time_s);
+    for (const Vec3& e : exits) {
+        const int o = assign(e);
+        const size_t k = o < 0 ? outlets_.size() : size_t(o);
+        total_[k] += 1.0;
+        if (first_s_[k] < 0.0) first_s_[k] = time_s;
+    }
+    row_[0] = time_s;
+    std::copy(total_.begin(), total_.end(), row_.begin() + 1);
+    records_.push(row_);
 }
 
 OutletMeter::Summary OutletMeter::summary() const {
     Summary s;
     s.outlets.resize(outlets_.size());
-    // The second half as FlowMeter measures it: frame records (k0, last].
-    const size_t last = t_.empty() ? 0 : t_.size() - 1, k0 = t_.size() / 2;
-    const double span = t_.size() >= 8 && t_[last] > t_[k0] ? t_[last] - t_[k0] : 0.0;
-    std::vector<uint64_t> late(outlets_.size() + 1, 0);  // second-half exits; the last one: other
-    for (const auto& [k, o] : exits_) {
-        Count& c = o < 0 ? s.other : s.outlets[size_t(o)];
-        ++c.particles;
-        if (c.first_s < 0.0) c.first_s = t_[k];
-        late[o < 0 ? outlets_.size() : size_t(o)] += k > k0 && k <= last;
-    }
-    if (span > 0.0) {
-        for (size_t k = 0; k < outlets_.size(); ++k) s.outlets[k].rate = double(late[k]) / span;
-        s.other.rate = double(late.back()) / span;
+    // The second half as FlowMeter measures it: the exits of frame records (k0, last].
+    const size_t n = records_.size();
+    const size_t last = n ? n - 1 : 0, k0 = n / 2;
+    const double span = n >= 8 && records_[last][0] > records_[k0][0] ? records_[last][0] - records_[k0][0] : 0.0;
+    for (size_t k = 0; k <= outlets_.size(); ++k) {
+        Count& c = k < outlets_.size() ? s.outlets[k] : s.other;
+        c.particles = uint64_t(total_[k]);
+        c.first_s = first_s_[k];
+        if (span > 0.0) c.rate = (records_[last][1 + k] - records_[k0][1 + k]) / span;
     }
     for (size_t k = 0; k < outlets_.size(); ++k)
         if (outlets_[k].main) s.main = s.outlets[k];
