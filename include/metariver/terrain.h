@@ -9,6 +9,7 @@
 
 #include <metariver/core.h>
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -39,6 +40,12 @@ inline constexpr int kMaxHeightmapSide = 4097;
 Result<Heightmap> load_heightmap_png(const std::string& path);
 /// The same from bytes in memory; `name` is used in error messages.
 Result<Heightmap> load_heightmap_png_memory(std::span<const uint8_t> bytes, const std::string& name);
+/// A PNG's structure, checked before any decoder sees it: the signature, every chunk's
+/// length within the bytes, the CRC of every critical chunk, IHDR first, up to IEND.
+/// Returns IHDR's width and height; errors (truncated, corrupt) name `name`. The heightmap
+/// and the image loader run it (stb_image alone takes a file cut inside IEND, and
+/// allocates what a chunk's length field claims before reading it).
+Result<std::array<uint32_t, 2>> check_png_structure(std::span<const uint8_t> bytes, const std::string& name);
 
 /// A width x height map with every sample = value (procedural, bit_depth 32);
 /// negative sizes count as 0. Callers shape it from there.

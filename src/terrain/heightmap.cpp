@@ -56,9 +56,9 @@ std::string chunk_name(const uint8_t* type) {
 
 Error fail(const std::string& name, const std::string& what) { return Error{name + ": " + what}; }
 
-/// Checks the signature and the chunk structure; returns the IHDR width and height.
-Result<std::array<uint32_t, 2>> check_png_structure(std::span<const uint8_t> bytes,
-                                                    const std::string& name) {
+}  // namespace
+
+Result<std::array<uint32_t, 2>> check_png_structure(std::span<const uint8_t> bytes, const std::string& name) {
     if (bytes.size() < kPngSignature.size() ||
         std::memcmp(bytes.data(), kPngSignature.data(), kPngSignature.size()) != 0) {
         return fail(name, "not a PNG image (bad signature)");
@@ -99,8 +99,6 @@ Result<std::array<uint32_t, 2>> check_png_structure(std::span<const uint8_t> byt
     }
     return size;
 }
-
-}  // namespace
 
 Result<Heightmap> load_heightmap_png_memory(std::span<const uint8_t> bytes, const std::string& name) {
     if (bytes.empty()) return fail(name, "empty file");

@@ -333,5 +333,30 @@ TEST(Presets, PaperEngineScenesCarryTheirExactParameters) {
     EXPECT_FALSE(nile->bullet.springs);
 }
 
+
+TEST(SceneToml, ErrorsAreOneLineWhateverTheFileHolds) {
+    // Found by fuzz/scene_toml_fuzz.cpp: toml++ quotes the text at a syntax error, so
+    // "sleep = fals" followed by a newline gave a message with a line break in it; quoted
+    // keys and string values can hold newlines, tabs and other control characters too.
+    const char* const inputs[] = {
+        "[bullet]\nsleep = fals\nccd = true\n",
+        "solver = \"pbf\\nsprings\"\n",
+        "\"na\\nme\" = 1\n",
+        "[terrain]\nsource = \"val\\tley\\u0001\"\n",
+        "[particles]\ncount = 1\r\ncount = 2\r\n",
+        "x = \"\\u007f\"\n",
+    };
+    for (const char* text : inputs) {
+        auto r = parse_scene_toml(text, "one_line.toml", default_scene());
+        ASSERT_FALSE(r.ok()) << text;
+        const std::string& m = r.error().message;
+        EXPECT_EQ(m.rfind("one_line.toml", 0), 0u) << m;
+        for (char c : m) EXPECT_FALSE(static_cast<unsigned char>(c) < 0x20 || c == 0x7f) << "control character in: " << m;
+    }
+    auto r = parse_scene_toml("solver = \"pbf\\nsprings\"\n", "s.toml", default_scene());
+    ASSERT_FALSE(r.ok());
+    EXPECT_NE(r.error().message.find("(got 'pbf\\nsprings')"), std::string::npos) << r.error().message;
+}
+
 }  // namespace
 }  // namespace mr
