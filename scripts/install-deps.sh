@@ -12,6 +12,8 @@ pkgs=(cmake ninja-build g++ pkg-config
       libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev
       libbullet-dev
       libepoxy-dev libglfw3-dev libimgui-dev libegl-dev libgl1-mesa-dri libegl-mesa0 ffmpeg xvfb
+      # the sanitizer build and the fuzz targets (scripts/fuzz.sh): clang, its runtimes
+      clang libclang-rt-dev
       # export (docs/export.md): tinygltf, OpenVDB (its headers need Boost's), and the
       # outside readers the tests use: assimp, vdb_print
       libtinygltf-dev libopenvdb-dev libboost-iostreams-dev libassimp-dev libopenvdb-tools)

@@ -34,10 +34,11 @@ std::set<uint32_t> check_births(const SceneDef& def, int frames) {
             births.insert(b);
             EXPECT_LE(b, static_cast<uint32_t>(f)) << "born after the frame just stepped, id " << p.id[i];
             const auto it = before.find(p.id[i]);
-            if (it == before.end())
+            if (it == before.end()) {
                 EXPECT_EQ(b, static_cast<uint32_t>(f)) << "newly active particle " << p.id[i] << " at frame " << f;
-            else if (b != it->second)
+            } else if (b != it->second) {
                 EXPECT_EQ(b, static_cast<uint32_t>(f)) << "birth changed without a re-emission, id " << p.id[i];
+            }
         }
         before.swap(now);
         if (::testing::Test::HasFailure()) break;
