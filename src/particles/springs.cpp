@@ -50,15 +50,28 @@ namespace {
 /// Candidates gathered per chunk; 3 x 512 floats stay on the stack (no heap at all).
 constexpr int kChunk = 512;
 
+// target_clones makes an ifunc, whose resolver the dynamic loader runs before the
+// ThreadSanitizer runtime is set up: instrumented, it crashed the tsan build's
+// particles_tests at load (before main). TSan builds keep the default version only.
+#if defined(__SANITIZE_THREAD__)
+#define METARIVER_AVX2_CLONES
+#elif defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+#define METARIVER_AVX2_CLONES
+#endif
+#endif
+#ifndef METARIVER_AVX2_CLONES
+#define METARIVER_AVX2_CLONES [[gnu::target_clones("avx2", "default")]]
+#endif
+
 /// Sum of the spring accelerations on a particle at (xi, yi, zi) from m candidates.
 /// Eight independent lanes so the loop vectorises without reassociating the sum (the
 /// result is the same whatever the vector width), a candidate at distance 0 (the
 /// particle itself, or one exactly on top of it) adds nothing, as in the pair loop.
 /// The arrays must hold finite values up to the next multiple of 8 past m: the lanes
 /// past m are masked out (their terms are exactly 0), so there is no scalar tail.
-[[gnu::target_clones("avx2", "default")]] void spring_sum(float xi, float yi, float zi, const float* cx,
-                                                         const float* cy, const float* cz, int m, float r,
-                                                         float max_d, float half_k, float out[3]) {
+METARIVER_AVX2_CLONES void spring_sum(float xi, float yi, float zi, const float* cx, const float* cy,
+                                      const float* cz, int m, float r, float max_d, float half_k, float out[3]) {
     float ax[8] = {}, ay[8] = {}, az[8] = {};
     for (int k = 0; k < m; k += 8) {
         for (int l = 0; l < 8; ++l) {
