@@ -121,7 +121,7 @@ ScenarioResult bench_simulation(const std::string& name, const SceneDef& def, in
     r.particles = s.particles().active_count();
     r.triangles = s.surface().triangle_count();
     r.params = {{"scene", def.name},
-                {"particles", def.spawn.count},
+                {"particles", s.def().spawn.count},  // the budget as sized (particles.count = "auto")
                 {"springs", std::string(to_string(def.springs.mode))},
                 {"collision", std::string(to_string(def.collision.mode))},
                 {"field_kernel", std::string(to_string(def.field.kernel))},
@@ -132,7 +132,7 @@ ScenarioResult bench_simulation(const std::string& name, const SceneDef& def, in
     // frames, water in the channel, density error, no explosion, no spray, settled speed.
     // Outflow over inflow: the main outlet's rate over the second half of the measured
     // frames over the source's nominal rate; coverage of the main channel at the end.
-    const double inflow = def.spawn.particles_per_second();
+    const double inflow = s.def().spawn.particles_per_second();  // as sized
     r.quality = {{"tunneled", s.counters().tunneled},
                  {"guarded", s.counters().guarded},
                  {"respawned", s.counters().respawned},
@@ -275,7 +275,7 @@ ScenarioResult bench_export(int particles, int warmup, int frames) {
     }
     r.particles = s.particles().active_count();
     r.triangles = s.surface().triangle_count();
-    r.params = {{"scene", def.name}, {"particles", def.spawn.count}, {"warmup", warmup}, {"frames", frames},
+    r.params = {{"scene", def.name}, {"particles", s.def().spawn.count}, {"warmup", warmup}, {"frames", frames},
                 {"voxel_size", 1.0 / def.field.resolution}};
     r.quality = {{"mb_per_frame", bytes}};
     return r;  // the export is not finished: its files go with it

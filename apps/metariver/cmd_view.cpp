@@ -178,7 +178,12 @@ bool scene_editor(SceneDef& d) {
         commit |= ImGui::Checkbox("paper row orientation", &d.terrain.paper_row_orientation);
     }
     if (ImGui::CollapsingHeader("Particles / spawn", ImGuiTreeNodeFlags_DefaultOpen)) {
-        commit |= drag_int("count", d.spawn.count, 5.0f, 1, 200000);
+        bool auto_count = d.spawn.count == kAutoCount;
+        if (ImGui::Checkbox("budget sized to the channel", &auto_count)) {
+            d.spawn.count = auto_count ? kAutoCount : kFixedDefaultCount;
+            commit = true;
+        }
+        if (!auto_count) commit |= drag_int("count", d.spawn.count, 5.0f, 1, 200000);
         commit |= ImGui::Checkbox("auto spawn centre", &d.spawn.auto_center);
         if (d.spawn.auto_center) commit |= drag_float("auto height (m)", d.spawn.auto_height, 0.05f, 0.0f, 100.0f);
         else commit |= drag_vec3("spawn centre (m)", d.spawn.center, 0.1f, -1e4f, 1e4f);

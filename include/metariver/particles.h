@@ -48,9 +48,13 @@ struct Particles {
 
 /// Largest particle budget a scene may ask for.
 inline constexpr int kMaxParticles = 10'000'000;
+/// `SpawnDef::count` asking for a budget sized to the terrain (`particles.count = "auto"`).
+inline constexpr int kAutoCount = 0;
+/// `SpawnDef::flow_rate` asking for a rate sized to the terrain (`particles.flow_rate = "auto"`).
+inline constexpr float kAutoRate = -1.0f;
 
 struct SpawnDef {
-    int count = 20;                          ///< particle budget, [1, kMaxParticles]
+    int count = 20;                          ///< particle budget, [1, kMaxParticles]; kAutoCount: sized to the terrain (PBF)
     Vec3 center{8.0f, 7.0f, 15.0f};          ///< spawn volume centre, metres
     Vec3 half_extent{2.0f, 1.0f, 0.2f};      ///< spawn volume half size, metres (>= 0)
     int interval = 80;                       ///< frames between two activations, [0, 1e6]; 0 = all at once
@@ -71,8 +75,15 @@ struct SpawnDef {
     /// > 0: `flow_rate` is given in litres per second and each particle carries this
     /// many litres; 0: `flow_rate` is in particles per second.
     float litres_per_particle = 0.0f;
+    /// `flow_rate == kAutoRate` (`particles.flow_rate = "auto"`, the default river's):
+    /// derived from the terrain's main channel when a PBF simulation is created
+    /// (size_river in scene.h); any other value is used as given.
+    bool auto_rate() const { return flow_rate == kAutoRate; }
     /// Particles per second the source emits.
-    float particles_per_second() const { return litres_per_particle > 0.0f ? flow_rate / litres_per_particle : flow_rate; }
+    float particles_per_second() const {
+        if (auto_rate()) return 0.0f;  // not known before the terrain is
+        return litres_per_particle > 0.0f ? flow_rate / litres_per_particle : flow_rate;
+    }
 };
 
 /// Position Based Fluids (Macklin and Mueller 2013). The rest density is the kernel

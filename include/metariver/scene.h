@@ -106,6 +106,28 @@ TerrainCondition resolved_condition(const SceneDef& def);
 /// max(3 samples, 4 pbf.spacing) wide, walls max(1.5 samples, 2 pbf.spacing) wide on
 /// each side, the bed 2 pbf.spacing deep.
 CarveDef carve_def(const SceneDef& def, float area_scale);
+
+/// The self-sized river (docs/river.md, "Sizing"): `particles.count = "auto"` and
+/// `particles.flow_rate = "auto"` are derived from the carved channel's section and the
+/// main channel's length. The rate fills kRiverFill of the section at kRiverSpeed; the
+/// budget covers the rate over the time a particle spends on the channel at the slower
+/// kRiverTransitSpeed (the measured median), kRiverBudgetMargin times, plus the source's
+/// pile; above kRiverMaxCount the rate drops so that the budget still covers it.
+inline constexpr float kRiverSpeed = 1.5f;          ///< m/s, the flow speed the section is sized for
+inline constexpr float kRiverTransitSpeed = 0.75f;  ///< m/s, the speed the budget's transit time assumes
+inline constexpr float kRiverFill = 0.75f;          ///< share of the carved section the flow fills
+inline constexpr float kRiverBudgetMargin = 2.0f;   ///< budget over rate x transit time
+inline constexpr double kRiverSourcePile = 300.0;   ///< particles the source's basin holds
+inline constexpr float kRiverMinRate = 0.5f, kRiverMaxRate = 2000.0f;  ///< particles per second
+inline constexpr int kRiverMinCount = 500, kRiverMaxCount = 12000;     ///< particle budget
+inline constexpr int kFixedDefaultCount = 4000;  ///< `count = "auto"` for a solver that does not size itself
+struct RiverSize {
+    int count = 0;              ///< particle budget
+    float rate = 0.0f;          ///< particles per second
+    float channel_length_m = 0; ///< the main channel's length from the source to its outlet
+    bool capped = false;        ///< the budget hit kRiverMaxCount (the rate was lowered)
+};
+RiverSize size_river(const SceneDef& def, float area_scale, float channel_length_m);
 /// Non-fatal advice about a valid scene (e.g. a flow rate the particle budget cannot
 /// sustain for long), one line each, naming the field.
 std::vector<std::string> scene_warnings(const SceneDef& def);
@@ -257,6 +279,9 @@ public:
     std::span<const std::pair<int, int>> main_channel() const { return main_path_; }
     /// ChannelCoverage of the main channel by the current particles (1.5 samples, 3 m).
     float channel_coverage() const;
+    /// How the river sized itself (particles.count / flow_rate = "auto"); empty when
+    /// neither was automatic.
+    const std::optional<RiverSize>& sizing() const { return sizing_; }
 
 private:
     Simulation(const SceneDef& def, Terrain terrain, Bvh bvh);
@@ -276,6 +301,7 @@ private:
     ChannelMap channel_;
     std::vector<std::pair<int, int>> main_path_;
     ChannelCoverage coverage_;
+    std::optional<RiverSize> sizing_;
 };
 
 }  // namespace mr

@@ -41,7 +41,7 @@ SceneDef default_scene() {
     // substeps of 1/120 s with 3 density iterations; the sparse poly6 field wraps them.
     SceneDef d = springs_valley_scene();
     d.solver = SolverKind::Pbf;
-    d.spawn = {.count = 4000,
+    d.spawn = {.count = kAutoCount,
                .center = Vec3(0.0f),
                .half_extent = Vec3(2.5f, 0.5f, 2.5f),
                .interval = 0,
@@ -50,7 +50,7 @@ SceneDef default_scene() {
                .auto_height = 1.5f,
                .auto_channel = true,
                .shape = SourceShape::Disc,
-               .flow_rate = 420.0f,
+               .flow_rate = kAutoRate,
                .litres_per_particle = 0.0f};
     d.pbf = PbfDef{};
     // The river's channel is carved from the source to the outlet (a scene without a
@@ -237,7 +237,7 @@ Status validate(const SceneDef& d) {
     }
     c.positive("terrain.area_scale", d.terrain.area_scale, 1e4);
     c.positive("terrain.height_scale", d.terrain.height_scale, 1e5);
-    c.range("particles.count", d.spawn.count, 1, kMaxParticles);
+    if (d.spawn.count != kAutoCount) c.range("particles.count", d.spawn.count, 1, kMaxParticles);
     c.vec("particles.spawn_center", d.spawn.center, -kBig, kBig);
     c.vec("particles.spawn_half_extent", d.spawn.half_extent, 0.0, kBig);
     c.range("particles.spawn_interval", d.spawn.interval, 0, 1e6);
@@ -282,7 +282,7 @@ Status validate(const SceneDef& d) {
     c.positive("bullet.dt", d.bullet.fixed_dt, 1.0);
     c.range("bullet.max_substeps", d.bullet.max_substeps, 0, 1000);
     c.range("bullet.solver_iterations", d.bullet.solver_iterations, 1, 1000);
-    c.range("particles.flow_rate", d.spawn.flow_rate, 0.0, 1e7);
+    if (!d.spawn.auto_rate()) c.range("particles.flow_rate", d.spawn.flow_rate, 0.0, 1e7);
     c.range("particles.litres_per_particle", d.spawn.litres_per_particle, 0.0, 1e9);
     if (d.solver == SolverKind::Pbf) {
         c.range("pbf.spacing", d.pbf.spacing, 1e-3, 1e3);  // below 1 mm the kernel constants overflow float

@@ -164,7 +164,7 @@ void apply_solver_scope(const toml::table& root, Reader& r, SceneDef& d) {
     if (root.get("pbf")) r.fail("pbf", "only solver = \"pbf\" reads [pbf]");
     const std::string why = "solver = \"bullet\" does not use it (spheres spawn in the box every "
                             "particles.spawn_interval frames, collide through Bullet and respawn below or outside the terrain)";
-    if (given("flow_rate") && d.spawn.flow_rate > 0.0f) r.fail("particles.flow_rate", why + "; remove it or set 0");
+    if (given("flow_rate") && (d.spawn.flow_rate > 0.0f || d.spawn.auto_rate())) r.fail("particles.flow_rate", why + "; remove it or set 0");
     if (given("litres_per_particle") && d.spawn.litres_per_particle > 0.0f) r.fail("particles.litres_per_particle", why);
     if (given("source_shape") && d.spawn.shape != SourceShape::Box) r.fail("particles.source_shape", why + "; only \"box\"");
     if (root.get("collision")) r.fail("collision", why + " ([bullet] has its contact settings)");
@@ -266,7 +266,12 @@ Result<SceneDef> parse_scene_toml_lines(std::string_view text, const std::string
         const std::string p = "particles.";
         r.allow(*t, p, {"count", "spawn_center", "spawn_half_extent", "spawn_interval", "initial_velocity",
                         "auto_height", "source_shape", "flow_rate", "litres_per_particle"});
-        r.integer(*t, p, "count", d.spawn.count, 1, kMaxParticles);
+        if (const toml::node* n = t->get("count"); n && n->is_string()) {
+            if (n->value<std::string>() == "auto") d.spawn.count = kAutoCount;
+            else r.fail(p + "count", fmt::format("must be \"auto\" or a whole number in [1, {}]", kMaxParticles));
+        } else {
+            r.integer(*t, p, "count", d.spawn.count, 1, kMaxParticles);
+        }
         if (const toml::node* n = t->get("spawn_center"); n && n->is_string()) {
             if (n->value<std::string>() == "auto") {
                 d.spawn.auto_center = true;
@@ -287,7 +292,12 @@ Result<SceneDef> parse_scene_toml_lines(std::string_view text, const std::string
         r.number(*t, p, "auto_height", d.spawn.auto_height);
         r.choice(*t, p, "source_shape", d.spawn.shape,
                  {{"box", SourceShape::Box}, {"disc", SourceShape::Disc}, {"point", SourceShape::Point}});
-        r.number(*t, p, "flow_rate", d.spawn.flow_rate);
+        if (const toml::node* n = t->get("flow_rate"); n && n->is_string()) {
+            if (n->value<std::string>() == "auto") d.spawn.flow_rate = kAutoRate;
+            else r.fail(p + "flow_rate", "must be \"auto\" or a number of particles (or litres) per second in [0, 1e7]");
+        } else if (n) {
+            r.number(*t, p, "flow_rate", d.spawn.flow_rate);
+        }
         r.number(*t, p, "litres_per_particle", d.spawn.litres_per_particle);
     }
     if (const toml::table* t = r.table(root, "pbf")) {

@@ -168,6 +168,11 @@ Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh)
 
 std::vector<std::string> Simulation::warnings() const {
     std::vector<std::string> w = scene_warnings(def_);
+    if (sizing_ && sizing_->capped)
+        w.push_back(fmt::format("particles.count: the main channel is {:.0f} m long; at {} particles (the most the "
+                                "automatic budget takes) the river runs at {:.1f} particles per second, thinner than its "
+                                "channel; set particles.count and particles.flow_rate, or a larger pbf.spacing",
+                                sizing_->channel_length_m, def_.spawn.count, def_.spawn.particles_per_second()));
     for (std::string& s : solver_->warnings()) w.push_back(std::move(s));
     return w;
 }
@@ -182,7 +187,7 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def) {
 TerrainCondition resolved_condition(const SceneDef& def) {
     if (def.terrain.condition != TerrainCondition::Auto) return def.terrain.condition;
     const bool river = def.solver == SolverKind::Pbf && def.sink.kind == SinkKind::Edges &&
-                       def.spawn.particles_per_second() > 0.0;
+                       (def.spawn.particles_per_second() > 0.0 || def.spawn.auto_rate());
     return river ? TerrainCondition::Carve : TerrainCondition::None;
 }
 
@@ -194,13 +199,37 @@ CarveDef carve_def(const SceneDef& def, float area_scale) {
     return CarveDef{.width_m = floor + 2.0f * std::max(1.5f * area_scale, 2.0f * d), .floor_m = floor, .depth_m = 2.0f * d};
 }
 
+RiverSize size_river(const SceneDef& def, float area_scale, float channel_length_m) {
+    const CarveDef c = carve_def(def, area_scale);
+    const float s = def.pbf.spacing;
+    RiverSize r;
+    r.channel_length_m = channel_length_m;
+    // A quarter of the carved section full, at the reference speed: a river a couple of
+    // layers deep on the channel's floor, well inside its walls.
+    const float area_m2 = kRiverFill * c.floor_m * c.depth_m;
+    r.rate = std::clamp(area_m2 * kRiverSpeed / (s * s * s), kRiverMinRate, kRiverMaxRate);
+    // The budget: the particles on their way (the rate times the time they spend on the
+    // terrain at the reference speed, twice over: slower reaches, the source's basin,
+    // eddies) plus the particles the source's pile holds.
+    const float transit_s = channel_length_m / kRiverTransitSpeed;
+    const double want = double(r.rate) * double(transit_s) * kRiverBudgetMargin + kRiverSourcePile;
+    r.count = int(std::clamp(std::ceil(want), double(kRiverMinCount), double(kRiverMaxCount)));
+    if (want > double(kRiverMaxCount)) {  // the budget's ceiling: a thinner river, not gaps
+        r.rate = std::max(kRiverMinRate, float((kRiverMaxCount - kRiverSourcePile) / (transit_s * kRiverBudgetMargin)));
+        r.capped = true;
+    }
+    return r;
+}
+
 Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, const Heightmap& map) {
     if (auto v = validate(def); !v) return v.error();
     SceneDef resolved = def;
     resolved.terrain.condition = resolved_condition(def);
     auto terrain = Terrain::build(map, resolved.terrain);
     if (!terrain) return terrain.error();
-    if (resolved.terrain.condition == TerrainCondition::Carve) {
+    const bool auto_size = def.solver == SolverKind::Pbf && (def.spawn.count == kAutoCount || def.spawn.auto_rate());
+    std::optional<RiverSize> sizing;
+    if (resolved.terrain.condition == TerrainCondition::Carve || auto_size) {
         // The main channel of the breached terrain from where the source will sit, and
         // a basin under the source (resolved as the constructor will: x and z do not
         // depend on the heights the carve changes).
@@ -208,13 +237,33 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, cons
         SpawnDef spawn = def.spawn;
         resolve_source(terrain.value(), m, spawn);
         const auto path = main_channel_path(terrain.value(), m, def.spawn, spawn.center);
-        CarveDef carve = carve_def(def, terrain->area_scale());
-        carve.basin_center = spawn.center;
-        carve.basin_radius_m = spawn.shape == SourceShape::Point ? 0.0f
-                               : std::max(spawn.half_extent.x, spawn.shape == SourceShape::Disc ? 0.0f : spawn.half_extent.z) +
-                                     def.pbf.spacing;
-        terrain->carve_channel(path, carve);
+        if (auto_size) {
+            const float as = terrain->area_scale();
+            float length = 0.0f;
+            for (size_t k = 1; k < path.size(); ++k)
+                length += as * std::hypot(float(path[k].first - path[k - 1].first), float(path[k].second - path[k - 1].second));
+            if (path.size() < 2) length = std::hypot(terrain->bounds().extent().x, terrain->bounds().extent().z);
+            const RiverSize size = size_river(def, as, length);
+            sizing = size;
+            if (def.spawn.count == kAutoCount) resolved.spawn.count = size.count;
+            if (def.spawn.auto_rate())  // in the unit flow_rate is given in
+                resolved.spawn.flow_rate =
+                    def.spawn.litres_per_particle > 0.0f ? size.rate * def.spawn.litres_per_particle : size.rate;
+        }
+        if (resolved.terrain.condition == TerrainCondition::Carve) {
+            CarveDef carve = carve_def(def, terrain->area_scale());
+            carve.basin_center = spawn.center;
+            carve.basin_radius_m =
+                spawn.shape == SourceShape::Point
+                    ? 0.0f
+                    : std::max(spawn.half_extent.x, spawn.shape == SourceShape::Disc ? 0.0f : spawn.half_extent.z) +
+                          def.pbf.spacing;
+            terrain->carve_channel(path, carve);
+        }
     }
+    // Not a PBF river: the budget the default scene had before it sized itself.
+    if (resolved.spawn.count == kAutoCount) resolved.spawn.count = kFixedDefaultCount;
+    if (resolved.spawn.auto_rate()) resolved.spawn.flow_rate = 0.0f;  // not a PBF river: no continuous source
     if (def.field.bounds == FieldBounds::Terrain) {
         // The fixed field box spans the terrain: its samples per axis must fit an int
         // (4096 samples x 1e4 m x 64 per metre would not).
@@ -230,6 +279,7 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, cons
     if (!bvh) return bvh.error();
     std::unique_ptr<Simulation> sim(new Simulation(resolved, std::move(terrain.value()), std::move(bvh.value())));
     if (auto v = validate_on_terrain(sim->def(), sim->terrain()); !v) return v.error();  // resolved source
+    sim->sizing_ = sizing;
     return sim;
 }
 

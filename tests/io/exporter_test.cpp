@@ -20,10 +20,12 @@ namespace fs = std::filesystem;
 
 class Exporting : public test::ExportFixture {
 protected:
-    /// The default river, small: 600 particles (the source is still emitting at frame 12).
+    /// The default river, small: 600 particles at 420 per second (water from frame 0,
+    /// the source still emitting at frame 12).
     static std::unique_ptr<Simulation> small_river() {
         SceneDef d = default_scene();
         d.spawn.count = 600;
+        d.spawn.flow_rate = 420.0f;
         auto sim = Simulation::create(d);
         EXPECT_TRUE(sim.ok()) << (sim.ok() ? "" : sim.error().message);
         return std::move(sim.value());

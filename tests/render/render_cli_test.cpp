@@ -86,7 +86,7 @@ TEST_F(RenderCli, AFullDiskPartWayLeavesNoFrameAndNamesThePath) {
 TEST_F(RenderCli, PngSequenceHasCountAndSizeAndFramesDiffer) {
     REQUIRE_GL();
     const fs::path out = dir_ / "frames";
-    const CliResult r = run("render --frames 4 --size 80x48 --steps 6 --warmup 30 --out " + out.string());
+    const CliResult r = run("render --frames 4 --size 80x48 --steps 6 --warmup 240 --out " + out.string());
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_NE(r.out.find("wrote 4 PNG frames"), std::string::npos) << r.out;
     std::vector<mr::render::Image> frames;

@@ -123,7 +123,7 @@ TEST(SceneToml, UnknownKeysAreErrors) {
 }
 
 TEST(SceneToml, WrongTypesAreErrors) {
-    expect_error("[particles]\ncount = \"many\"\n", "particles.count: must be an integer");
+    expect_error("[particles]\ncount = \"many\"\n", "particles.count: must be \"auto\" or a whole number");
     expect_error("[particles]\ncount = 2.5\n", "particles.count: must be an integer");
     expect_error("[field]\nresolution = \"high\"\n", "field.resolution: must be a number");
     expect_error("[particles]\nspawn_half_extent = [1, 2]\n", "particles.spawn_half_extent: must be an array of 3");

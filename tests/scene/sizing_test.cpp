@@ -1,0 +1,114 @@
+// The self-sized river (issue 10, docs/river.md "Sizing"): particles.count and
+// particles.flow_rate = "auto" derive the budget and the rate from the carved channel's
+// section and the main channel's length; each can be given instead.
+#include <metariver/scene.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace mr {
+namespace {
+
+std::unique_ptr<Simulation> make(const SceneDef& d) {
+    auto sim = Simulation::create(d);
+    EXPECT_TRUE(sim.ok()) << sim.error().message;
+    return sim.ok() ? std::move(sim.value()) : nullptr;
+}
+
+TEST(Sizing, TheDefaultRiverSizesItsBudgetAndRateToTheMainChannel) {
+    const SceneDef d = default_scene();
+    ASSERT_EQ(d.spawn.count, kAutoCount);
+    ASSERT_TRUE(d.spawn.auto_rate());
+    auto sim = make(d);
+    ASSERT_TRUE(sim);
+    ASSERT_TRUE(sim->sizing().has_value());
+    const RiverSize& z = *sim->sizing();
+    // The path's length: at least the straight line from the source to the outlet cell.
+    const auto path = sim->main_channel();
+    ASSERT_GE(path.size(), 2u);
+    const float s = sim->terrain().area_scale();
+    const float straight = s * std::hypot(float(path.front().first - path.back().first),
+                                          float(path.front().second - path.back().second));
+    EXPECT_GE(z.channel_length_m, straight);
+    EXPECT_LE(z.channel_length_m, straight * 2.0f);
+    // What the simulation runs with is the rule's result, and nothing is left automatic.
+    const RiverSize rule = size_river(d, s, z.channel_length_m);
+    EXPECT_EQ(sim->def().spawn.count, rule.count);
+    EXPECT_FLOAT_EQ(sim->def().spawn.flow_rate, rule.rate);
+    EXPECT_FALSE(sim->def().spawn.auto_rate());
+    EXPECT_FALSE(z.capped);
+    // The budget covers the rate over the transit at the transit speed, twice.
+    EXPECT_GE(double(rule.count), double(rule.rate) * z.channel_length_m / kRiverTransitSpeed * kRiverBudgetMargin);
+    EXPECT_TRUE(sim->warnings().empty()) << sim->warnings().front();
+}
+
+TEST(Sizing, ALongerChannelGetsALargerBudgetAtTheSameRateUntilTheCeiling) {
+    const SceneDef d = default_scene();
+    const RiverSize a = size_river(d, 1.0f, 50.0f), b = size_river(d, 1.0f, 100.0f);
+    EXPECT_FLOAT_EQ(a.rate, b.rate);
+    EXPECT_NEAR(double(b.count - kRiverSourcePile), 2.0 * double(a.count - kRiverSourcePile), 2.0);
+    // Far longer: the budget stops at its ceiling and the rate drops so that it still
+    // covers the transit (a thinner river rather than one with gaps).
+    const RiverSize c = size_river(d, 1.0f, 5000.0f);
+    EXPECT_TRUE(c.capped);
+    EXPECT_EQ(c.count, kRiverMaxCount);
+    EXPECT_LT(c.rate, a.rate);
+    EXPECT_LE(double(c.rate) * 5000.0 / kRiverTransitSpeed * kRiverBudgetMargin + kRiverSourcePile, kRiverMaxCount + 1.0);
+    // A wider sample spacing carves a wider channel: a larger rate.
+    EXPECT_GT(size_river(d, 4.0f, 50.0f).rate, a.rate);
+}
+
+TEST(Sizing, EachDerivedValueCanBeGivenInstead) {
+    auto only_count = parse_scene_toml("[particles]\ncount = 5000\n", "c.toml", default_scene());
+    ASSERT_TRUE(only_count.ok()) << only_count.error().message;
+    auto a = make(only_count.value());
+    ASSERT_TRUE(a);
+    EXPECT_EQ(a->def().spawn.count, 5000);
+    ASSERT_TRUE(a->sizing().has_value());  // the rate is still derived
+    EXPECT_FLOAT_EQ(a->def().spawn.flow_rate, a->sizing()->rate);
+
+    auto only_rate = parse_scene_toml("[particles]\nflow_rate = 33.0\n", "r.toml", default_scene());
+    ASSERT_TRUE(only_rate.ok());
+    auto b = make(only_rate.value());
+    ASSERT_TRUE(b);
+    EXPECT_FLOAT_EQ(b->def().spawn.flow_rate, 33.0f);
+    EXPECT_EQ(b->def().spawn.count, b->sizing()->count);
+
+    auto both = parse_scene_toml("[particles]\ncount = 700\nflow_rate = 20.0\n", "b.toml", default_scene());
+    ASSERT_TRUE(both.ok());
+    auto c = make(both.value());
+    ASSERT_TRUE(c);
+    EXPECT_FALSE(c->sizing().has_value());
+    EXPECT_EQ(c->def().spawn.count, 700);
+
+    auto autos = parse_scene_toml("[particles]\ncount = 700\nflow_rate = 20.0\n", "x.toml", default_scene());
+    ASSERT_TRUE(autos.ok());
+    auto back = parse_scene_toml("[particles]\ncount = \"auto\"\nflow_rate = \"auto\"\n", "y.toml", autos.value());
+    ASSERT_TRUE(back.ok()) << back.error().message;
+    EXPECT_EQ(back->spawn.count, kAutoCount);
+    EXPECT_TRUE(back->spawn.auto_rate());
+
+    auto bad = parse_scene_toml("[particles]\ncount = \"many\"\n", "bad.toml", default_scene());
+    ASSERT_FALSE(bad.ok());
+    EXPECT_NE(bad.error().message.find("bad.toml: particles.count: must be \"auto\""), std::string::npos)
+        << bad.error().message;
+    auto bad_rate = parse_scene_toml("[particles]\nflow_rate = \"fast\"\n", "bad.toml", default_scene());
+    ASSERT_FALSE(bad_rate.ok());
+    EXPECT_NE(bad_rate.error().message.find("particles.flow_rate: must be \"auto\""), std::string::npos);
+}
+
+TEST(Sizing, SolversThatDoNotSizeThemselvesKeepTheFixedBudget) {
+    SceneDef d = default_scene();
+    d.solver = SolverKind::Springs;
+    d.spawn.flow_rate = 0.0f;
+    d.spawn.interval = 10;
+    d.sink.kind = SinkKind::None;
+    auto sim = make(d);
+    ASSERT_TRUE(sim);
+    EXPECT_FALSE(sim->sizing().has_value());
+    EXPECT_EQ(sim->def().spawn.count, kFixedDefaultCount);
+}
+
+}  // namespace
+}  // namespace mr
