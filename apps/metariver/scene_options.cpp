@@ -74,6 +74,8 @@ Result<SceneDef> SceneOptions::resolve() const {
         else if (collision == "robust") def.collision.mode = CollisionMode::Robust;
         else if (collision == "none") def.collision.mode = CollisionMode::None;
         else return Error{fmt::format("--collision: must be one of paper, robust, none (got '{}')", collision)};
+        if (const std::string why = collision_mode_unused(def.solver, def.collision.mode); !why.empty())
+            return Error{"--collision: " + why};
     }
     if (def.source.kind == TerrainSource::File && def.source.heightmap.empty())
         return Error{fmt::format("scene '{}' uses the paper's heightmap file: give it with --heightmap FILE", def.name)};

@@ -83,6 +83,11 @@ inline constexpr int kMaxDenseFieldBalls = 5'000;    ///< the paper's field kern
 inline constexpr int kMaxBulletBodies = 200'000;     ///< solver = "bullet"
 inline constexpr int kMaxFieldAxisSamples = 1'000'000;  ///< field.bounds = "terrain": samples along one axis
 
+/// Why `solver` does not use collision mode `mode`, or "" when it does: Bullet has its
+/// own contacts ([bullet]); PBF slides along the terrain ("robust") or ignores it
+/// ("none") but never reflects ("paper", the springs solver's response).
+std::string collision_mode_unused(SolverKind solver, CollisionMode mode);
+
 /// Checks every field against its documented range. The message names the field
 /// ("particles.count: must be in [1, 10000000] (got 0)").
 Status validate(const SceneDef& def);

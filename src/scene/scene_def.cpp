@@ -31,6 +31,15 @@ std::string_view to_string(SolverKind s) {
     return "?";
 }
 
+std::string collision_mode_unused(SolverKind solver, CollisionMode mode) {
+    if (solver == SolverKind::Bullet)
+        return "solver = \"bullet\" does not use it ([bullet] has its contact settings)";
+    if (solver == SolverKind::Pbf && mode == CollisionMode::Paper)
+        return "solver = \"pbf\" slides along the terrain (\"robust\") or ignores it (\"none\"); \"paper\" "
+               "(reflection) is solver = \"springs\"'s response";
+    return {};
+}
+
 SceneDef default_scene() {
     // A PBF river down the procedural valley: a disc source (radius 2.5 m, 1.5 m above
     // the ground, inflow 3 m/s down: a lattice source that can deliver about 600
@@ -284,8 +293,11 @@ Status validate(const SceneDef& d) {
     c.range("bullet.solver_iterations", d.bullet.solver_iterations, 1, 1000);
     if (!d.spawn.auto_rate()) c.range("particles.flow_rate", d.spawn.flow_rate, 0.0, 1e7);
     c.range("particles.litres_per_particle", d.spawn.litres_per_particle, 0.0, 1e9);
+    // Below 1 mm the kernel constants overflow float. Any solver carving a channel reads
+    // pbf.spacing too (the channel's depth and width: carve_def).
+    if (d.solver == SolverKind::Pbf || d.terrain.condition == TerrainCondition::Carve)
+        c.range("pbf.spacing", d.pbf.spacing, 1e-3, 1e3);
     if (d.solver == SolverKind::Pbf) {
-        c.range("pbf.spacing", d.pbf.spacing, 1e-3, 1e3);  // below 1 mm the kernel constants overflow float
         if (c.error.empty() && !(d.pbf.kernel_radius > d.pbf.spacing && d.pbf.kernel_radius <= 4.0f * d.pbf.spacing))
             c.error = fmt::format("pbf.kernel_radius: must be in (pbf.spacing, 4 pbf.spacing] = ({}, {}] (got {})",
                                   d.pbf.spacing, 4.0f * d.pbf.spacing, d.pbf.kernel_radius);

@@ -153,25 +153,68 @@ private:
     std::string error_;
 };
 
-/// Options solver = "bullet" does not use: a key that asks for something it does not
-/// do is an error naming the key; what a Bullet scene would otherwise inherit
-/// from the default river (its flow-rate source, edge sinks and spawn-all-at-once) is
-/// replaced by the paper's engine scene's spawning.
+/// Options the chosen solver does not read: a key that asks for something the solver
+/// does not do is an error naming the key. What each reads (src/particles/solver.cpp,
+/// pbf.cpp, bullet_solver.cpp, src/scene/simulation.cpp):
+///   [pbf]       solver = "pbf"; the others read pbf.spacing only to carve a channel
+///               (terrain.condition = "carve": its depth and width, carve_def)
+///   [bullet]    solver = "bullet"
+///   [springs]   solver = "springs"; Bullet the stiffness and distances with
+///               bullet.springs = true (not springs.mode); PBF none of it
+///   [collision] springs and PBF (PBF never reflects: no mode = "paper"); not Bullet
+///   integrator.substeps: springs and PBF (Bullet substeps by bullet.dt)
+/// What a Bullet scene would otherwise inherit from the default river (its flow-rate
+/// source, edge sinks and spawn-all-at-once) is replaced by the paper's engine
+/// scene's spawning.
 void apply_solver_scope(const toml::table& root, Reader& r, SceneDef& d) {
-    if (d.solver != SolverKind::Bullet) return;
+    const std::string solver = fmt::format("solver = \"{}\"", to_string(d.solver));
     const toml::table* pt = root["particles"].as_table();
+    const toml::table* st = root["springs"].as_table();
     auto given = [&](const char* key) { return pt && pt->get(key) != nullptr; };
-    if (root.get("pbf")) r.fail("pbf", "only solver = \"pbf\" reads [pbf]");
+    auto in = [](const toml::table* t, const char* key) { return t && t->get(key) != nullptr; };
+
+    if (const toml::table* pbf = root["pbf"].as_table(); pbf && d.solver != SolverKind::Pbf) {
+        if (d.terrain.condition != TerrainCondition::Carve) {
+            r.fail("pbf", fmt::format("only solver = \"pbf\" reads [pbf] ({} reads pbf.spacing only to carve a "
+                                      "channel, terrain.condition = \"carve\")", solver));
+        } else {
+            for (const auto& [k, v] : *pbf)
+                if (k.str() != "spacing")
+                    r.fail("pbf." + std::string(k.str()),
+                           fmt::format("only solver = \"pbf\" reads it ({} reads pbf.spacing only, the carved "
+                                       "channel's depth)", solver));
+        }
+    }
+    if (root.get("bullet") && d.solver != SolverKind::Bullet)
+        r.fail("bullet", fmt::format("only solver = \"bullet\" reads [bullet] (this scene has {})", solver));
+    if (st && d.solver == SolverKind::Pbf)
+        r.fail("springs", "solver = \"pbf\" does not use springs (its density constraint keeps the particles "
+                          "apart: [pbf]); remove [springs]");
+    if (const toml::table* ct = root["collision"].as_table(); ct && ct->get("mode") && d.solver == SolverKind::Pbf) {
+        if (const std::string why = collision_mode_unused(d.solver, d.collision.mode); !why.empty())
+            r.fail("collision.mode", why);
+    }
+    if (d.solver != SolverKind::Bullet) return;
+
     const std::string why = "solver = \"bullet\" does not use it (spheres spawn in the box every "
                             "particles.spawn_interval frames, collide through Bullet and respawn below or outside the terrain)";
     if (given("flow_rate") && (d.spawn.flow_rate > 0.0f || d.spawn.auto_rate())) r.fail("particles.flow_rate", why + "; remove it or set 0");
     if (given("litres_per_particle") && d.spawn.litres_per_particle > 0.0f) r.fail("particles.litres_per_particle", why);
     if (given("source_shape") && d.spawn.shape != SourceShape::Box) r.fail("particles.source_shape", why + "; only \"box\"");
-    if (root.get("collision")) r.fail("collision", why + " ([bullet] has its contact settings)");
-    if (const toml::table* st = root["sink"].as_table(); st && d.sink.kind != SinkKind::None)
+    if (root.get("collision")) r.fail("collision", collision_mode_unused(d.solver, d.collision.mode));
+    if (const toml::table* sk = root["sink"].as_table(); sk && d.sink.kind != SinkKind::None)
         r.fail("sink.kind", why + "; only \"none\"");
-    if (const toml::table* sp = root["springs"].as_table(); sp && sp->get("mode"))
+    if (in(st, "mode"))
         r.fail("springs.mode", "solver = \"bullet\" applies the springs itself (bullet.springs); remove springs.mode");
+    if (!d.bullet.springs) {
+        const char* off = "solver = \"bullet\" applies springs only with bullet.springs = true";
+        if (in(st, "stiffness") && d.springs.stiffness != 0.0f) r.fail("springs.stiffness", fmt::format("{}; set 0 or turn them on", off));
+        for (const char* k : {"min_distance", "max_distance"})
+            if (in(st, k)) r.fail(fmt::format("springs.{}", k), off);
+    }
+    if (in(root["integrator"].as_table(), "substeps"))
+        r.fail("integrator.substeps", "solver = \"bullet\" substeps with its own fixed step (bullet.dt, "
+                                      "bullet.max_substeps); remove it");
     // Not inherited from the default river:
     if (!given("flow_rate")) d.spawn.flow_rate = 0.0f;
     if (!given("litres_per_particle")) d.spawn.litres_per_particle = 0.0f;

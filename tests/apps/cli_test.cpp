@@ -280,6 +280,10 @@ TEST_F(Cli, BadPresetsScenesAndOptions) {
     expect_bad("run --frames 0", "--frames: must be in [1,");
     expect_bad("run --frames -3", "--frames");
     expect_bad("run --collision magic", "--collision: must be one of paper, robust, none");
+    // Issue 13: --collision the solver does not use (PBF never reflects; Bullet has its own contacts).
+    expect_bad("run --collision paper", "--collision: solver = \"pbf\" slides along the terrain");
+    expect_bad("run --scene " + write("b.toml", "solver = \"bullet\"\n").string() + " --collision robust",
+               "--collision: solver = \"bullet\" does not use it");
     expect_bad("run --frames many", "--frames");
     expect_bad("run --preset default --scene x.toml", "--preset");
     expect_bad("fly", "fly");

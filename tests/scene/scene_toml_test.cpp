@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <string>
 
 namespace mr {
@@ -28,6 +29,7 @@ TEST(SceneToml, EmptyFileIsTheDefaultScene) {
 TEST(SceneToml, EveryKeyIsRead) {
     auto r = parse(R"(
 name = "mine"
+solver = "springs"
 seed = 42
 surface = false
 [terrain]
@@ -246,6 +248,60 @@ TEST(SceneToml, OptionsBulletIgnoresAreErrorsAndItDoesNotInheritTheRiversSpawnin
     EXPECT_TRUE(parse("solver = \"bullet\"\n[particles]\nflow_rate = 0.0\n[sink]\nkind = \"none\"\n").ok());
 }
 
+TEST(SceneToml, OptionsTheSpringsAndPbfSolversIgnoreAreErrorsNamingTheKey) {
+    // Issue 13: only Bullet scenes refused what they ignore; a springs scene took a
+    // [pbf] or [bullet] table, a PBF scene [springs], [bullet] and collision.mode =
+    // "paper" (it slides, never reflects), a Bullet scene integrator.substeps and
+    // springs it does not apply, all without a word.
+    const std::string springs = "solver = \"springs\"\n";
+    expect_error(springs + "[pbf]\nxsph = 0.1\n", "pbf: only solver = \"pbf\" reads [pbf]");
+    expect_error(springs + "[pbf]\nspacing = 0.25\n", "pbf: only solver = \"pbf\"");  // no carving: unused
+    expect_error(springs + "[bullet]\nmass = 2.0\n", "bullet: only solver = \"bullet\" reads [bullet]");
+    expect_error("solver = \"pbf\"\n[bullet]\nccd = true\n", "bullet: only solver = \"bullet\"");
+    expect_error("[bullet]\nccd = true\n", "bullet: only solver = \"bullet\"");  // the default is PBF
+    expect_error("solver = \"pbf\"\n[springs]\nstiffness = 2.0\n", "springs: solver = \"pbf\" does not use springs");
+    expect_error("[springs]\nmode = \"grid\"\n", "springs: solver = \"pbf\"");
+    expect_error("[collision]\nmode = \"paper\"\n", "collision.mode: solver = \"pbf\" slides");
+    expect_error("solver = \"bullet\"\n[integrator]\nsubsteps = 4\n", "integrator.substeps: solver = \"bullet\"");
+    expect_error("solver = \"bullet\"\n[springs]\nstiffness = 2.0\n", "springs.stiffness: solver = \"bullet\" applies springs only");
+    expect_error("solver = \"bullet\"\n[springs]\nmin_distance = 2.0\n", "springs.min_distance");
+    // A springs scene that carves a channel reads pbf.spacing (its depth), nothing else of [pbf].
+    const std::string carve = springs + "[terrain]\ncondition = \"carve\"\n";
+    auto c = parse(carve + "[pbf]\nspacing = 0.25\n");
+    ASSERT_TRUE(c.ok()) << c.error().message;
+    EXPECT_FLOAT_EQ(c->pbf.spacing, 0.25f);
+    expect_error(carve + "[pbf]\nspacing = 0.25\niterations = 4\n", "pbf.iterations: only solver = \"pbf\" reads it");
+    expect_error(carve + "[pbf]\nspacing = 0.0\n", "pbf.spacing: must be in [0.001, 1000]");
+    // What each solver reads is accepted.
+    for (const char* ok : {"solver = \"springs\"\n[springs]\nstiffness = 2.0\nmode = \"grid\"\n[collision]\nmode = \"paper\"\n"
+                           "[integrator]\nsubsteps = 2\n",
+                           "solver = \"pbf\"\n[pbf]\nxsph = 0.1\n[collision]\nmode = \"none\"\ndamping = 0.1\n[integrator]\nsubsteps = 3\n",
+                           "solver = \"bullet\"\n[springs]\nstiffness = 0.0\n",
+                           "solver = \"bullet\"\n[bullet]\nsprings = true\n[springs]\nstiffness = 2.0\nmin_distance = 1.0\nmax_distance = 0.5\n"
+                           "[integrator]\ndt = 0.02\n"}) {
+        auto r = parse(ok);
+        EXPECT_TRUE(r.ok()) << ok << (r.ok() ? "" : r.error().message);
+    }
+}
+
+TEST(SceneFile, TheScenesShippedInTheRepositoryStillLoad) {
+    // docs/bullet/*.toml and the fuzz seed corpus: each scene loads, except the broken_*
+    // seeds, which are refused.
+    const std::filesystem::path src(METARIVER_SOURCE_DIR);
+    int seen = 0;
+    for (const char* dir : {"docs/bullet", "fuzz/corpus/scene_toml"})
+        for (const auto& e : std::filesystem::directory_iterator(src / dir)) {
+            if (e.path().extension() != ".toml") continue;
+            ++seen;
+            auto r = load_scene_file(e.path().string());
+            if (e.path().filename().string().rfind("broken_", 0) == 0)
+                EXPECT_FALSE(r.ok()) << e.path();
+            else
+                EXPECT_TRUE(r.ok()) << e.path() << ": " << r.error().message;
+        }
+    EXPECT_GE(seen, 20);
+}
+
 TEST(SceneToml, BulletTableIsRead) {
     auto r = parse(R"(
 solver = "bullet"
@@ -282,19 +338,19 @@ springs = true
 
 TEST(SceneToml, BadBulletValuesNameTheKey) {
     expect_error("solver = \"havok\"\n", "solver: must be one of springs, bullet");
-    expect_error("[bullet]\nterrain = \"voxels\"\n", "bullet.terrain: must be one of mesh, heightfield");
-    expect_error("[bullet]\nsphere_radius = 0\n", "bullet.sphere_radius: must be in (0, 1000]");
-    expect_error("[bullet]\nsphere_radius = nan\n", "bullet.sphere_radius");
-    expect_error("[bullet]\nmass = -1\n", "bullet.mass: must be in (0, 1000000]");
-    expect_error("[bullet]\nfriction = -0.1\n", "bullet.friction: must be in [0, 100]");
-    expect_error("[bullet]\nrestitution = 2\n", "bullet.restitution: must be in [0, 1]");
-    expect_error("[bullet]\ndt = 0\n", "bullet.dt: must be in (0, 1]");
-    expect_error("[bullet]\nmax_substeps = -1\n", "bullet.max_substeps: must be in [0, 1000]");
-    expect_error("[bullet]\nmax_substeps = 1.5\n", "bullet.max_substeps: must be an integer");
-    expect_error("[bullet]\nsolver_iterations = 0\n", "bullet.solver_iterations: must be in [1, 1000]");
-    expect_error("[bullet]\nccd = 1\n", "bullet.ccd: must be true or false");
-    expect_error("[bullet]\nsprings = \"yes\"\n", "bullet.springs: must be true or false");
-    expect_error("[bullet]\ngravity = 9.81\n", "bullet.gravity: unknown key");
+    expect_error("solver = \"bullet\"\n[bullet]\nterrain = \"voxels\"\n", "bullet.terrain: must be one of mesh, heightfield");
+    expect_error("solver = \"bullet\"\n[bullet]\nsphere_radius = 0\n", "bullet.sphere_radius: must be in (0, 1000]");
+    expect_error("solver = \"bullet\"\n[bullet]\nsphere_radius = nan\n", "bullet.sphere_radius");
+    expect_error("solver = \"bullet\"\n[bullet]\nmass = -1\n", "bullet.mass: must be in (0, 1000000]");
+    expect_error("solver = \"bullet\"\n[bullet]\nfriction = -0.1\n", "bullet.friction: must be in [0, 100]");
+    expect_error("solver = \"bullet\"\n[bullet]\nrestitution = 2\n", "bullet.restitution: must be in [0, 1]");
+    expect_error("solver = \"bullet\"\n[bullet]\ndt = 0\n", "bullet.dt: must be in (0, 1]");
+    expect_error("solver = \"bullet\"\n[bullet]\nmax_substeps = -1\n", "bullet.max_substeps: must be in [0, 1000]");
+    expect_error("solver = \"bullet\"\n[bullet]\nmax_substeps = 1.5\n", "bullet.max_substeps: must be an integer");
+    expect_error("solver = \"bullet\"\n[bullet]\nsolver_iterations = 0\n", "bullet.solver_iterations: must be in [1, 1000]");
+    expect_error("solver = \"bullet\"\n[bullet]\nccd = 1\n", "bullet.ccd: must be true or false");
+    expect_error("solver = \"bullet\"\n[bullet]\nsprings = \"yes\"\n", "bullet.springs: must be true or false");
+    expect_error("solver = \"bullet\"\n[bullet]\ngravity = 9.81\n", "bullet.gravity: unknown key");
     expect_error("bullet = 3\n", "bullet: must be a table");
 }
 
