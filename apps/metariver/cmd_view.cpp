@@ -681,6 +681,7 @@ int view(const ViewOptions& o) {
     ImGui_ImplOpenGL3_Shutdown();
     ImGui_ImplGlfw_Shutdown();
     ImGui::DestroyContext();
+    render::keep_loaded_libraries_under_asan();  // LeakSanitizer names Mesa's libraries at exit
     glfwDestroyWindow(window);
     glfwTerminate();
     return code;

@@ -149,6 +149,13 @@ private:
     std::unique_ptr<Impl> impl_;
 };
 
+/// AddressSanitizer builds only (a no-op otherwise): keeps every library loaded now
+/// mapped until the process exits. Call before tearing down an OpenGL context: Mesa
+/// unloads its driver then, and LeakSanitizer, which runs at exit, could no longer name
+/// the module of what the driver still held ("<unknown module>"), so the suppressions
+/// of tests/sanitizers/lsan.supp, which name Mesa's libraries, did not match.
+void keep_loaded_libraries_under_asan();
+
 /// An OpenGL 4.5 core context without a window or display: EGL on Mesa's surfaceless
 /// platform (EGL_PLATFORM_SURFACELESS_MESA, EGL_NO_CONFIG_KHR, no surface). Current on
 /// the creating thread until destroyed. Sets XDG_RUNTIME_DIR to /tmp when unset (Mesa

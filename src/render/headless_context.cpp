@@ -12,6 +12,18 @@
 
 #include <cstdlib>
 #include <dlfcn.h>
+#include <link.h>
+
+#include <string>
+#include <vector>
+
+#if defined(__SANITIZE_ADDRESS__)
+#define METARIVER_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define METARIVER_ASAN 1
+#endif
+#endif
 
 namespace mr::render {
 
@@ -33,6 +45,19 @@ std::string egl_error_name(EGLint e) {
 }
 
 }  // namespace
+
+void keep_loaded_libraries_under_asan() {
+#ifdef METARIVER_ASAN
+    std::vector<std::string> names;
+    dl_iterate_phdr(
+        [](dl_phdr_info* info, size_t, void* out) {
+            if (info->dlpi_name && info->dlpi_name[0]) static_cast<std::vector<std::string>*>(out)->emplace_back(info->dlpi_name);
+            return 0;
+        },
+        &names);
+    for (const std::string& n : names) dlopen(n.c_str(), RTLD_NOW | RTLD_NOLOAD | RTLD_NODELETE);  // never closed
+#endif
+}
 
 Result<std::unique_ptr<HeadlessContext>> HeadlessContext::create() {
     setenv("XDG_RUNTIME_DIR", "/tmp", 0);  // keeps Mesa from warning; never overrides
@@ -83,6 +108,7 @@ Result<std::unique_ptr<HeadlessContext>> HeadlessContext::create() {
 
 HeadlessContext::~HeadlessContext() {
     if (!display_) return;
+    keep_loaded_libraries_under_asan();
     eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
     eglDestroyContext(display_, context_);
     eglTerminate(display_);

@@ -247,7 +247,7 @@ TEST_F(Cli, BadHeightmaps) {
     expect_bad("run --heightmap " + write("empty.png", "").string(), "empty.png");
     expect_bad("run --heightmap " + write("text.png", "this is not an image\n").string(), "text.png");
     // A truncated PNG: the signature and a cut-off header chunk.
-    expect_bad("run --heightmap " + write("trunc.png", std::string("\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR\0\0", 20)).string(),
+    expect_bad("run --heightmap " + write("trunc.png", std::string("\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR\0\0", 18)).string(),
                "trunc.png");
     if (fs::exists(shared_map("nile.png"))) {
         const std::string full = slurp(shared_map("nile.png"));
