@@ -204,12 +204,12 @@ RiverSize size_river(const SceneDef& def, float area_scale, float channel_length
     const float s = def.pbf.spacing;
     RiverSize r;
     r.channel_length_m = channel_length_m;
-    // A quarter of the carved section full, at the reference speed: a river a couple of
-    // layers deep on the channel's floor, well inside its walls.
+    // kRiverFill (three quarters) of the carved section full at kRiverSpeed: a river a
+    // couple of layers deep on the channel's floor, inside its walls.
     const float area_m2 = kRiverFill * c.floor_m * c.depth_m;
     r.rate = std::clamp(area_m2 * kRiverSpeed / (s * s * s), kRiverMinRate, kRiverMaxRate);
     // The budget: the particles on their way (the rate times the time they spend on the
-    // terrain at the reference speed, twice over: slower reaches, the source's basin,
+    // channel at kRiverTransitSpeed, twice over: slower reaches, the source's basin,
     // eddies) plus the particles the source's pile holds.
     const float transit_s = channel_length_m / kRiverTransitSpeed;
     const double want = double(r.rate) * double(transit_s) * kRiverBudgetMargin + kRiverSourcePile;
