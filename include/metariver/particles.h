@@ -46,6 +46,12 @@ struct Particles {
     void gather_active_positions(std::vector<Vec3>& out) const;
 };
 
+/// How long a PBF particle must stay slower than `PbfDef::sleep_threshold` to fall asleep.
+inline constexpr float kSleepAfterSeconds = 0.1f;
+/// PBF sleep threshold cap, as a fraction of the speed gravity gives in one step: an
+/// asleep particle with nothing under it moves faster than that in its first step.
+inline constexpr float kSleepCapOfFallStep = 0.9f;
+
 /// Largest particle budget a scene may ask for.
 inline constexpr int kMaxParticles = 10'000'000;
 /// `SpawnDef::count` asking for a budget sized to the terrain (`particles.count = "auto"`).
@@ -99,6 +105,13 @@ struct PbfDef {
     float scorr_dq = 0.3f;       ///< tensile correction reference distance, fraction of h, (0, 1)
     float xsph = 0.05f;          ///< XSPH viscosity c, [0, 1]
     float vorticity = 0.0f;      ///< vorticity confinement epsilon, m/s^2 scale, [0, 100]; 0 = off
+    /// Sleeping (after NVIDIA FleX's sleepThreshold), m/s, [0, 1]; 0 = off: a particle
+    /// slower than this for kSleepAfterSeconds falls asleep, and while asleep a step
+    /// that would move it slower than this is undone (position kept, velocity zero); a
+    /// faster step wakes it. Still water comes to rest instead of creeping; anything
+    /// moving faster is untouched. Capped at kSleepCapOfFallStep x gravity x the step
+    /// (0.074 m/s at 120 steps/s under 9.82): an unsupported particle never stays asleep.
+    float sleep_threshold = 0.05f;
 };
 
 enum class SpringMode {
@@ -318,6 +331,9 @@ private:
     float lattice_grad_sum_ = 1.0f;
     std::vector<float> lambda_, density_;
     std::vector<uint8_t> contact_;  ///< PBF: held by the terrain this step
+    /// PBF sleeping, per slot: consecutive slow steps (saturating; asleep at
+    /// kSleepAfterSeconds' worth).
+    std::vector<uint16_t> slow_steps_;
     std::vector<Vec3> delta_, omega_;
     // Reorder scratch (reused; no allocation once warm).
     std::vector<uint32_t> perm_;

@@ -15,6 +15,8 @@
 //   v = (x* - x) / dt; swept robust terrain collision on x -> x* (the particle slides)
 //   XSPH viscosity v_i += c sum_j (v_j - v_i) W(x_i - x_j) / rho_0 (eq. 17), optional
 //   vorticity confinement (eq. 15, 16)
+//   sleeping (after NVIDIA FleX's sleepThreshold): a particle slower than
+//   sleep_threshold for kSleepAfterSeconds is asleep; its slow steps are undone
 //
 // rho_0 is the kernel sum of a cubic lattice of the rest spacing, so "number density"
 // (no mass) and a perfect lattice has C = 0. eps and s_corr are scaled by a lattice
@@ -179,27 +181,32 @@ void ParticleSolver::collide_fluid(size_t i, StepCounts& c) {
 // next step's swept segment starts above it and rounding cannot hide a crossing. At a
 // concave crease the new point can be under the neighbouring triangle: a few rounds,
 // then the particle stays where it started the step (`fallback`, above the ground): a
-// vertical lift out of a narrow pit or off a spike's flank would fling it.
+// vertical lift out of a narrow pit or off a spike's flank would fling it. After a
+// push, a point within half the offset of its target counts as out: on a plane the
+// push lands exactly on the target, and float rounding lands it a hair below half
+// the time; without the slack three such rounds sent a particle sliding down a steep
+// face back to `fallback` every few steps, and it stuck to the wall.
 bool ParticleSolver::push_out_of_terrain(Vec3& x, const Vec3& fallback) const {
     const float lift = collision_.radius + collision_.offset;
+    const float slack = 0.5f * collision_.offset;
     bool pushed = false;
     for (int round = 0; round < 3; ++round) {
         if (!terrain_.contains_xz(x.x, x.z)) return pushed;
         const float h = terrain_.height_mesh(x.x, x.z) + lift;
-        if (x.y >= h) return pushed;
+        if (x.y >= (pushed ? h - slack : h)) return pushed;
         // Deeper under the ground than the step moved it: it did not sink through the
         // surface it was on, it ran into a cliff face between two samples. Lifting it
         // onto the ground above would launch it up the cliff (tens of m/s): it stops at
         // the face.
-        if (round == 0 && h - x.y > glm::length(x - fallback) + lift) {
+        const Vec3 nrm = terrain_.normal_mesh(x.x, x.z);
+        if (round == 0 && (h - x.y) * nrm.y > glm::length(x - fallback) + lift) {
             x = fallback;
             return true;
         }
-        const Vec3 nrm = terrain_.normal_mesh(x.x, x.z);
         x += ((h - x.y) * nrm.y) * nrm;
         pushed = true;
     }
-    if (terrain_.contains_xz(x.x, x.z) && x.y < terrain_.height_mesh(x.x, x.z) + lift) x = fallback;
+    if (terrain_.contains_xz(x.x, x.z) && x.y < terrain_.height_mesh(x.x, x.z) + lift - slack) x = fallback;
     return true;
 }
 
@@ -359,6 +366,32 @@ void ParticleSolver::step_pbf(float dt) {
         tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
             for (size_t i = r.begin(); i != r.end(); ++i)
                 if (p.active[i]) p.velocity[i] = delta_[i];
+        });
+    }
+    // 6. Sleeping: a particle slower than the threshold for kSleepAfterSeconds is
+    // asleep, and an asleep particle's slow step is undone (position kept, velocity
+    // zero); a faster step wakes it. Judged on the final velocity, after collision and
+    // viscosity: a particle at the top of a bounce is slow for a step or two, not for
+    // kSleepAfterSeconds. The threshold is capped below the speed gravity gives in one
+    // step, so an asleep particle whose support went away wakes with its first fall.
+    const float sleep = integrator_.gravity > 0.0f
+                            ? std::min(d.sleep_threshold, kSleepCapOfFallStep * integrator_.gravity * dt)
+                            : d.sleep_threshold;
+    if (sleep > 0.0f) {
+        const float s2 = sleep * sleep;
+        const int after = std::clamp(int(std::ceil(kSleepAfterSeconds / dt)), 1, 65535);
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t i = r.begin(); i != r.end(); ++i) {
+                if (!p.active[i]) continue;
+                if (glm::dot(p.velocity[i], p.velocity[i]) >= s2) {
+                    slow_steps_[i] = 0;  // moving (or woken)
+                } else if (slow_steps_[i] < after) {
+                    ++slow_steps_[i];
+                } else {  // asleep
+                    p.position[i] = p.last_position[i];
+                    p.velocity[i] = Vec3(0.0f);
+                }
+            }
         });
     }
     for (size_t i = 0; i < n; ++i)

@@ -70,6 +70,7 @@ ParticleSolver::ParticleSolver(const Terrain& terrain, const Bvh& bvh, SpawnDef 
         particles_.id[i] = static_cast<uint32_t>(i);
     }
     respawn_flag_.assign(n, 0);
+    slow_steps_.assign(n, 0);
     if (pbf_) init_pbf();
 }
 
@@ -94,6 +95,7 @@ void ParticleSolver::spawn(size_t i) {
     particles_.velocity[i] = spawn_.initial_velocity;
     particles_.active[i] = 1;
     particles_.birth_frame[i] = static_cast<uint32_t>(frame_);
+    slow_steps_[i] = 0;
 }
 
 size_t ParticleSolver::slot_of_id(uint32_t id) const {
@@ -111,6 +113,7 @@ void ParticleSolver::place(std::span<const Vec3> positions) {
         particles_.velocity[i] = spawn_.initial_velocity;
         particles_.active[i] = 1;
         particles_.birth_frame[i] = static_cast<uint32_t>(frame_);
+        slow_steps_[i] = 0;
     }
 }
 
@@ -156,6 +159,7 @@ void ParticleSolver::deactivate(size_t i) {
         std::swap(p.force[i], p.force[j]);
         std::swap(p.id[i], p.id[j]);
         std::swap(p.birth_frame[i], p.birth_frame[j]);
+        std::swap(slow_steps_[i], slow_steps_[j]);
     }
     p.active[j] = 0;
 }
@@ -224,6 +228,7 @@ void ParticleSolver::emit_lattice() {
         particles_.velocity[i] = spawn_.initial_velocity;
         particles_.active[i] = 1;
         particles_.birth_frame[i] = static_cast<uint32_t>(frame_);
+        slow_steps_[i] = 0;
         ++counters_.emitted;
     }
     emit_credit_ -= double(emit_slots_.size());
@@ -352,6 +357,8 @@ void ParticleSolver::sort_by_cell(float cell) {
     p.id.swap(scratch_id_);
     for (size_t k = 0; k < n; ++k) scratch_id_[k] = p.birth_frame[perm_[k]];  // same scratch: no allocation
     p.birth_frame.swap(scratch_id_);
+    for (size_t k = 0; k < n; ++k) scratch_id_[k] = slow_steps_[perm_[k]];
+    for (size_t k = 0; k < n; ++k) slow_steps_[k] = static_cast<uint16_t>(scratch_id_[k]);
     // active stays a prefix of the same length: nothing to move.
     grid_.relabel_identity();
 }

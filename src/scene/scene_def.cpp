@@ -308,6 +308,7 @@ Status validate(const SceneDef& d) {
         c.range("pbf.scorr_dq", d.pbf.scorr_dq, 1e-3, 0.999);
         c.range("pbf.xsph", d.pbf.xsph, 0.0, 1.0);
         c.range("pbf.vorticity", d.pbf.vorticity, 0.0, 100.0);
+        c.range("pbf.sleep_threshold", d.pbf.sleep_threshold, 0.0, 1.0);
     }
     if (d.sink.kind == SinkKind::Box) {
         c.vec("sink.min", d.sink.min, -kBig, kBig);

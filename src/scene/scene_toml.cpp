@@ -346,7 +346,7 @@ Result<SceneDef> parse_scene_toml_lines(std::string_view text, const std::string
     if (const toml::table* t = r.table(root, "pbf")) {
         const std::string p = "pbf.";
         r.allow(*t, p, {"spacing", "kernel_radius", "iterations", "relaxation", "scorr_k", "scorr_n", "scorr_dq", "xsph",
-                        "vorticity"});
+                        "vorticity", "sleep_threshold"});
         r.number(*t, p, "spacing", d.pbf.spacing);
         r.number(*t, p, "kernel_radius", d.pbf.kernel_radius);
         r.integer(*t, p, "iterations", d.pbf.iterations, 1, 100);
@@ -356,6 +356,7 @@ Result<SceneDef> parse_scene_toml_lines(std::string_view text, const std::string
         r.number(*t, p, "scorr_dq", d.pbf.scorr_dq);
         r.number(*t, p, "xsph", d.pbf.xsph);
         r.number(*t, p, "vorticity", d.pbf.vorticity);
+        r.number(*t, p, "sleep_threshold", d.pbf.sleep_threshold);
     }
     if (const toml::table* t = r.table(root, "sink")) {
         const std::string p = "sink.";

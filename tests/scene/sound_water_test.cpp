@@ -2,18 +2,22 @@
 // never throw particles, and the collision counters stay at zero while they are
 // honest (tests/particles/tunneling_test.cpp proves they can count).
 //
-// Measured on this build (the note of the change gives the commands): the still pool
-// below (bed friction 0.02) after 15 s has speed p95 about 0.03 m/s and max 0.1-0.4
-// m/s; the target (p95 <= 0.02, max <= 0.1 after 10 s of settling) is reached
-// only after about 30 s. The bounds here are what the solver holds today, each one failing without the
-// fix it guards (no bed friction: p95 0.15; random spawning: max speed 31 m/s and
-// respawned particles).
+// The still pool is the scene with the default river's parameters. PBF water
+// creeps when nothing stops it: without sleeping (pbf.sleep_threshold = 0) the pool
+// still moves after 15 s (speed p95 0.06 m/s, max 0.17; at 10 s p95 0.11, max 0.40).
+// With the default sleep_threshold (0.05 m/s) it is at rest by 8-10 s; the bounds are
+// the (p95 <= 0.02 m/s, max <= 0.1 after 10 s), checked at 10 s and at 15 s
+// (the box basin's max is the exception, below). The highest particle is checked
+// after the same 10 s: the first slosh runs up the bowl's banks 1.3 m above the rest
+// level at 5 s.
 #include <metariver/scene.h>
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 namespace mr {
@@ -35,10 +39,6 @@ SceneDef still_pool(int count) {
     d.spawn.flow_rate = 0.0f;
     d.spawn.shape = SourceShape::Box;
     d.sink.kind = SinkKind::None;
-    // Still-water bed friction: the default river's 0.002 leaves the pool rocking
-    // (p95 0.06-0.12 m/s after 10-15 s); 0.02 damps the slosh (and would hold a
-    // shallow river on its bed).
-    d.collision.damping = 0.02f;
     return d;
 }
 
@@ -47,13 +47,25 @@ struct PoolRun {
     float max_y_late = -1e30f;   ///< highest particle after `settle_s`
     float rest_level = 0.0f;     ///< 99th percentile of the heights at the end
     float p95 = 0.0f, vmax = 0.0f;  ///< speeds at the end
+    float p95_10s = 0.0f, vmax_10s = 0.0f;  ///< speeds after 10 s
     float density_max_late = 0.0f;
     SolverCounters counters;
 };
 
+/// 95th percentile and maximum of the active particles' speeds.
+std::pair<float, float> speeds(const Simulation& s) {
+    std::vector<float> v;
+    const Particles& p = s.particles();
+    for (size_t i = 0; i < p.size(); ++i)
+        if (p.active[i]) v.push_back(glm::length(p.velocity[i]));
+    std::sort(v.begin(), v.end());
+    return {v[size_t(0.95 * double(v.size()))], v.back()};
+}
+
 PoolRun run_pool(Simulation& s, int frames, float settle_s) {
     PoolRun r;
     for (int f = 0; f < frames; ++f) {
+        if (f == 600) std::tie(r.p95_10s, r.vmax_10s) = speeds(s);
         s.step(1.0f / 60.0f);
         r.max_speed = std::max(r.max_speed, s.counters().max_speed);
         if (float(f + 1) / 60.0f >= settle_s) {
@@ -63,17 +75,12 @@ PoolRun run_pool(Simulation& s, int frames, float settle_s) {
                 if (p.active[i]) r.max_y_late = std::max(r.max_y_late, p.position[i].y);
         }
     }
-    std::vector<float> v, y;
+    std::vector<float> y;
     const Particles& p = s.particles();
     for (size_t i = 0; i < p.size(); ++i)
-        if (p.active[i]) {
-            v.push_back(glm::length(p.velocity[i]));
-            y.push_back(p.position[i].y);
-        }
-    std::sort(v.begin(), v.end());
+        if (p.active[i]) y.push_back(p.position[i].y);
     std::sort(y.begin(), y.end());
-    r.p95 = v[size_t(0.95 * double(v.size()))];
-    r.vmax = v.back();
+    std::tie(r.p95, r.vmax) = speeds(s);
     r.rest_level = y[size_t(0.99 * double(y.size()))];
     r.counters = s.counters();
     return r;
@@ -91,11 +98,11 @@ TEST(SoundWater, StillPoolSettlesStaysInItsBowlAndNothingIsThrown) {
     auto sim = Simulation::create(still_pool(2500));
     ASSERT_TRUE(sim.ok()) << sim.error().message;
     Simulation& s = *sim.value();
-    const PoolRun r = run_pool(s, 900, 5.0f);
+    const PoolRun r = run_pool(s, 900, 10.0f);
     const float d = s.def().pbf.spacing;
-    std::printf("still pool: max speed %.2f (bound %.2f), end p95 %.4f max %.4f, rest level %.2f, highest after 5 s "
-                "%.2f, respawned %llu, tunneled %llu, guarded %llu\n",
-                r.max_speed, speed_bound(s), r.p95, r.vmax, r.rest_level, r.max_y_late,
+    std::printf("still pool: max speed %.2f (bound %.2f), at 10 s p95 %.4f max %.4f, at 15 s p95 %.4f max %.4f, "
+                "rest level %.2f, highest after 10 s %.2f, respawned %llu, tunneled %llu, guarded %llu\n",
+                r.max_speed, speed_bound(s), r.p95_10s, r.vmax_10s, r.p95, r.vmax, r.rest_level, r.max_y_late,
                 (unsigned long long)r.counters.respawned, (unsigned long long)r.counters.tunneled,
                 (unsigned long long)r.counters.guarded);
     EXPECT_EQ(s.particles().active_count(), 2500u);
@@ -106,8 +113,10 @@ TEST(SoundWater, StillPoolSettlesStaysInItsBowlAndNothingIsThrown) {
     EXPECT_LE(r.max_speed, speed_bound(s));
     EXPECT_LE(r.max_y_late, r.rest_level + 2.0f * d) << "a particle rose above the water";
     EXPECT_LT(r.density_max_late, 0.05f);
-    EXPECT_LE(r.p95, 0.05f) << "the pool still moves after 15 s";
-    EXPECT_LE(r.vmax, 1.0f);
+    EXPECT_LE(r.p95_10s, 0.02f) << "the pool still moves after 10 s";
+    EXPECT_LE(r.vmax_10s, 0.1f) << "the pool still moves after 10 s";
+    EXPECT_LE(r.p95, 0.02f) << "the pool moves again after 15 s";
+    EXPECT_LE(r.vmax, 0.1f) << "the pool moves again after 15 s";
 }
 
 TEST(SoundWater, StillWaterInABoxBasin) {
@@ -124,22 +133,35 @@ TEST(SoundWater, StillWaterInABoxBasin) {
     auto sim = Simulation::create(d, m);
     ASSERT_TRUE(sim.ok()) << sim.error().message;
     Simulation& s = *sim.value();
-    const PoolRun r = run_pool(s, 900, 5.0f);
-    std::printf("box basin: max speed %.2f (bound %.2f), end p95 %.4f max %.4f, rest level %.2f, highest after 5 s %.2f\n",
-                r.max_speed, speed_bound(s), r.p95, r.vmax, r.rest_level, r.max_y_late);
+    const PoolRun r = run_pool(s, 900, 10.0f);
+    std::printf("box basin: max speed %.2f (bound %.2f), at 10 s p95 %.4f max %.4f, at 15 s p95 %.4f max %.4f, rest "
+                "level %.2f, highest after 10 s %.2f\n",
+                r.max_speed, speed_bound(s), r.p95_10s, r.vmax_10s, r.p95, r.vmax, r.rest_level, r.max_y_late);
     EXPECT_EQ(r.counters.respawned, 0u);
     EXPECT_EQ(r.counters.tunneled, 0u);
     EXPECT_EQ(r.counters.guarded, 0u);
     EXPECT_LE(r.max_speed, speed_bound(s));
     EXPECT_LE(r.max_y_late, r.rest_level + 2.0f * d.pbf.spacing);
-    EXPECT_LE(r.p95, 0.05f);
-    EXPECT_LE(r.vmax, 1.0f);
+    EXPECT_LE(r.p95_10s, 0.02f);
+    EXPECT_LE(r.p95, 0.02f);
+    // Not the 0.1 m/s: a few particles in the crease at the foot of a wall (the
+    // heightmap's 80-degree face meets the floor) keep a limit cycle of the constraint
+    // solve, 1.6 mm up and down every 3 frames (0.19 m/s at its fastest step), and
+    // never sleep. Measured 0.19 at 10 s and at 15 s; this bound catches anything more.
+    EXPECT_LE(r.vmax_10s, 0.25f);
+    EXPECT_LE(r.vmax, 0.25f);
 }
 
 TEST(SoundWater, SpawningIntoAFullVolumeAndPouringOntoWaterNeverThrowParticles) {
     // 4500 particles cannot fit in the spawn box at the rest spacing: the rest wait for
     // free slots. Then 500 more are poured onto the pool's surface.
-    auto sim = Simulation::create(still_pool(4500));
+    // 4500 particles fill the bowl 4.6 m deep (rim 7 m): with the river's bed friction
+    // (0.002) the first slosh runs 2 m up the banks and about 115 particles leave over
+    // the rim at 2-3 s (at speeds below the bound: water spilling, not thrown). Here
+    // `respawned` must count only throws, so the bed holds the slosh (0.02).
+    SceneDef def = still_pool(4500);
+    def.collision.damping = 0.02f;
+    auto sim = Simulation::create(def);
     ASSERT_TRUE(sim.ok()) << sim.error().message;
     Simulation& s = *sim.value();
     float vmax = 0.0f;
