@@ -7,6 +7,9 @@
 
 #include <metariver/core.h>
 
+#include <glm/common.hpp>
+#include <glm/vec3.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
@@ -169,6 +172,91 @@ inline size_t count_duplicate_positions(std::span<const Vec3> positions) {
         if (sorted[i] == sorted[i - 1]) ++dup;
     }
     return dup;
+}
+
+/// Whether segment p-q crosses the interior of triangle a, b, c (Moller-Trumbore in
+/// double; touching an edge or a corner, or lying in its plane, does not count).
+inline bool segment_crosses_triangle(const glm::dvec3& p, const glm::dvec3& q, const glm::dvec3& a,
+                                     const glm::dvec3& b, const glm::dvec3& c) {
+    const glm::dvec3 d = q - p, e1 = b - a, e2 = c - a;
+    const glm::dvec3 h = glm::cross(d, e2);
+    const double det = glm::dot(e1, h);
+    if (std::abs(det) < 1e-18) return false;
+    const double inv = 1.0 / det;
+    const glm::dvec3 s = p - a;
+    const double u = glm::dot(s, h) * inv;
+    if (u <= 0.0 || u >= 1.0) return false;
+    const glm::dvec3 qv = glm::cross(s, e1);
+    const double v = glm::dot(d, qv) * inv;
+    if (v <= 0.0 || u + v >= 1.0) return false;
+    const double t = glm::dot(e2, qv) * inv;
+    return t > 0.0 && t < 1.0;
+}
+
+/// Pairs of triangles that share no vertex and intersect (an edge of one crosses the
+/// other's interior): a mesh that passes through itself. Broad phase: a uniform grid of
+/// cells twice the mean edge length over the triangles' boxes.
+inline size_t count_self_intersections(std::span<const Vec3> positions, std::span<const uint32_t> indices) {
+    const size_t nt = indices.size() / 3;
+    if (nt < 2) return 0;
+    double edge = 0.0;
+    glm::dvec3 lo(1e300), hi(-1e300);
+    for (size_t t = 0; t < nt; ++t)
+        for (int k = 0; k < 3; ++k) {
+            const glm::dvec3 a(positions[indices[3 * t + k]]), b(positions[indices[3 * t + (k + 1) % 3]]);
+            edge += glm::length(b - a);
+            lo = glm::min(lo, a);
+            hi = glm::max(hi, a);
+        }
+    const double cell = std::max(2.0 * edge / double(3 * nt), 1e-6);
+    const glm::ivec3 n = glm::max(glm::ivec3(glm::floor((hi - lo) / cell)) + 1, glm::ivec3(1));
+    const auto key = [&](int i, int j, int k) { return (size_t(k) * size_t(n.y) + size_t(j)) * size_t(n.x) + size_t(i); };
+    std::vector<std::vector<uint32_t>> cells(size_t(n.x) * n.y * n.z);
+    const auto box = [&](size_t t, glm::ivec3& a, glm::ivec3& b) {
+        glm::dvec3 mn(1e300), mx(-1e300);
+        for (int k = 0; k < 3; ++k) {
+            mn = glm::min(mn, glm::dvec3(positions[indices[3 * t + k]]));
+            mx = glm::max(mx, glm::dvec3(positions[indices[3 * t + k]]));
+        }
+        a = glm::clamp(glm::ivec3(glm::floor((mn - lo) / cell)), glm::ivec3(0), n - 1);
+        b = glm::clamp(glm::ivec3(glm::floor((mx - lo) / cell)), glm::ivec3(0), n - 1);
+    };
+    for (size_t t = 0; t < nt; ++t) {
+        glm::ivec3 a, b;
+        box(t, a, b);
+        for (int k = a.z; k <= b.z; ++k)
+            for (int j = a.y; j <= b.y; ++j)
+                for (int i = a.x; i <= b.x; ++i) cells[key(i, j, k)].push_back(static_cast<uint32_t>(t));
+    }
+    std::vector<size_t> seen(nt, SIZE_MAX);
+    size_t count = 0;
+    for (size_t t = 0; t < nt; ++t) {
+        glm::ivec3 a, b;
+        box(t, a, b);
+        const uint32_t* ti = &indices[3 * t];
+        const glm::dvec3 p[3] = {glm::dvec3(positions[ti[0]]), glm::dvec3(positions[ti[1]]), glm::dvec3(positions[ti[2]])};
+        for (int k = a.z; k <= b.z; ++k)
+            for (int j = a.y; j <= b.y; ++j)
+                for (int i = a.x; i <= b.x; ++i)
+                    for (const uint32_t u : cells[key(i, j, k)]) {
+                        if (u <= t || seen[u] == t) continue;
+                        seen[u] = t;
+                        const uint32_t* ui = &indices[3 * size_t(u)];
+                        bool shared = false;
+                        for (int x = 0; x < 3; ++x)
+                            for (int y = 0; y < 3; ++y) shared |= ti[x] == ui[y];
+                        if (shared) continue;
+                        const glm::dvec3 r[3] = {glm::dvec3(positions[ui[0]]), glm::dvec3(positions[ui[1]]),
+                                                 glm::dvec3(positions[ui[2]])};
+                        bool hit = false;
+                        for (int e = 0; e < 3 && !hit; ++e) {
+                            hit = segment_crosses_triangle(p[e], p[(e + 1) % 3], r[0], r[1], r[2]) ||
+                                  segment_crosses_triangle(r[e], r[(e + 1) % 3], p[0], p[1], p[2]);
+                        }
+                        count += hit ? 1 : 0;
+                    }
+    }
+    return count;
 }
 
 }  // namespace mr::test

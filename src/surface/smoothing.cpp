@@ -1,0 +1,511 @@
+// metariver surface: feature-weighted Laplacian / Taubin smoothing of the extracted mesh.
+//
+// Loeschner, Boettcher, Jeske, Bender, "Weighted Laplacian smoothing for surface
+// reconstruction of particle-based fluids" (VMV 2023; splashsurf): Laplacian steps, each
+// vertex weighted by how much fluid lies around it so that splashes keep their shape.
+// Taubin, "A signal processing approach to fair surface design" (SIGGRAPH 1995):
+// alternating steps lambda > 0 and mu < -lambda cut high frequencies and pass low ones.
+// Taubin, Zhang, Golub, "Optimal surface smoothing as filter design" (ECCV 1996): N steps
+// of sizes 1 / r_i, r_i the roots of the Chebyshev polynomial of degree N on a band
+// [a, 2], make the filter that damps that band most evenly; N = 6 on [0.1, 2] damps it
+// at least as much as 12 uniform steps of 1, in half the passes.
+//
+//   weights  (parallel) The field sampled (trilinear) one lone ball's iso distance inside
+//            the surface, along the normal marching cubes gave the vertex (the field's
+//            gradient): about the fluid behind it, in units of the kernel's centre value.
+//            A lone particle reads 1 (its centre), two touching ones about 1.4, still
+//            water 2 to 4: w = smoothstep((v - N / 2) / (N / 2)), N = feature_count, 0
+//            below kMinWeight. Where the blocks' maxima say the value cannot exceed N / 2,
+//            no sample is read. Only
+//            the vertices with w > 0 ("moving") cost anything from here on: a frame of
+//            spray and drops costs little more than this pass.
+//   rings    (serial) Touched: the moving vertices and their neighbours (every vertex of
+//            a triangle with a moving corner), whose fans change. Each corner of a touched
+//            vertex files its next and previous vertex under it (a counting sort by
+//            vertex): on a closed oriented manifold a vertex's "next" vertices are its
+//            neighbours, each once, and the (next, previous) pairs are its fan. A moving
+//            vertex whose fan does not close (its nexts are not its previouses) lies on an
+//            open boundary and is pinned.
+//   steps    (parallel, double-buffered gathers over the moving vertices, positions
+//            padded to 16 bytes for one SSE load each) p' = p + w s (mean of neighbours
+//            - p), s from smoothing_step_sizes().
+//   normals  (parallel gathers) Area-weighted for the touched vertices: the sum of the
+//            fan's cross products S_v; the others keep the field's gradient normal. The
+//            enclosed volume is sum_v p_v . S_v / 18 (each triangle's a . (b x c) is the
+//            same with a, b or c, so the triangles' sum regroups by vertex): its change is
+//            that sum over the touched vertices, before and after the steps.
+//   volume   Laplacian with keep_volume on a closed mesh: every vertex moves along its
+//            normal by w d, d = (volume before - volume after the steps) / sum w A_v,
+//            A_v = |S_v| / 6 (a third of the fan's area): the first-order volume change
+//            of that offset is exactly what the steps took. Normals are kept (an offset
+//            along the normals leaves them to first order).
+//   passes   Optional normal passes over the touched vertices: each normal averaged
+//            with its neighbours'.
+// Every sum runs in a fixed order (triangle order, fixed chunks of vertices), so the
+// result does not depend on the thread count.
+#include <metariver/surface.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numbers>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+namespace mr {
+
+namespace {
+
+using P4 = SmoothingWorkspace::P4;
+
+double ms_since(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// Vertices per parallel task and per partial sum: a step over a few thousand vertices
+/// takes microseconds, so small meshes run on one thread without the scheduling cost
+/// (on two busy cores a parallel_for costs tens of microseconds). The field probes cost
+/// more per vertex and split sooner.
+constexpr size_t kChunk = 16384;
+constexpr size_t kProbeChunk = 4096;
+/// Chebyshev steps come in cycles of at most this many: longer cycles amplify the
+/// middle of the band in between (50x at 20 steps on [0.1, 2]) and with it float error.
+constexpr int kChebyshevCycle = 8;
+/// Feature weights below this are 0: the vertex does not move (a step of a few per cent
+/// of the way is not worth its cost; mostly lone drops and pairs).
+constexpr float kMinWeight = 0.05f;
+/// SmoothingWorkspace::flag values.
+constexpr uint8_t kTouched = 1, kMoving = 2;  // bits
+
+/// f(lo, hi) over [0, n) in chunks of `chunk` (fixed boundaries), in parallel when n > chunk.
+template <class F>
+void for_chunks(size_t n, F&& f, size_t chunk = kChunk) {
+    if (n <= chunk) {
+        if (n) f(size_t{0}, n);
+        return;
+    }
+    const size_t chunks = (n + chunk - 1) / chunk;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, chunks, 1), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t c = r.begin(); c != r.end(); ++c) f(c * chunk, std::min(n, (c + 1) * chunk));
+    });
+}
+
+/// Reads a SparseField at arbitrary points (trilinear; 0 outside the grid and where no
+/// block is stored). Everything it needs is copied out of the field once, so the loop
+/// that stores weights does not re-read the field's members after every store.
+class FieldProbe {
+public:
+    explicit FieldProbe(const SparseField& f)
+        : f_(f), origin_(f.grid().origin), inv_(1.0f / f.grid().spacing), hi_(float(f.grid().nx - 1), float(f.grid().ny - 1), float(f.grid().nz - 1)),
+          nx2_(f.grid().nx - 2), ny2_(f.grid().ny - 2), nz2_(f.grid().nz - 2), bx_(f.blocks_x()), by_(f.blocks_y()),
+          dir_(f.directory().data()) {}
+
+    /// The value at p, or `floor` when the blocks holding its 8 samples all stay at or
+    /// below `floor` (their block max): the caller only needs to know that much, and the
+    /// blocks' maxima are small and cached where the samples may not be.
+    float at(const Vec3& p, float floor) const {
+        constexpr unsigned B = SparseField::kBlock;
+        static_assert(B == 8, "the shifts and masks below assume 8^3 blocks");
+        const Vec3 q = (p - origin_) * inv_;
+        if (!(q.x >= 0.0f && q.y >= 0.0f && q.z >= 0.0f && q.x <= hi_.x && q.y <= hi_.y && q.z <= hi_.z)) return 0.0f;
+        const int i = std::min(static_cast<int>(q.x), nx2_);
+        const int j = std::min(static_cast<int>(q.y), ny2_);
+        const int k = std::min(static_cast<int>(q.z), nz2_);
+        const float tx = q.x - float(i), ty = q.y - float(j), tz = q.z - float(k);
+        const unsigned ui = unsigned(i), uj = unsigned(j), uk = unsigned(k);
+        float c[8];
+        if ((ui & 7u) != 7u && (uj & 7u) != 7u && (uk & 7u) != 7u) {  // all 8 samples in one block
+            const int32_t s = dir_[size_t(ui >> 3) + size_t(bx_) * (size_t(uj >> 3) + size_t(by_) * size_t(uk >> 3))];
+            if (s == SparseField::kNoBlock || f_.block_max(s) <= floor) return floor;
+            const float* v = f_.block_values(s) + (ui & 7u) + B * ((uj & 7u) + B * (uk & 7u));
+            c[0] = v[0], c[1] = v[1], c[2] = v[B], c[3] = v[B + 1];
+            c[4] = v[B * B], c[5] = v[B * B + 1], c[6] = v[B * B + B], c[7] = v[B * B + B + 1];
+        } else {
+            int32_t slot[8];
+            bool above = false;
+            for (unsigned n = 0; n < 8; ++n) {
+                const unsigned x = ui + (n & 1u), y = uj + ((n >> 1) & 1u), z = uk + (n >> 2);
+                slot[n] = dir_[size_t(x >> 3) + size_t(bx_) * (size_t(y >> 3) + size_t(by_) * size_t(z >> 3))];
+                above |= slot[n] != SparseField::kNoBlock && f_.block_max(slot[n]) > floor;
+            }
+            if (!above) return floor;
+            for (unsigned n = 0; n < 8; ++n) {
+                const unsigned x = ui + (n & 1u), y = uj + ((n >> 1) & 1u), z = uk + (n >> 2);
+                c[n] = slot[n] == SparseField::kNoBlock ? 0.0f
+                                                         : f_.block_values(slot[n])[(x & 7u) + B * ((y & 7u) + B * (z & 7u))];
+            }
+        }
+        const auto lerp = [](float a, float b, float t) { return a + t * (b - a); };
+        const float y0 = lerp(lerp(c[0], c[1], tx), lerp(c[2], c[3], tx), ty);
+        const float y1 = lerp(lerp(c[4], c[5], tx), lerp(c[6], c[7], tx), ty);
+        return lerp(y0, y1, tz);
+    }
+
+private:
+    const SparseField& f_;
+    Vec3 origin_;
+    float inv_;
+    Vec3 hi_;
+    int nx2_, ny2_, nz2_, bx_, by_;
+    const int32_t* dir_;
+};
+
+float smoothstep01(float x) {
+    x = std::clamp(x, 0.0f, 1.0f);
+    return x * x * (3.0f - 2.0f * x);
+}
+
+/// Marks the touched vertices (ws.flag: the moving ones are marked already; a vertex that
+/// shares a triangle with a moving one is touched) and builds their fans (ring_start,
+/// next, prev; other vertices get an empty fan). False when an index is out of range.
+bool build_rings(const SurfaceMesh& m, SmoothingWorkspace& ws) {
+    const size_t nv = m.positions.size();
+    const uint32_t* idx = m.indices.data();
+    const size_t nt = m.indices.size() / 3;
+    uint8_t* flag = ws.flag.data();
+    for (size_t t = 0; t < nt; ++t) {
+        const uint32_t a = idx[3 * t], b = idx[3 * t + 1], c = idx[3 * t + 2];
+        if (a >= nv || b >= nv || c >= nv) return false;
+        if ((flag[a] | flag[b] | flag[c]) & kMoving) {
+            flag[a] |= kTouched, flag[b] |= kTouched, flag[c] |= kTouched;
+        }
+    }
+    ws.ring_start.assign(nv + 1, 0u);
+    uint32_t* start = ws.ring_start.data();
+    for (size_t i = 0; i < 3 * nt; ++i) start[idx[i] + 1] += flag[idx[i]] != 0;
+    for (size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
+    // Fill with start[v] as v's cursor (it ends at v's end, v + 1's beginning), then shift back.
+    ws.next.resize(start[nv]);
+    ws.prev.resize(start[nv]);
+    uint32_t* next = ws.next.data();
+    uint32_t* prev = ws.prev.data();
+    for (size_t t = 0; t < nt; ++t) {
+        const uint32_t a = idx[3 * t], b = idx[3 * t + 1], c = idx[3 * t + 2];
+        if (!(flag[a] | flag[b] | flag[c])) continue;
+        if (flag[a]) {
+            const uint32_t x = start[a]++;
+            next[x] = b, prev[x] = c;
+        }
+        if (flag[b]) {
+            const uint32_t x = start[b]++;
+            next[x] = c, prev[x] = a;
+        }
+        if (flag[c]) {
+            const uint32_t x = start[c]++;
+            next[x] = a, prev[x] = b;
+        }
+    }
+    for (size_t v = nv; v > 0; --v) start[v] = start[v - 1];
+    start[0] = 0;
+    return true;
+}
+
+/// Whether vertex v's fan closes: its nexts are its previouses. An open fan is a chain
+/// whose last next and first previous differ, so the sums (and xors) of the nexts and of
+/// the previouses differ; O(degree), unlike matching the pairs.
+bool fan_closed(const SmoothingWorkspace& ws, size_t v) {
+    const uint32_t b = ws.ring_start[v], e = ws.ring_start[v + 1];
+    if (b == e) return false;
+    uint64_t sn = 0, sp = 0;
+    uint32_t xn = 0, xp = 0;
+    for (uint32_t x = b; x < e; ++x) {
+        sn += ws.next[x], sp += ws.prev[x];
+        xn ^= ws.next[x], xp ^= ws.prev[x];
+    }
+    return sn == sp && xn == xp;
+}
+
+/// One step over the moving vertices: dst = src + s (w / degree * sum of neighbours - w src).
+void laplacian_step(const SmoothingWorkspace& ws, const P4* src, P4* dst, float s) {
+    const uint32_t* moving = ws.moving.data();
+    const uint32_t* start = ws.ring_start.data();
+    const uint32_t* next = ws.next.data();
+    const float* wd = ws.step_weight.data();
+    const float* w = ws.weight.data();
+    for_chunks(ws.moving.size(), [&](size_t lo, size_t hi) {
+        for (size_t m = lo; m < hi; ++m) {
+            const uint32_t v = moving[m];
+            const uint32_t b = start[v], e = start[v + 1];
+#if defined(__SSE2__)
+            __m128 sum = _mm_setzero_ps();
+            for (uint32_t x = b; x < e; ++x) sum = _mm_add_ps(sum, _mm_load_ps(&src[next[x]].x));
+            const __m128 p = _mm_load_ps(&src[v].x);
+            const __m128 d = _mm_sub_ps(_mm_mul_ps(_mm_set1_ps(wd[v]), sum), _mm_mul_ps(_mm_set1_ps(w[v]), p));
+            _mm_store_ps(&dst[v].x, _mm_add_ps(p, _mm_mul_ps(_mm_set1_ps(s), d)));
+#else
+            float sx = 0.0f, sy = 0.0f, sz = 0.0f;
+            for (uint32_t x = b; x < e; ++x) {
+                const P4& q = src[next[x]];
+                sx += q.x, sy += q.y, sz += q.z;
+            }
+            const P4 p = src[v];
+            dst[v] = P4{p.x + s * (wd[v] * sx - w[v] * p.x), p.y + s * (wd[v] * sy - w[v] * p.y),
+                        p.z + s * (wd[v] * sz - w[v] * p.z), 0.0f};
+#endif
+        }
+    });
+}
+
+/// sum over the touched vertices of p_v . S_v, S_v the sum of the cross products of v's
+/// fan (18 times the share of the enclosed volume that changes when they move), in fixed
+/// chunks; with `keep`, S_v goes to ws.area_normal[v].
+double touched_volume(const Vec3* p, SmoothingWorkspace& ws, bool keep) {
+    const size_t n = ws.touched.size();
+    ws.partial.assign((n + kChunk - 1) / kChunk, 0.0);
+    for_chunks(n, [&](size_t lo, size_t hi) {
+        double vol = 0.0;
+        for (size_t m = lo; m < hi; ++m) {
+            const uint32_t v = ws.touched[m];
+            const Vec3 pv = p[v];
+            Vec3 s(0.0f);
+            for (uint32_t x = ws.ring_start[v]; x < ws.ring_start[v + 1]; ++x)
+                s += glm::cross(p[ws.next[x]] - pv, p[ws.prev[x]] - pv);
+            if (keep) ws.area_normal[v] = s;
+            vol += double(pv.x) * s.x + double(pv.y) * s.y + double(pv.z) * s.z;
+        }
+        ws.partial[lo / kChunk] = vol;
+    });
+    double vol = 0.0;
+    for (const double x : ws.partial) vol += x;
+    return vol;
+}
+
+}  // namespace
+
+std::string_view to_string(SmoothingMethod m) {
+    switch (m) {
+        case SmoothingMethod::None: return "none";
+        case SmoothingMethod::Laplacian: return "laplacian";
+        case SmoothingMethod::Taubin: return "taubin";
+    }
+    return "?";
+}
+
+std::string_view to_string(SmoothingSteps s) {
+    switch (s) {
+        case SmoothingSteps::Uniform: return "uniform";
+        case SmoothingSteps::Chebyshev: return "chebyshev";
+    }
+    return "?";
+}
+
+namespace {
+
+/// The step sizes of `def` into `s` (cleared; its capacity reused).
+void fill_step_sizes(const SmoothingDef& def, std::vector<float>& s) {
+    s.clear();
+    const int n = std::max(0, def.iterations);
+    if (def.method == SmoothingMethod::None) return;
+    if (def.method == SmoothingMethod::Taubin) {
+        const float mu = 1.0f / (def.pass_band - 1.0f / def.lambda);
+        for (int i = 0; i < n; ++i) s.push_back(i % 2 == 0 ? def.lambda : mu);
+        return;
+    }
+    if (def.steps == SmoothingSteps::Uniform) {
+        s.assign(static_cast<size_t>(n), def.lambda);
+        return;
+    }
+    // Chebyshev: the roots r_i = (2 + a) / 2 + (2 - a) / 2 cos(pi (2 i + 1) / (2 N)) of
+    // the degree-N polynomial on [a, 2], steps 1 / r_i; small and large steps alternate
+    // so the intermediate results stay bounded.
+    const double a = def.pass_band, b = 2.0;
+    for (int done = 0; done < n;) {
+        const int cycle = std::min(kChebyshevCycle, n - done);
+        for (int it = 0; it < cycle; ++it) {
+            const int root = it % 2 == 0 ? it / 2 : cycle - 1 - it / 2;
+            const double r = 0.5 * (b + a) + 0.5 * (b - a) * std::cos(std::numbers::pi * (2 * root + 1) / (2.0 * cycle));
+            s.push_back(static_cast<float>(1.0 / r));
+        }
+        done += cycle;
+    }
+}
+
+}  // namespace
+
+std::vector<float> smoothing_step_sizes(const SmoothingDef& def) {
+    std::vector<float> s;
+    fill_step_sizes(def, s);
+    return s;
+}
+
+float lone_ball_iso_distance(const KernelDef& k, float threshold) {
+    const float centre = kernel_value(k, 0.0f);
+    if (!(centre > threshold) || !(k.radius > 0.0f) || !std::isfinite(k.radius)) return 0.0f;
+    // The kernel falls monotonically from the centre: bisect r^2 in [0, radius^2].
+    float lo = 0.0f, hi = k.radius * k.radius;
+    for (int it = 0; it < 40; ++it) {
+        const float mid = 0.5f * (lo + hi);
+        if (kernel_value(k, mid) > threshold) lo = mid;
+        else hi = mid;
+    }
+    return std::sqrt(0.5f * (lo + hi));
+}
+
+size_t SmoothingWorkspace::capacity_bytes() const {
+    return (ring_start.capacity() + next.capacity() + prev.capacity() + moving.capacity() + touched.capacity()) *
+               sizeof(uint32_t) +
+           flag.capacity() +
+           (weight.capacity() + step_weight.capacity()) * sizeof(float) + (a.capacity() + b.capacity()) * sizeof(P4) +
+           area_normal.capacity() * sizeof(Vec3) + partial.capacity() * sizeof(double) +
+           step_sizes.capacity() * sizeof(float);
+}
+
+void smooth_surface(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspace& ws, const SmoothingField* field) {
+    using Clock = std::chrono::steady_clock;
+    ws.stats = SmoothingStats{};
+    if (def.method == SmoothingMethod::None) return;
+    const size_t nv = mesh.positions.size();
+    ws.stats.vertices = nv;
+    if (nv == 0 || mesh.indices.empty() || def.iterations <= 0) return;
+
+    // Feature weights.
+    auto t0 = Clock::now();
+    ws.weight.resize(nv);
+    const SparseField* f = field && def.feature_count > 0.0f ? field->field : nullptr;
+    const float depth = f ? lone_ball_iso_distance(field->kernel, field->threshold) : 0.0f;
+    const float unit = f ? kernel_value(field->kernel, 0.0f) : 1.0f;
+    const SampleGrid& g = f ? f->grid() : SampleGrid{};
+    const bool use_field = f && depth > 0.0f && unit > 0.0f && mesh.normals.size() == nv && g.nx >= 2 &&
+                           g.ny >= 2 && g.nz >= 2 && g.spacing > 0.0f;
+    const float half = 0.5f * def.feature_count, inv_span = 1.0f / std::max(half, 1e-3f);
+    const Vec3* pos = mesh.positions.data();
+    const Vec3* nrm = mesh.normals.data();
+    float* weight = ws.weight.data();
+    if (!use_field) {
+        std::fill(weight, weight + nv, 1.0f);
+    } else {
+        const FieldProbe probe(*f);
+        const float floor = half * unit;  // at or below it, w = 0: only that much is read
+        for_chunks(nv, [&, depth, unit, half, inv_span, floor](size_t lo, size_t hi) {
+            for (size_t v = lo; v < hi; ++v) {
+                const float value = probe.at(pos[v] - depth * nrm[v], floor);
+                const float w = smoothstep01((value / unit - half) * inv_span);
+                weight[v] = w < kMinWeight ? 0.0f : w;
+            }
+        }, kProbeChunk);
+    }
+    ws.moving.clear();
+    ws.moving.reserve(nv);
+    for (size_t v = 0; v < nv; ++v)
+        if (ws.weight[v] > 0.0f) ws.moving.push_back(static_cast<uint32_t>(v));
+    ws.stats.ms_weights = ms_since(t0);
+    if (ws.moving.empty()) return;  // nothing moves: the mesh keeps its normals too
+
+    t0 = Clock::now();
+    ws.flag.assign(nv, 0);
+    for (const uint32_t v : ws.moving) ws.flag[v] = kMoving;
+    if (!build_rings(mesh, ws)) return;  // a malformed mesh is left as it is
+    // Pin the moving vertices on an open boundary; the rest move by w / degree.
+    ws.step_weight.resize(nv);
+    for_chunks(ws.moving.size(), [&](size_t lo, size_t hi) {
+        for (size_t m = lo; m < hi; ++m) {
+            const uint32_t v = ws.moving[m];
+            if (!fan_closed(ws, v)) ws.weight[v] = 0.0f;
+            ws.step_weight[v] = ws.weight[v] / static_cast<float>(ws.ring_start[v + 1] - ws.ring_start[v]);
+        }
+    });
+    size_t kept = 0;
+    double wsum = 0.0;
+    for (const uint32_t v : ws.moving) {
+        if (ws.weight[v] > 0.0f) {
+            ws.moving[kept++] = v;
+            wsum += ws.weight[v];
+        }
+    }
+    ws.stats.pinned = ws.moving.size() - kept;
+    ws.moving.resize(kept);
+    ws.stats.moving = kept;
+    ws.stats.mean_weight = wsum / double(nv);
+    // Touched: the moving vertices and their neighbours (their fans change).
+    ws.touched.clear();
+    ws.touched.reserve(nv);
+    for (size_t v = 0; v < nv; ++v)
+        if (ws.flag[v]) ws.touched.push_back(static_cast<uint32_t>(v));
+    ws.stats.touched = ws.touched.size();
+    ws.stats.ms_rings = ms_since(t0);
+    if (ws.moving.empty()) return;
+
+    // Position steps, double-buffered over the touched vertices (the ones that do not
+    // move hold their place in both buffers); then the moving ones back into the mesh.
+    t0 = Clock::now();
+    ws.a.resize(nv);
+    ws.b.resize(nv);
+    for_chunks(ws.touched.size(), [&](size_t lo, size_t hi) {
+        for (size_t m = lo; m < hi; ++m) {
+            const uint32_t v = ws.touched[m];
+            const Vec3& q = mesh.positions[v];
+            ws.a[v] = ws.b[v] = P4{q.x, q.y, q.z, 0.0f};
+        }
+    });
+    const bool restore = def.method == SmoothingMethod::Laplacian && def.keep_volume && ws.stats.pinned == 0;
+    const double before = restore ? touched_volume(mesh.positions.data(), ws, false) : 0.0;
+    P4* src = ws.a.data();
+    P4* dst = ws.b.data();
+    fill_step_sizes(def, ws.step_sizes);
+    for (const float s : ws.step_sizes) {
+        laplacian_step(ws, src, dst, s);
+        std::swap(src, dst);
+    }
+    for_chunks(ws.moving.size(), [&](size_t lo, size_t hi) {
+        for (size_t m = lo; m < hi; ++m) {
+            const uint32_t v = ws.moving[m];
+            mesh.positions[v] = Vec3(src[v].x, src[v].y, src[v].z);
+        }
+    });
+    ws.stats.ms_smooth = ms_since(t0);
+
+    // Normals of the touched vertices from the smoothed geometry (the others keep the
+    // field's gradient); the volume given back along them.
+    t0 = Clock::now();
+    ws.area_normal.resize(nv);
+    const double after = touched_volume(mesh.positions.data(), ws, true);
+    ws.stats.volume_change = restore ? (after - before) / 18.0 : 0.0;
+    for_chunks(ws.touched.size(), [&](size_t lo, size_t hi) {
+        for (size_t m = lo; m < hi; ++m) {
+            const uint32_t v = ws.touched[m];
+            const Vec3 s = ws.area_normal[v];
+            const float len = glm::length(s);
+            if (len > 0.0f && std::isfinite(len)) mesh.normals[v] = s / len;
+        }
+    });
+    if (restore) {
+        double wa = 0.0;  // sum of w A_v over the moving vertices, in order
+        for (const uint32_t v : ws.moving) wa += double(ws.weight[v]) * double(glm::length(ws.area_normal[v])) / 6.0;
+        if (wa > 0.0 && std::isfinite(ws.stats.volume_change)) {
+            const float d = static_cast<float>(-ws.stats.volume_change / wa);
+            for_chunks(ws.moving.size(), [&](size_t lo, size_t hi) {
+                for (size_t m = lo; m < hi; ++m) {
+                    const uint32_t v = ws.moving[m];
+                    mesh.positions[v] += (d * ws.weight[v]) * mesh.normals[v];
+                }
+            });
+        }
+    }
+    for (int it = 0; it < def.normal_iterations; ++it) {
+        P4* nb = ws.a.data();  // the positions are back in the mesh: reuse the buffers
+        for_chunks(ws.touched.size(), [&](size_t lo, size_t hi) {
+            for (size_t m = lo; m < hi; ++m) {
+                const uint32_t v = ws.touched[m];
+                Vec3 s = mesh.normals[v];
+                for (uint32_t x = ws.ring_start[v]; x < ws.ring_start[v + 1]; ++x) s += mesh.normals[ws.next[x]];
+                const float len = glm::length(s);
+                const Vec3 n = len > 0.0f && std::isfinite(len) ? s / len : mesh.normals[v];
+                nb[v] = P4{n.x, n.y, n.z, 0.0f};
+            }
+        });
+        for_chunks(ws.touched.size(), [&](size_t lo, size_t hi) {
+            for (size_t m = lo; m < hi; ++m) {
+                const uint32_t v = ws.touched[m];
+                mesh.normals[v] = Vec3(nb[v].x, nb[v].y, nb[v].z);
+            }
+        });
+    }
+    ws.stats.ms_normals = ms_since(t0);
+}
+
+}  // namespace mr
