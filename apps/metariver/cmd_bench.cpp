@@ -125,6 +125,7 @@ ScenarioResult bench_simulation(const std::string& name, const SceneDef& def, in
                 {"springs", std::string(to_string(def.springs.mode))},
                 {"collision", std::string(to_string(def.collision.mode))},
                 {"field_kernel", std::string(to_string(def.field.kernel))},
+                {"surface_smoothing", std::string(to_string(def.smoothing.method))},
                 {"frames", frames},
                 {"warmup", warmup}};
     // Plausibility (issues 5 and 9) beside the times: nothing through the ground (and how

@@ -266,6 +266,13 @@ int run(const RunOptions& o) {
         j["triangles"] = sim.surface().triangle_count();
         j["vertices"] = sim.surface().vertex_count();
         j["field_grid"] = sim.field_dims();
+        // The last frame's smoothing ([surface], issue 11).
+        const SmoothingStats& sm = sim.smoothing_stats();
+        j["surface_smoothing"] = {{"method", std::string(to_string(d.smoothing.method))},
+                                  {"moving_vertices", sm.moving},
+                                  {"pinned_vertices", sm.pinned},
+                                  {"mean_weight", sm.mean_weight},
+                                  {"volume_change_m3", sm.volume_change}};
         j["field_overflows"] = sim.field_overflows();
         j["particle_steps"] = c.particle_steps;
         j["collisions"] = c.collisions;

@@ -225,6 +225,22 @@ bool scene_editor(SceneDef& d) {
         commit |= drag_float("resolution (cells/m)", d.field.resolution, 0.01f, 0.05f, 64.0f);
         commit |= drag_float("bounds offset (m)", d.field.bounds_offset, 0.05f, 0.0f, 100.0f);
         commit |= drag_float("threshold", d.field.threshold, 0.001f, 1e-6f, 1e3f, "%.4f");
+        // [surface]: the smoothing of the marching-cubes mesh (docs/rendering.md).
+        SmoothingDef& sm = d.smoothing;
+        commit |= enum_combo("smoothing", sm.method,
+                             std::array{SmoothingMethod::None, SmoothingMethod::Laplacian, SmoothingMethod::Taubin});
+        if (sm.method != SmoothingMethod::None) {
+            if (sm.method == SmoothingMethod::Laplacian)
+                commit |= enum_combo("steps", sm.steps, std::array{SmoothingSteps::Chebyshev, SmoothingSteps::Uniform});
+            commit |= drag_int("iterations", sm.iterations, 0.2f, 0, 100);
+            if (sm.method == SmoothingMethod::Taubin || sm.steps == SmoothingSteps::Uniform)
+                commit |= drag_float("lambda", sm.lambda, 0.01f, 0.01f, 1.0f);
+            if (sm.method == SmoothingMethod::Taubin || sm.steps == SmoothingSteps::Chebyshev)
+                commit |= drag_float("pass band", sm.pass_band, 0.005f, 0.005f, 0.995f);
+            commit |= drag_float("feature count (0 off)", sm.feature_count, 0.05f, 0.0f, 1000.0f);
+            if (sm.method == SmoothingMethod::Laplacian) commit |= ImGui::Checkbox("keep volume", &sm.keep_volume);
+            commit |= drag_int("normal passes", sm.normal_iterations, 0.2f, 0, 100);
+        }
     }
     return commit;
 }

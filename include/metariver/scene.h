@@ -61,6 +61,7 @@ struct SceneDef {
     SinkDef sink;      ///< where water leaves (recycled to the source)
     FieldDef field;
     bool surface = true;  ///< build the field and the surface every frame
+    SmoothingDef smoothing;  ///< [surface]: how the extracted mesh is smoothed (none in the paper's presets)
 };
 
 /// The built-in default scene: a PBF river on the procedural valley (source at the head
@@ -223,7 +224,7 @@ private:
 struct FrameTimings {
     double simulate_ms = 0.0;
     double field_ms = 0.0;
-    double surface_ms = 0.0;
+    double surface_ms = 0.0;  ///< marching cubes and the smoothing ([surface])
 };
 
 /// Owns one scene's terrain, tree, particles, solver, field and surface.
@@ -259,6 +260,8 @@ public:
     /// Samples per axis of the latest field, whichever kind.
     std::array<int, 3> field_dims() const;
     const SurfaceMesh& surface() const { return surface_; }
+    /// Numbers of the latest frame's smoothing (all 0 with surface.method = "none").
+    const SmoothingStats& smoothing_stats() const { return smooth_ws_.stats; }
     const FrameTimings& last_timings() const { return timings_; }
     uint64_t frame() const { return solver_->frame(); }
     /// Frames whose field grid would have exceeded kMaxFieldSamples (surface skipped).
@@ -300,6 +303,7 @@ private:
     SparseField sparse_;
     SparseFieldDef sparse_def_;
     SurfaceWorkspace surface_ws_;
+    SmoothingWorkspace smooth_ws_;
     SurfaceMesh surface_;
     FrameTimings timings_;
     uint64_t field_overflows_ = 0;

@@ -74,6 +74,10 @@ SceneDef default_scene() {
                .resolution = 3.0f,
                .bounds_offset = 1.0f,
                .threshold = 0.4f};
+    // The mesh smoothed as splashsurf does (feature-weighted Laplacian steps), in six
+    // Chebyshev steps and with its volume given back: still water flat, drops kept
+    // (docs/rendering.md, "Surface smoothing").
+    d.smoothing = SmoothingDef{.method = SmoothingMethod::Laplacian};
     return d;
 }
 
@@ -266,6 +270,14 @@ Status validate(const SceneDef& d) {
     c.positive("field.radius", d.field.radius, 1e4);
     c.range("field.bounds_offset", d.field.bounds_offset, 0.0, 1e4);
     c.positive("field.threshold", d.field.threshold, 1e9);
+    c.range("surface.iterations", d.smoothing.iterations, 0, 100);
+    c.positive("surface.lambda", d.smoothing.lambda, 1.0);
+    if (c.error.empty() && !(d.smoothing.pass_band > 0.0f && d.smoothing.pass_band < 1.0f))
+        c.error = fmt::format("surface.pass_band: must be in (0, 1) (got {})", d.smoothing.pass_band);
+    if (c.error.empty() && d.smoothing.feature_count != 0.0f &&
+        !(d.smoothing.feature_count >= 2.0f && d.smoothing.feature_count <= 1000.0f))
+        c.error = fmt::format("surface.feature_count: must be 0 (off) or in [2, 1000] (got {})", d.smoothing.feature_count);
+    c.range("surface.normal_iterations", d.smoothing.normal_iterations, 0, 100);
     // Accepted input must finish a frame in bounded time: the O(N^2) and O(balls x
     // samples) reference paths are refused above a size, naming the fast alternative.
     if (c.error.empty() && d.solver == SolverKind::Springs && d.springs.stiffness > 0.0f &&

@@ -271,7 +271,29 @@ Result<SceneDef> parse_scene_toml_lines(std::string_view text, const std::string
                        "integrator", "field", "bullet", "pbf", "sink"});
     r.string(root, "", "name", d.name);
     r.seed(root, "", "seed", d.seed);
-    r.boolean(root, "", "surface", d.surface);
+    // `surface` is either the switch (surface = false) or the table of the smoothing
+    // ([surface], whose `enabled` is the same switch).
+    if (const toml::node* n = root.get("surface"); n && n->is_table()) {
+        const toml::table& t = *n->as_table();
+        const std::string p = "surface.";
+        r.allow(t, p, {"enabled", "method", "steps", "iterations", "lambda", "pass_band", "feature_count", "keep_volume",
+                       "normal_iterations"});
+        r.boolean(t, p, "enabled", d.surface);
+        r.choice(t, p, "method", d.smoothing.method,
+                 {{"none", SmoothingMethod::None}, {"laplacian", SmoothingMethod::Laplacian}, {"taubin", SmoothingMethod::Taubin}});
+        r.choice(t, p, "steps", d.smoothing.steps,
+                 {{"chebyshev", SmoothingSteps::Chebyshev}, {"uniform", SmoothingSteps::Uniform}});
+        r.integer(t, p, "iterations", d.smoothing.iterations, 0, 100);
+        r.number(t, p, "lambda", d.smoothing.lambda);
+        r.number(t, p, "pass_band", d.smoothing.pass_band);
+        r.number(t, p, "feature_count", d.smoothing.feature_count);
+        r.boolean(t, p, "keep_volume", d.smoothing.keep_volume);
+        r.integer(t, p, "normal_iterations", d.smoothing.normal_iterations, 0, 100);
+    } else if (n && !n->is_boolean()) {
+        r.fail("surface", "must be true or false, or a table ([surface])");
+    } else {
+        r.boolean(root, "", "surface", d.surface);
+    }
     r.choice(root, "", "solver", d.solver, {{"springs", SolverKind::Springs}, {"bullet", SolverKind::Bullet}, {"pbf", SolverKind::Pbf}});
 
     if (const toml::table* t = r.table(root, "terrain")) {

@@ -290,6 +290,7 @@ void Simulation::step(float frame_dt) {
 
     if (!def_.surface) {
         timings_.field_ms = timings_.surface_ms = 0.0;
+        smooth_ws_.stats = SmoothingStats{};
         return;
     }
     t0 = Clock::now();
@@ -299,6 +300,8 @@ void Simulation::step(float frame_dt) {
         timings_.field_ms = ms_since(t0);
         t0 = Clock::now();
         extract_surface_sparse(sparse_, def_.field.threshold, surface_, surface_ws_);
+        const SmoothingField weights{.field = &sparse_, .kernel = sparse_def_.kernel, .threshold = def_.field.threshold};
+        smooth_surface(surface_, def_.smoothing, smooth_ws_, &weights);
         timings_.surface_ms = ms_since(t0);
         return;
     }
@@ -307,6 +310,7 @@ void Simulation::step(float frame_dt) {
 
     t0 = Clock::now();
     extract_surface(field_, def_.field.threshold, surface_);
+    smooth_surface(surface_, def_.smoothing, smooth_ws_);  // the paper's kernels: no feature weights
     timings_.surface_ms = ms_since(t0);
 }
 

@@ -84,9 +84,10 @@ TEST(Allocations, CountingSeesTheNothrowFormStableSortUses) {
     EXPECT_TRUE(std::is_sorted(v.begin(), v.end()));
 }
 
-TEST(Allocations, SteadyStateFramesOfTheFastPipelineAllocateNothing) {
+void expect_steady_state_allocates_nothing(bool smoothing) {
     // Water settled in a closed bowl: a steady state (no new regions of the field).
     SceneDef d = river_scene(3000);
+    if (smoothing) d.smoothing = default_scene().smoothing;  // issue 11: the default river's
     d.source = {.kind = TerrainSource::Bowl, .heightmap = {}, .width = 33, .height = 33, .seed = 1};
     d.terrain.height_scale = 7.0f;
     d.spawn.auto_center = false;
@@ -106,7 +107,14 @@ TEST(Allocations, SteadyStateFramesOfTheFastPipelineAllocateNothing) {
     g_counting = false;
     EXPECT_EQ(g_allocations.load(), 0u) << "allocations in 30 steady-state frames";
     EXPECT_GT(s.surface().triangle_count(), 100u);
+    if (smoothing) {
+        EXPECT_GT(s.smoothing_stats().moving, 100u) << "the smoothing ran";
+    }
 }
+
+TEST(Allocations, SteadyStateFramesOfTheFastPipelineAllocateNothing) { expect_steady_state_allocates_nothing(false); }
+
+TEST(Allocations, SteadyStateFramesWithTheSurfaceSmoothedAllocateNothing) { expect_steady_state_allocates_nothing(true); }
 
 }  // namespace
 }  // namespace mr

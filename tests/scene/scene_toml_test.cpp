@@ -414,5 +414,68 @@ TEST(SceneToml, ErrorsAreOneLineWhateverTheFileHolds) {
     EXPECT_NE(r.error().message.find("(got 'pbf\\nsprings')"), std::string::npos) << r.error().message;
 }
 
+// Issue 11: [surface] chooses how the marching-cubes mesh is smoothed; `surface = false`
+// (the switch) still works, and [surface] enabled is the same switch.
+TEST(SceneToml, SurfaceTableChoosesTheSmoothing) {
+    const SmoothingDef d = default_scene().smoothing;
+    EXPECT_EQ(d.method, SmoothingMethod::Laplacian) << "the default river is smoothed";
+    EXPECT_EQ(d.steps, SmoothingSteps::Chebyshev);
+    for (const std::string& name : preset_names()) {
+        if (name.rfind("paper-", 0) != 0 && name != "springs-valley") continue;
+        auto p = preset(name);
+        ASSERT_TRUE(p.ok()) << name;
+        EXPECT_EQ(p->smoothing.method, SmoothingMethod::None) << name << " keeps the paper's surface";
+    }
+    auto r = parse(R"(
+[surface]
+enabled = true
+method = "taubin"
+steps = "uniform"
+iterations = 30
+lambda = 0.6
+pass_band = 0.05
+feature_count = 5
+keep_volume = false
+normal_iterations = 2
+)");
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    EXPECT_TRUE(r->surface);
+    EXPECT_EQ(r->smoothing.method, SmoothingMethod::Taubin);
+    EXPECT_EQ(r->smoothing.steps, SmoothingSteps::Uniform);
+    EXPECT_EQ(r->smoothing.iterations, 30);
+    EXPECT_FLOAT_EQ(r->smoothing.lambda, 0.6f);
+    EXPECT_FLOAT_EQ(r->smoothing.pass_band, 0.05f);
+    EXPECT_FLOAT_EQ(r->smoothing.feature_count, 5.0f);
+    EXPECT_FALSE(r->smoothing.keep_volume);
+    EXPECT_EQ(r->smoothing.normal_iterations, 2);
+    auto none = parse("[surface]\nmethod = \"none\"\n");
+    ASSERT_TRUE(none.ok()) << none.error().message;
+    EXPECT_EQ(none->smoothing.method, SmoothingMethod::None);
+    EXPECT_TRUE(none->surface);
+    auto off = parse("[surface]\nenabled = false\n");
+    ASSERT_TRUE(off.ok());
+    EXPECT_FALSE(off->surface);
+    auto old = parse("surface = false\n");
+    ASSERT_TRUE(old.ok());
+    EXPECT_FALSE(old->surface);
+    EXPECT_EQ(old->smoothing.method, SmoothingMethod::Laplacian);
+    auto weights_off = parse("[surface]\nfeature_count = 0\n");
+    ASSERT_TRUE(weights_off.ok()) << weights_off.error().message;
+
+    expect_error("[surface]\nmethod = \"gauss\"\n", "surface.method: must be one of none, laplacian, taubin");
+    expect_error("[surface]\nsteps = \"fast\"\n", "surface.steps: must be one of chebyshev, uniform");
+    expect_error("[surface]\niterations = 101\n", "surface.iterations: must be in [0, 100]");
+    expect_error("[surface]\niterations = 2.5\n", "surface.iterations: must be an integer");
+    expect_error("[surface]\nlambda = 0\n", "surface.lambda: must be in (0, 1]");
+    expect_error("[surface]\nlambda = 1.5\n", "surface.lambda: must be in (0, 1]");
+    expect_error("[surface]\npass_band = 1\n", "surface.pass_band: must be in (0, 1)");
+    expect_error("[surface]\npass_band = nan\n", "surface.pass_band");
+    expect_error("[surface]\nfeature_count = 1\n", "surface.feature_count: must be 0 (off) or in [2, 1000]");
+    expect_error("[surface]\nnormal_iterations = -1\n", "surface.normal_iterations: must be in [0, 100]");
+    expect_error("[surface]\nkeep_volume = 1\n", "surface.keep_volume: must be true or false");
+    expect_error("[surface]\nradius = 1\n", "surface.radius: unknown key");
+    expect_error("surface = 3\n", "surface: must be true or false, or a table");
+}
+
 }  // namespace
 }  // namespace mr
