@@ -128,7 +128,7 @@ std::string_view to_string(SmoothingSteps s);
 struct SmoothingDef {
     SmoothingMethod method = SmoothingMethod::None;
     SmoothingSteps steps = SmoothingSteps::Chebyshev;  ///< Laplacian only
-    int iterations = 6;      ///< [0, 100] steps (Taubin: lambda, mu, lambda, ... one each)
+    int iterations = 8;      ///< [0, 100] steps (Taubin: lambda, mu, lambda, ... one each)
     float lambda = 0.9f;     ///< (0, 1] share of the way to the neighbours' mean per step (uniform, Taubin)
     /// (0, 1): frequencies (eigenvalues of the mesh Laplacian, 0 to 2) below it are
     /// kept: Taubin's k_PB (mu = 1 / (k_PB - 1 / lambda)); Chebyshev steps damp [pass_band, 2].

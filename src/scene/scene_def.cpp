@@ -74,7 +74,7 @@ SceneDef default_scene() {
                .resolution = 3.0f,
                .bounds_offset = 1.0f,
                .threshold = 0.4f};
-    // The mesh smoothed as splashsurf does (feature-weighted Laplacian steps), in six
+    // The mesh smoothed as splashsurf does (feature-weighted Laplacian steps), in eight
     // Chebyshev steps and with its volume given back: still water flat, drops kept
     // (docs/rendering.md, "Surface smoothing").
     d.smoothing = SmoothingDef{.method = SmoothingMethod::Laplacian};

@@ -7,8 +7,8 @@
 // alternating steps lambda > 0 and mu < -lambda cut high frequencies and pass low ones.
 // Taubin, Zhang, Golub, "Optimal surface smoothing as filter design" (ECCV 1996): N steps
 // of sizes 1 / r_i, r_i the roots of the Chebyshev polynomial of degree N on a band
-// [a, 2], make the filter that damps that band most evenly; N = 6 on [0.1, 2] damps it
-// at least as much as 12 uniform steps of 1, in half the passes.
+// [a, 2], make the filter that damps that band most evenly; N = 8 on [0.1, 2] damps it
+// to 0.05 or less, where 16 uniform steps of 1 leave its low end at 0.19.
 //
 //   weights  (parallel) The field sampled (trilinear) one lone ball's iso distance inside
 //            the surface, along the normal marching cubes gave the vertex (the field's
