@@ -159,15 +159,15 @@ struct SmoothingField {
 /// Numbers from the last smooth_surface, for tests and the bench.
 struct SmoothingStats {
     size_t vertices = 0;
-    size_t moving = 0;           ///< vertices with a weight > 0
-    size_t pinned = 0;           ///< vertices on an open boundary (never moved)
+    size_t moving = 0;           ///< vertices that moved (weight > 0, not pinned)
+    size_t pinned = 0;           ///< vertices with a weight > 0 on an open boundary (not moved)
     double mean_weight = 0.0;    ///< mean feature weight over the vertices
-    size_t touched = 0;          ///< moving vertices and their neighbours (normals recomputed)
+    size_t triangles = 0;        ///< triangles with a moving corner
     double volume_change = 0.0;  ///< m^3 the steps changed the enclosed volume by, before it was given back (keep_volume; else 0)
-    double ms_rings = 0.0;       ///< one-rings from the triangles, pinning, touched set (serial)
+    double ms_rings = 0.0;       ///< fans of the moving vertices, pinning (serial)
     double ms_weights = 0.0;     ///< feature weights (parallel)
     double ms_smooth = 0.0;      ///< the position steps (parallel)
-    double ms_normals = 0.0;     ///< normals, volume and its restoration (parallel)
+    double ms_normals = 0.0;     ///< normals, the volume given back (parallel)
 };
 
 /// Scratch of smooth_surface, owned by the caller and reused: a frame no larger than one
@@ -178,15 +178,16 @@ struct SmoothingWorkspace {
         float x, y, z, w;
     };
     SmoothingStats stats;
-    std::vector<uint32_t> ring_start;  ///< per vertex + 1: its first corner in next / prev
-    std::vector<uint32_t> next, prev;  ///< per corner of a vertex: the triangle's next and previous vertex
-    std::vector<uint32_t> moving;      ///< vertices with a weight > 0, ascending
-    std::vector<uint32_t> touched;     ///< moving vertices and their neighbours, ascending
-    std::vector<uint8_t> flag;         ///< per vertex: touched
-    std::vector<float> weight;         ///< per vertex: feature weight (0: fixed, or pinned on an open boundary)
-    std::vector<float> step_weight;    ///< per moving vertex: weight / degree
+    std::vector<uint32_t> moving;        ///< vertices with a weight > 0, ascending
+    std::vector<uint32_t> moving_index;  ///< per vertex: its index in `moving`, or 0xffffffff
+    std::vector<uint32_t> tris;          ///< triangles with a moving corner, ascending
+    std::vector<uint32_t> ring_start;    ///< per moving vertex + 1: its first corner in next / prev
+    std::vector<uint32_t> next, prev;    ///< per corner of a moving vertex: the triangle's next and previous vertex
+    std::vector<float> weight;           ///< per vertex: feature weight (0: does not move)
+    std::vector<float> moving_weight;    ///< per moving vertex: weight (0: pinned on an open boundary)
+    std::vector<float> step_weight;      ///< per moving vertex: weight / degree
     std::vector<P4> a, b;              ///< double-buffered positions (normal passes reuse them)
-    std::vector<Vec3> area_normal;     ///< per vertex: sum of its fan's cross products
+    std::vector<Vec3> area_normal;     ///< per moving vertex: sum of its fan's cross products
     std::vector<double> partial;       ///< per chunk of vertices: partial sums (fixed order)
     std::vector<float> step_sizes;     ///< smoothing_step_sizes() of the latest call
     size_t capacity_bytes() const;

@@ -19,28 +19,27 @@
 //            no sample is read. Only
 //            the vertices with w > 0 ("moving") cost anything from here on: a frame of
 //            spray and drops costs little more than this pass.
-//   rings    (serial) Touched: the moving vertices and their neighbours (every vertex of
-//            a triangle with a moving corner), whose fans change. Each corner of a touched
-//            vertex files its next and previous vertex under it (a counting sort by
-//            vertex): on a closed oriented manifold a vertex's "next" vertices are its
-//            neighbours, each once, and the (next, previous) pairs are its fan. A moving
-//            vertex whose fan does not close (its nexts are not its previouses) lies on an
-//            open boundary and is pinned.
+//   fans     (serial) One pass over the triangles lists those with a moving corner (the
+//            only ones whose shape changes) and files, under each moving corner, the
+//            triangle's next and previous vertex (a counting sort by moving vertex): on a
+//            closed oriented manifold a vertex's "next" vertices are its neighbours, each
+//            once, and the (next, previous) pairs are its fan. A moving vertex whose fan
+//            does not close (its nexts are not its previouses) lies on an open boundary
+//            and is pinned.
 //   steps    (parallel, double-buffered gathers over the moving vertices, positions
 //            padded to 16 bytes for one SSE load each) p' = p + w s (mean of neighbours
 //            - p), s from smoothing_step_sizes().
-//   normals  (parallel gathers) Area-weighted for the touched vertices: the sum of the
-//            fan's cross products S_v; the others keep the field's gradient normal. The
-//            enclosed volume is sum_v p_v . S_v / 18 (each triangle's a . (b x c) is the
-//            same with a, b or c, so the triangles' sum regroups by vertex): its change is
-//            that sum over the touched vertices, before and after the steps.
-//   volume   Laplacian with keep_volume on a closed mesh: every vertex moves along its
-//            normal by w d, d = (volume before - volume after the steps) / sum w A_v,
-//            A_v = |S_v| / 6 (a third of the fan's area): the first-order volume change
-//            of that offset is exactly what the steps took. Normals are kept (an offset
-//            along the normals leaves them to first order).
-//   passes   Optional normal passes over the touched vertices: each normal averaged
-//            with its neighbours'.
+//   volume   The enclosed volume changes only in the listed triangles: sum of
+//            a . (b x c) / 6 over them, before and after the steps (open meshes too: their
+//            rims do not move). Laplacian with keep_volume: every moving vertex moves
+//            along its normal by w d, d = (volume before - volume after the steps) /
+//            sum w A_v, A_v a third of its fan's area: the first-order volume change of
+//            that offset is exactly what the steps took.
+//   normals  (parallel gathers) Area-weighted from the smoothed fans for the moving
+//            vertices (before the offset, which leaves them to first order); every other
+//            vertex keeps the field's gradient normal (a neighbour of a moving vertex too:
+//            near the edge of the moving region its neighbours moved little). Optional
+//            passes average each moving vertex's normal with its neighbours'.
 // Every sum runs in a fixed order (triangle order, fixed chunks of vertices), so the
 // result does not depend on the thread count.
 #include <metariver/surface.h>
@@ -79,8 +78,8 @@ constexpr int kChebyshevCycle = 8;
 /// Feature weights below this are 0: the vertex does not move (a step of a few per cent
 /// of the way is not worth its cost; mostly lone drops and pairs).
 constexpr float kMinWeight = 0.05f;
-/// SmoothingWorkspace::flag values.
-constexpr uint8_t kTouched = 1, kMoving = 2;  // bits
+/// SmoothingWorkspace::moving_index of a vertex that does not move.
+constexpr uint32_t kFixed = 0xffffffffu;
 
 /// f(lo, hi) over [0, n) in chunks of `chunk` (fixed boundaries), in parallel when n > chunk.
 template <class F>
@@ -160,56 +159,58 @@ float smoothstep01(float x) {
     return x * x * (3.0f - 2.0f * x);
 }
 
-/// Marks the touched vertices (ws.flag: the moving ones are marked already; a vertex that
-/// shares a triangle with a moving one is touched) and builds their fans (ring_start,
-/// next, prev; other vertices get an empty fan). False when an index is out of range.
-bool build_rings(const SurfaceMesh& m, SmoothingWorkspace& ws) {
-    const size_t nv = m.positions.size();
+/// Lists the triangles with a moving corner (ws.tris) and builds the fans of the moving
+/// vertices (ring_start per moving index, next, prev). False when an index is out of range.
+bool build_fans(const SurfaceMesh& m, SmoothingWorkspace& ws) {
+    const size_t nv = m.positions.size(), nm = ws.moving.size();
     const uint32_t* idx = m.indices.data();
     const size_t nt = m.indices.size() / 3;
-    uint8_t* flag = ws.flag.data();
+    const uint32_t* mi = ws.moving_index.data();
+    ws.tris.clear();
+    ws.ring_start.assign(nm + 1, 0u);
+    uint32_t* start = ws.ring_start.data();
     for (size_t t = 0; t < nt; ++t) {
         const uint32_t a = idx[3 * t], b = idx[3 * t + 1], c = idx[3 * t + 2];
         if (a >= nv || b >= nv || c >= nv) return false;
-        if ((flag[a] | flag[b] | flag[c]) & kMoving) {
-            flag[a] |= kTouched, flag[b] |= kTouched, flag[c] |= kTouched;
-        }
+        const uint32_t ma = mi[a], mb = mi[b], mc = mi[c];
+        if ((ma & mb & mc) == kFixed) continue;  // no moving corner
+        ws.tris.push_back(static_cast<uint32_t>(t));
+        start[ma + 1] += ma != kFixed;  // kFixed + 1 wraps to 0: start[0] is reset below
+        start[mb + 1] += mb != kFixed;
+        start[mc + 1] += mc != kFixed;
     }
-    ws.ring_start.assign(nv + 1, 0u);
-    uint32_t* start = ws.ring_start.data();
-    for (size_t i = 0; i < 3 * nt; ++i) start[idx[i] + 1] += flag[idx[i]] != 0;
-    for (size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
-    // Fill with start[v] as v's cursor (it ends at v's end, v + 1's beginning), then shift back.
-    ws.next.resize(start[nv]);
-    ws.prev.resize(start[nv]);
+    start[0] = 0;
+    for (size_t k = 0; k < nm; ++k) start[k + 1] += start[k];
+    // Fill with start[k] as k's cursor (it ends at k's end, k + 1's beginning), then shift back.
+    ws.next.resize(start[nm]);
+    ws.prev.resize(start[nm]);
     uint32_t* next = ws.next.data();
     uint32_t* prev = ws.prev.data();
-    for (size_t t = 0; t < nt; ++t) {
+    for (const uint32_t t : ws.tris) {
         const uint32_t a = idx[3 * t], b = idx[3 * t + 1], c = idx[3 * t + 2];
-        if (!(flag[a] | flag[b] | flag[c])) continue;
-        if (flag[a]) {
-            const uint32_t x = start[a]++;
+        if (mi[a] != kFixed) {
+            const uint32_t x = start[mi[a]]++;
             next[x] = b, prev[x] = c;
         }
-        if (flag[b]) {
-            const uint32_t x = start[b]++;
+        if (mi[b] != kFixed) {
+            const uint32_t x = start[mi[b]]++;
             next[x] = c, prev[x] = a;
         }
-        if (flag[c]) {
-            const uint32_t x = start[c]++;
+        if (mi[c] != kFixed) {
+            const uint32_t x = start[mi[c]]++;
             next[x] = a, prev[x] = b;
         }
     }
-    for (size_t v = nv; v > 0; --v) start[v] = start[v - 1];
+    for (size_t k = nm; k > 0; --k) start[k] = start[k - 1];
     start[0] = 0;
     return true;
 }
 
-/// Whether vertex v's fan closes: its nexts are its previouses. An open fan is a chain
-/// whose last next and first previous differ, so the sums (and xors) of the nexts and of
-/// the previouses differ; O(degree), unlike matching the pairs.
-bool fan_closed(const SmoothingWorkspace& ws, size_t v) {
-    const uint32_t b = ws.ring_start[v], e = ws.ring_start[v + 1];
+/// Whether moving vertex k's fan closes: its nexts are its previouses. An open fan is a
+/// chain whose last next and first previous differ, so the sums (and xors) of the nexts
+/// and of the previouses differ; O(degree), unlike matching the pairs.
+bool fan_closed(const SmoothingWorkspace& ws, size_t k) {
+    const uint32_t b = ws.ring_start[k], e = ws.ring_start[k + 1];
     if (b == e) return false;
     uint64_t sn = 0, sp = 0;
     uint32_t xn = 0, xp = 0;
@@ -226,16 +227,16 @@ void laplacian_step(const SmoothingWorkspace& ws, const P4* src, P4* dst, float 
     const uint32_t* start = ws.ring_start.data();
     const uint32_t* next = ws.next.data();
     const float* wd = ws.step_weight.data();
-    const float* w = ws.weight.data();
+    const float* w = ws.moving_weight.data();
     for_chunks(ws.moving.size(), [&](size_t lo, size_t hi) {
-        for (size_t m = lo; m < hi; ++m) {
-            const uint32_t v = moving[m];
-            const uint32_t b = start[v], e = start[v + 1];
+        for (size_t k = lo; k < hi; ++k) {
+            const uint32_t v = moving[k];
+            const uint32_t b = start[k], e = start[k + 1];
 #if defined(__SSE2__)
             __m128 sum = _mm_setzero_ps();
             for (uint32_t x = b; x < e; ++x) sum = _mm_add_ps(sum, _mm_load_ps(&src[next[x]].x));
             const __m128 p = _mm_load_ps(&src[v].x);
-            const __m128 d = _mm_sub_ps(_mm_mul_ps(_mm_set1_ps(wd[v]), sum), _mm_mul_ps(_mm_set1_ps(w[v]), p));
+            const __m128 d = _mm_sub_ps(_mm_mul_ps(_mm_set1_ps(wd[k]), sum), _mm_mul_ps(_mm_set1_ps(w[k]), p));
             _mm_store_ps(&dst[v].x, _mm_add_ps(p, _mm_mul_ps(_mm_set1_ps(s), d)));
 #else
             float sx = 0.0f, sy = 0.0f, sz = 0.0f;
@@ -244,29 +245,27 @@ void laplacian_step(const SmoothingWorkspace& ws, const P4* src, P4* dst, float 
                 sx += q.x, sy += q.y, sz += q.z;
             }
             const P4 p = src[v];
-            dst[v] = P4{p.x + s * (wd[v] * sx - w[v] * p.x), p.y + s * (wd[v] * sy - w[v] * p.y),
-                        p.z + s * (wd[v] * sz - w[v] * p.z), 0.0f};
+            dst[v] = P4{p.x + s * (wd[k] * sx - w[k] * p.x), p.y + s * (wd[k] * sy - w[k] * p.y),
+                        p.z + s * (wd[k] * sz - w[k] * p.z), 0.0f};
 #endif
         }
     });
 }
 
-/// sum over the touched vertices of p_v . S_v, S_v the sum of the cross products of v's
-/// fan (18 times the share of the enclosed volume that changes when they move), in fixed
-/// chunks; with `keep`, S_v goes to ws.area_normal[v].
-double touched_volume(const Vec3* p, SmoothingWorkspace& ws, bool keep) {
-    const size_t n = ws.touched.size();
+/// Six times the volume the listed triangles enclose (sum of a . (b x c)) at positions
+/// p (stride `stride` floats), in fixed chunks of triangles.
+double tris_volume(const float* p, size_t stride, const SurfaceMesh& m, SmoothingWorkspace& ws) {
+    const size_t n = ws.tris.size();
     ws.partial.assign((n + kChunk - 1) / kChunk, 0.0);
+    const uint32_t* idx = m.indices.data();
     for_chunks(n, [&](size_t lo, size_t hi) {
         double vol = 0.0;
-        for (size_t m = lo; m < hi; ++m) {
-            const uint32_t v = ws.touched[m];
-            const Vec3 pv = p[v];
-            Vec3 s(0.0f);
-            for (uint32_t x = ws.ring_start[v]; x < ws.ring_start[v + 1]; ++x)
-                s += glm::cross(p[ws.next[x]] - pv, p[ws.prev[x]] - pv);
-            if (keep) ws.area_normal[v] = s;
-            vol += double(pv.x) * s.x + double(pv.y) * s.y + double(pv.z) * s.z;
+        for (size_t i = lo; i < hi; ++i) {
+            const uint32_t t = ws.tris[i];
+            const float* a = p + stride * idx[3 * t];
+            const float* b = p + stride * idx[3 * t + 1];
+            const float* c = p + stride * idx[3 * t + 2];
+            vol += double(glm::dot(Vec3(a[0], a[1], a[2]), glm::cross(Vec3(b[0], b[1], b[2]), Vec3(c[0], c[1], c[2]))));
         }
         ws.partial[lo / kChunk] = vol;
     });
@@ -347,10 +346,10 @@ float lone_ball_iso_distance(const KernelDef& k, float threshold) {
 }
 
 size_t SmoothingWorkspace::capacity_bytes() const {
-    return (ring_start.capacity() + next.capacity() + prev.capacity() + moving.capacity() + touched.capacity()) *
+    return (ring_start.capacity() + next.capacity() + prev.capacity() + moving.capacity() + moving_index.capacity() +
+            tris.capacity()) *
                sizeof(uint32_t) +
-           flag.capacity() +
-           (weight.capacity() + step_weight.capacity()) * sizeof(float) + (a.capacity() + b.capacity()) * sizeof(P4) +
+           (weight.capacity() + moving_weight.capacity() + step_weight.capacity()) * sizeof(float) + (a.capacity() + b.capacity()) * sizeof(P4) +
            area_normal.capacity() * sizeof(Vec3) + partial.capacity() * sizeof(double) +
            step_sizes.capacity() * sizeof(float);
 }
@@ -391,59 +390,53 @@ void smooth_surface(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspa
     }
     ws.moving.clear();
     ws.moving.reserve(nv);
+    ws.moving_index.assign(nv, kFixed);
     for (size_t v = 0; v < nv; ++v)
-        if (ws.weight[v] > 0.0f) ws.moving.push_back(static_cast<uint32_t>(v));
+        if (ws.weight[v] > 0.0f) {
+            ws.moving_index[v] = static_cast<uint32_t>(ws.moving.size());
+            ws.moving.push_back(static_cast<uint32_t>(v));
+        }
     ws.stats.ms_weights = ms_since(t0);
     if (ws.moving.empty()) return;  // nothing moves: the mesh keeps its normals too
 
     t0 = Clock::now();
-    ws.flag.assign(nv, 0);
-    for (const uint32_t v : ws.moving) ws.flag[v] = kMoving;
-    if (!build_rings(mesh, ws)) return;  // a malformed mesh is left as it is
-    // Pin the moving vertices on an open boundary; the rest move by w / degree.
-    ws.step_weight.resize(nv);
-    for_chunks(ws.moving.size(), [&](size_t lo, size_t hi) {
-        for (size_t m = lo; m < hi; ++m) {
-            const uint32_t v = ws.moving[m];
-            if (!fan_closed(ws, v)) ws.weight[v] = 0.0f;
-            ws.step_weight[v] = ws.weight[v] / static_cast<float>(ws.ring_start[v + 1] - ws.ring_start[v]);
+    if (!build_fans(mesh, ws)) return;  // a malformed mesh is left as it is
+    // Pin the moving vertices on an open boundary (weight 0: they keep their place); the
+    // rest move by w / degree.
+    const size_t nm = ws.moving.size();
+    ws.moving_weight.resize(nm);
+    ws.step_weight.resize(nm);
+    for_chunks(nm, [&](size_t lo, size_t hi) {
+        for (size_t k = lo; k < hi; ++k) {
+            const float w = fan_closed(ws, k) ? ws.weight[ws.moving[k]] : 0.0f;
+            ws.moving_weight[k] = w;
+            ws.step_weight[k] = w / static_cast<float>(ws.ring_start[k + 1] - ws.ring_start[k]);
         }
     });
-    size_t kept = 0;
     double wsum = 0.0;
-    for (const uint32_t v : ws.moving) {
-        if (ws.weight[v] > 0.0f) {
-            ws.moving[kept++] = v;
-            wsum += ws.weight[v];
-        }
+    for (size_t k = 0; k < nm; ++k) {
+        wsum += ws.moving_weight[k];
+        ws.stats.pinned += ws.moving_weight[k] == 0.0f;
     }
-    ws.stats.pinned = ws.moving.size() - kept;
-    ws.moving.resize(kept);
-    ws.stats.moving = kept;
+    ws.stats.moving = nm - ws.stats.pinned;
+    ws.stats.triangles = ws.tris.size();
     ws.stats.mean_weight = wsum / double(nv);
-    // Touched: the moving vertices and their neighbours (their fans change).
-    ws.touched.clear();
-    ws.touched.reserve(nv);
-    for (size_t v = 0; v < nv; ++v)
-        if (ws.flag[v]) ws.touched.push_back(static_cast<uint32_t>(v));
-    ws.stats.touched = ws.touched.size();
     ws.stats.ms_rings = ms_since(t0);
-    if (ws.moving.empty()) return;
 
-    // Position steps, double-buffered over the touched vertices (the ones that do not
-    // move hold their place in both buffers); then the moving ones back into the mesh.
+    // Position steps, double-buffered over the corners of the listed triangles (those
+    // that do not move hold their place in both buffers).
     t0 = Clock::now();
     ws.a.resize(nv);
     ws.b.resize(nv);
-    for_chunks(ws.touched.size(), [&](size_t lo, size_t hi) {
-        for (size_t m = lo; m < hi; ++m) {
-            const uint32_t v = ws.touched[m];
+    for (const uint32_t t : ws.tris)
+        for (int c = 0; c < 3; ++c) {
+            const uint32_t v = mesh.indices[3 * size_t(t) + c];
             const Vec3& q = mesh.positions[v];
             ws.a[v] = ws.b[v] = P4{q.x, q.y, q.z, 0.0f};
         }
-    });
-    const bool restore = def.method == SmoothingMethod::Laplacian && def.keep_volume && ws.stats.pinned == 0;
-    const double before = restore ? touched_volume(mesh.positions.data(), ws, false) : 0.0;
+    // The listed triangles' volume is what changes (an open mesh's too: its rim stays put).
+    const bool restore = def.method == SmoothingMethod::Laplacian && def.keep_volume;
+    const double before = restore ? tris_volume(&ws.a[0].x, 4, mesh, ws) : 0.0;
     P4* src = ws.a.data();
     P4* dst = ws.b.data();
     fill_step_sizes(def, ws.step_sizes);
@@ -451,58 +444,53 @@ void smooth_surface(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspa
         laplacian_step(ws, src, dst, s);
         std::swap(src, dst);
     }
-    for_chunks(ws.moving.size(), [&](size_t lo, size_t hi) {
-        for (size_t m = lo; m < hi; ++m) {
-            const uint32_t v = ws.moving[m];
-            mesh.positions[v] = Vec3(src[v].x, src[v].y, src[v].z);
-        }
-    });
+    ws.stats.volume_change = restore ? (tris_volume(&src[0].x, 4, mesh, ws) - before) / 6.0 : 0.0;
     ws.stats.ms_smooth = ms_since(t0);
 
-    // Normals of the touched vertices from the smoothed geometry (the others keep the
-    // field's gradient); the volume given back along them.
+    // Normals of the moving vertices from their smoothed fans; the volume given back along
+    // them; the positions back into the mesh.
     t0 = Clock::now();
-    ws.area_normal.resize(nv);
-    const double after = touched_volume(mesh.positions.data(), ws, true);
-    ws.stats.volume_change = restore ? (after - before) / 18.0 : 0.0;
-    for_chunks(ws.touched.size(), [&](size_t lo, size_t hi) {
-        for (size_t m = lo; m < hi; ++m) {
-            const uint32_t v = ws.touched[m];
-            const Vec3 s = ws.area_normal[v];
-            const float len = glm::length(s);
-            if (len > 0.0f && std::isfinite(len)) mesh.normals[v] = s / len;
+    ws.area_normal.resize(nm);
+    for_chunks(nm, [&](size_t lo, size_t hi) {
+        for (size_t k = lo; k < hi; ++k) {
+            const uint32_t v = ws.moving[k];
+            const Vec3 pv(src[v].x, src[v].y, src[v].z);
+            Vec3 s(0.0f);
+            for (uint32_t x = ws.ring_start[k]; x < ws.ring_start[k + 1]; ++x) {
+                const P4& a = src[ws.next[x]];
+                const P4& b = src[ws.prev[x]];
+                s += glm::cross(Vec3(a.x, a.y, a.z) - pv, Vec3(b.x, b.y, b.z) - pv);
+            }
+            ws.area_normal[k] = s;
         }
     });
+    float d = 0.0f;
     if (restore) {
         double wa = 0.0;  // sum of w A_v over the moving vertices, in order
-        for (const uint32_t v : ws.moving) wa += double(ws.weight[v]) * double(glm::length(ws.area_normal[v])) / 6.0;
-        if (wa > 0.0 && std::isfinite(ws.stats.volume_change)) {
-            const float d = static_cast<float>(-ws.stats.volume_change / wa);
-            for_chunks(ws.moving.size(), [&](size_t lo, size_t hi) {
-                for (size_t m = lo; m < hi; ++m) {
-                    const uint32_t v = ws.moving[m];
-                    mesh.positions[v] += (d * ws.weight[v]) * mesh.normals[v];
-                }
-            });
-        }
+        for (size_t k = 0; k < nm; ++k) wa += double(ws.moving_weight[k]) * double(glm::length(ws.area_normal[k])) / 6.0;
+        if (wa > 0.0 && std::isfinite(ws.stats.volume_change)) d = static_cast<float>(-ws.stats.volume_change / wa);
     }
+    for_chunks(nm, [&](size_t lo, size_t hi) {
+        for (size_t k = lo; k < hi; ++k) {
+            const uint32_t v = ws.moving[k];
+            const Vec3 s = ws.area_normal[k];
+            const float len = glm::length(s);
+            if (len > 0.0f && std::isfinite(len)) mesh.normals[v] = s / len;
+            mesh.positions[v] = Vec3(src[v].x, src[v].y, src[v].z) + (d * ws.moving_weight[k]) * mesh.normals[v];
+        }
+    });
     for (int it = 0; it < def.normal_iterations; ++it) {
-        P4* nb = ws.a.data();  // the positions are back in the mesh: reuse the buffers
-        for_chunks(ws.touched.size(), [&](size_t lo, size_t hi) {
-            for (size_t m = lo; m < hi; ++m) {
-                const uint32_t v = ws.touched[m];
+        for_chunks(nm, [&](size_t lo, size_t hi) {
+            for (size_t k = lo; k < hi; ++k) {
+                const uint32_t v = ws.moving[k];
                 Vec3 s = mesh.normals[v];
-                for (uint32_t x = ws.ring_start[v]; x < ws.ring_start[v + 1]; ++x) s += mesh.normals[ws.next[x]];
+                for (uint32_t x = ws.ring_start[k]; x < ws.ring_start[k + 1]; ++x) s += mesh.normals[ws.next[x]];
                 const float len = glm::length(s);
-                const Vec3 n = len > 0.0f && std::isfinite(len) ? s / len : mesh.normals[v];
-                nb[v] = P4{n.x, n.y, n.z, 0.0f};
+                ws.area_normal[k] = len > 0.0f && std::isfinite(len) ? s / len : mesh.normals[v];
             }
         });
-        for_chunks(ws.touched.size(), [&](size_t lo, size_t hi) {
-            for (size_t m = lo; m < hi; ++m) {
-                const uint32_t v = ws.touched[m];
-                mesh.normals[v] = Vec3(nb[v].x, nb[v].y, nb[v].z);
-            }
+        for_chunks(nm, [&](size_t lo, size_t hi) {
+            for (size_t k = lo; k < hi; ++k) mesh.normals[ws.moving[k]] = ws.area_normal[k];
         });
     }
     ws.stats.ms_normals = ms_since(t0);
