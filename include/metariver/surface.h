@@ -101,13 +101,14 @@ void extract_surface_sparse(const SparseField& field, float threshold, SurfaceMe
 // mesh (never its connectivity) with feature-weighted Laplacian steps, as splashsurf does
 // (Loeschner, Boettcher, Jeske, Bender, "Weighted Laplacian smoothing for surface
 // reconstruction of particle-based fluids", VMV 2023): every step moves a vertex toward
-// the mean of its neighbours by w * lambda, where the feature weight w in [0, 1] is small
-// where little water lies behind the surface (spray, lone drops, thin jets), so they keep
-// their shape. What the steps take from the volume (a pool's rim rounds off) is given
-// back by moving every vertex along its normal by w times one common distance. Taubin's
-// lambda|mu steps (Taubin, "A signal processing approach to fair surface design",
-// SIGGRAPH 1995) are the alternative that keeps the volume by itself but flattens far
-// less per step. Normals are then recomputed from the smoothed geometry.
+// the mean of its neighbours by w times the step size, where the feature weight w in
+// [0, 1] is small where little water lies behind the surface (spray, lone drops, thin
+// strands), so they keep their shape. What the steps take from the volume (a pool's rim
+// rounds off) is given back by moving every moved vertex along its normal by w times one
+// common distance. Taubin's lambda|mu steps (Taubin, "A signal processing approach to
+// fair surface design", SIGGRAPH 1995) are the alternative that keeps the volume by
+// itself but flattens far less per step. The moved vertices get normals from the smoothed
+// triangles; the others keep the field's gradient normal.
 
 enum class SmoothingMethod {
     None,       ///< the marching-cubes mesh as extracted (normals from the field's gradient)
@@ -120,8 +121,8 @@ std::string_view to_string(SmoothingMethod m);
 enum class SmoothingSteps {
     Uniform,    ///< every step lambda (splashsurf)
     Chebyshev,  ///< sizes from the Chebyshev polynomial that damps the band [pass_band, 2]
-                ///< evenly (Taubin, Zhang, Golub 1996), in cycles of up to 8 steps: what
-                ///< about twice as many uniform steps of 1 do
+                ///< evenly (Taubin, Zhang, Golub 1996), in cycles of up to 8 steps: more
+                ///< than twice as many uniform steps of 1 do at the band's low end
 };
 std::string_view to_string(SmoothingSteps s);
 
