@@ -198,7 +198,9 @@ struct SmoothingWorkspace {
 /// (optional) gives the feature weights; without it, or with feature_count 0, every
 /// vertex has weight 1. Vertices on an open boundary (an edge with one triangle) stay
 /// where they are, so a mesh clipped by the field's box keeps its rim. Positions and
-/// normals depend only on the mesh and the field, not on the thread count.
+/// normals depend only on the mesh and the field, not on the thread count. A mesh without
+/// one normal per vertex gets them (moved vertices from their triangles, the others +y)
+/// and no feature weights.
 void smooth_surface(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspace& ws,
                     const SmoothingField* field = nullptr);
 

@@ -450,6 +450,7 @@ void smooth_surface(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspa
     // Normals of the moving vertices from their smoothed fans; the volume given back along
     // them; the positions back into the mesh.
     t0 = Clock::now();
+    if (mesh.normals.size() != nv) mesh.normals.resize(nv, Vec3(0.0f, 1.0f, 0.0f));  // a mesh made elsewhere
     ws.area_normal.resize(nm);
     for_chunks(nm, [&](size_t lo, size_t hi) {
         for (size_t k = lo; k < hi; ++k) {

@@ -402,6 +402,18 @@ TEST(Smoothing, AMalformedMeshIsLeftAsItIs) {
     EXPECT_EQ(b.mesh.normals, raw.normals);
 }
 
+TEST(Smoothing, AMeshWithoutNormalsGetsThem) {
+    Built b;
+    build(jittered_pool(), b);
+    b.mesh.normals.clear();
+    SmoothingWorkspace ws;
+    const SmoothingField w = b.weights();
+    smooth_surface(b.mesh, default_smoothing(), ws, &w);
+    ASSERT_EQ(b.mesh.normals.size(), b.mesh.vertex_count());
+    EXPECT_EQ(ws.stats.moving, b.mesh.vertex_count()) << "no normals, no feature weights: everything moves";
+    for (const Vec3& n : b.mesh.normals) EXPECT_NEAR(glm::length(n), 1.0f, 1e-4f);
+}
+
 TEST(Smoothing, LoneBallIsoDistanceIsWhereOneBallReachesTheThreshold) {
     const KernelDef k = poly6_kernel(1.0f, 1.0f);
     const float r = lone_ball_iso_distance(k, 0.4f);
