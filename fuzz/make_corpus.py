@@ -129,7 +129,6 @@ SCENES = {
     "minimal.toml": 'name = "tiny"\n',
     "empty.toml": "",
     "river_all_tables.toml": '''name = "river"
-seed = 7
 solver = "pbf"
 surface = true
 [terrain]
@@ -145,7 +144,6 @@ condition = "fill"
 count = 2000
 spawn_center = "channel"
 spawn_half_extent = [1.0, 0.5, 1.0]
-spawn_interval = 0
 initial_velocity = [0.0, 0.0, 0.5]
 auto_height = 1.0
 source_shape = "disc"
@@ -185,6 +183,7 @@ threshold = 0.5
 ''',
     "springs_paper.toml": '''name = "paper"
 solver = "springs"
+seed = 7
 [terrain]
 source = "strict"
 width = 17
@@ -195,7 +194,7 @@ spawn_center = [8.0, 7.0, 15.0]
 spawn_half_extent = [2.0, 1.0, 0.2]
 spawn_interval = 80
 [springs]
-stiffness = 0.0
+stiffness = 2.0
 min_distance = 3.0
 max_distance = 5.0
 mode = "pairs"
@@ -204,7 +203,7 @@ mode = "paper"
 damping = 0.7
 offset = 0.07
 [field]
-kernel = "inverse_square"
+kernel = "radius_over_r"
 bounds = "particles"
 radius = 2.0
 resolution = 2.0
@@ -245,6 +244,10 @@ springs = true
     "broken_springs_with_bullet.toml": 'solver = "springs"\n[bullet]\nmass = 2.0\n',
     "broken_pbf_with_springs.toml": 'solver = "pbf"\n[springs]\nstiffness = 2.0\n',
     "springs_carve_spacing.toml": 'solver = "springs"\n[terrain]\ncondition = "carve"\n[pbf]\nspacing = 0.25\n',
+    "broken_interval_with_rate.toml": '[particles]\nflow_rate = 50.0\nspawn_interval = 4\n',
+    "broken_field_without_surface.toml": 'surface = false\n[field]\nthreshold = 0.3\n',
+    "broken_seed_with_pbf.toml": 'seed = 3\n',
+    "broken_springs_distance_without_stiffness.toml": 'solver = "springs"\n[springs]\nstiffness = 0.0\nmin_distance = 3.0\n',
     "broken_inline_tables.toml": 'particles = { count = 10, spawn_center = [1, 2] }\n',
     "broken_deep_array.toml": "x = " + "[" * 40 + "]" * 40 + "\n",
     "broken_utf8.toml": b'name = "\xff\xfe"\n',
@@ -252,7 +255,8 @@ springs = true
 
 CLI = {
     "run_default": "run\n--frames\n300",
-    "run_all": "run\n--preset\ndefault\n--frames\n10\n--dt\n0.016\n--seed\n3\n--collision\nrobust\n--stats\ns.json\n--obj-dir\nobjs\n--obj-every\n5\n--area-scale\n2\n--height-scale\n30",
+    "run_all": "run\n--preset\ndefault\n--frames\n10\n--dt\n0.016\n--collision\nrobust\n--stats\ns.json\n--obj-dir\nobjs\n--obj-every\n5\n--area-scale\n2\n--height-scale\n30",
+    "run_seed": "run\n--preset\npaper-bowl\n--frames\n10\n--seed\n3",
     "run_scene": "run\n--scene\nnone.toml\n--heightmap\nnone.png\n--real-scale",
     "run_bad_preset": "run\n--preset\nnope",
     "run_preset_and_scene": "run\n--preset\ndefault\n--scene\nx.toml",

@@ -68,7 +68,10 @@ Result<SceneDef> SceneOptions::resolve() const {
         def.source.kind = TerrainSource::File;
         def.source.heightmap = heightmap;
     }
-    if (seed) def.seed = *seed;
+    if (seed) {
+        if (const std::string why = seed_unused(def.solver); !why.empty()) return Error{"--seed: " + why};
+        def.seed = *seed;
+    }
     if (!collision.empty()) {
         if (collision == "paper") def.collision.mode = CollisionMode::Paper;
         else if (collision == "robust") def.collision.mode = CollisionMode::Robust;

@@ -89,6 +89,10 @@ inline constexpr int kMaxFieldAxisSamples = 1'000'000;  ///< field.bounds = "ter
 /// ("none") but never reflects ("paper", the springs solver's response).
 std::string collision_mode_unused(SolverKind solver, CollisionMode mode);
 
+/// Why `solver` does not use the spawn seed (`seed`, `--seed`), or "" when it does:
+/// PBF's lattice source places every particle it emits, nothing is random.
+std::string seed_unused(SolverKind solver);
+
 /// Checks every field against its documented range. The message names the field
 /// ("particles.count: must be in [1, 10000000] (got 0)").
 Status validate(const SceneDef& def);

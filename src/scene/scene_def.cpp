@@ -40,6 +40,13 @@ std::string collision_mode_unused(SolverKind solver, CollisionMode mode) {
     return {};
 }
 
+std::string seed_unused(SolverKind solver) {
+    if (solver == SolverKind::Pbf)
+        return "solver = \"pbf\" does not use it (its lattice source places every particle it emits: nothing is "
+               "random); remove it";
+    return {};
+}
+
 SceneDef default_scene() {
     // A PBF river down the procedural valley: a disc source (radius 2.5 m, 1.5 m above
     // the ground, inflow 3 m/s down: a lattice source that can deliver about 600
@@ -335,12 +342,17 @@ Status validate(const SceneDef& d) {
 Status validate_on_terrain(const SceneDef& d, const Terrain& t) {
     const Vec3 c = d.spawn.center;
     const Aabb b = t.bounds();
+    // The source's half sizes as the emitters read them: a point has none (its
+    // spawn_half_extent is not read), a disc is spawn_half_extent.x across both axes.
+    const Vec3 he = d.spawn.shape == SourceShape::Point  ? Vec3(0.0f)
+                    : d.spawn.shape == SourceShape::Disc ? Vec3(d.spawn.half_extent.x, d.spawn.half_extent.y, d.spawn.half_extent.x)
+                                                         : d.spawn.half_extent;
     if (!t.contains_xz(c.x, c.z))
         return Error{fmt::format("particles.spawn_center: the source at [{}, {}, {}] is outside the terrain's rectangle "
                                  "x in [0, {}], z in [0, {}]",
                                  c.x, c.y, c.z, b.max.x, b.max.z)};
     if (d.sink.kind == SinkKind::Box) {
-        const Vec3 lo = c - d.spawn.half_extent, hi = c + d.spawn.half_extent;
+        const Vec3 lo = c - he, hi = c + he;
         if (lo.x <= d.sink.max.x && hi.x >= d.sink.min.x && lo.y <= d.sink.max.y && hi.y >= d.sink.min.y &&
             lo.z <= d.sink.max.z && hi.z >= d.sink.min.z)
             return Error{fmt::format("sink.min/sink.max: the sink box overlaps the source volume around [{}, {}, {}] "
@@ -348,7 +360,7 @@ Status validate_on_terrain(const SceneDef& d, const Terrain& t) {
                                      c.x, c.y, c.z)};
     }
     if (d.sink.kind == SinkKind::Edges) {
-        const Vec3 lo = c - d.spawn.half_extent, hi = c + d.spawn.half_extent;
+        const Vec3 lo = c - he, hi = c + he;
         if (!t.contains_xz(lo.x, lo.z) || !t.contains_xz(hi.x, hi.z))
             return Error{fmt::format("particles.spawn_half_extent: the source volume around [{}, {}, {}] crosses the "
                                      "terrain's edge, which is the sink (sink.kind = \"edges\")",

@@ -163,6 +163,7 @@ private:
 ///               bullet.springs = true (not springs.mode); PBF none of it
 ///   [collision] springs and PBF (PBF never reflects: no mode = "paper"); not Bullet
 ///   integrator.substeps: springs and PBF (Bullet substeps by bullet.dt)
+///   seed        springs and Bullet (PBF's lattice source draws no random number)
 /// What a Bullet scene would otherwise inherit from the default river (its flow-rate
 /// source, edge sinks and spawn-all-at-once) is replaced by the paper's engine
 /// scene's spawning.
@@ -190,6 +191,8 @@ void apply_solver_scope(const toml::table& root, Reader& r, SceneDef& d) {
     if (st && d.solver == SolverKind::Pbf)
         r.fail("springs", "solver = \"pbf\" does not use springs (its density constraint keeps the particles "
                           "apart: [pbf]); remove [springs]");
+    // PBF draws no random number: its lattice source places every particle it emits.
+    if (const std::string why = seed_unused(d.solver); root.get("seed") && !why.empty()) r.fail("seed", why);
     if (const toml::table* ct = root["collision"].as_table(); ct && ct->get("mode") && d.solver == SolverKind::Pbf) {
         if (const std::string why = collision_mode_unused(d.solver, d.collision.mode); !why.empty())
             r.fail("collision.mode", why);
@@ -223,6 +226,176 @@ void apply_solver_scope(const toml::table& root, Reader& r, SceneDef& d) {
     if (!given("spawn_interval")) {
         auto engine = preset("paper-engine");
         if (engine) d.spawn.interval = engine->spawn.interval;
+    }
+}
+
+/// Keys another key's value makes irrelevant (issue 13, "no silent option"): a key
+/// written in the file that the scene as written never reads is an error naming the
+/// key and the key/value that makes it irrelevant, with the way out. Only keys present
+/// in the file are checked (what is inherited from the base scene is never an error);
+/// the deciding value may be inherited (a spawn_interval under the default river's
+/// flow_rate = "auto"). A value that agrees with what the scene does anyway (bullet.sleep
+/// = false with bullet.springs = true, litres_per_particle = 0 without a rate) is
+/// accepted, as springs.stiffness = 0 is in a Bullet scene without springs. Checked
+/// against the code that reads each key (after apply_solver_scope, which settles what
+/// each solver reads at all):
+///   surface.enabled = false   the smoothing keys of [surface]; surface.method = "none"
+///                       or iterations = 0: the other smoothing keys; method = "taubin":
+///                       steps, keep_volume; steps = "uniform": pass_band; "chebyshev":
+///                       lambda; a field.kernel other than poly6: feature_count > 0
+///   surface = false     [field] except resolution (Simulation::step builds no field;
+///                       field.resolution stays: the default --voxel-size of --export
+///                       --format vdb, export_options.cpp)
+///   field.kernel = "inverse_square"   field.radius (1/r^2 has none: paper_field.cpp)
+///   a particle rate     spawn_interval (ParticleSolver::step_frame: the interval only
+///                       schedules activations without a rate); a rate is flow_rate > 0,
+///                       or "auto" with solver = "pbf" (sized from the channel)
+///   no particle rate    litres_per_particle > 0 (the unit of flow_rate); flow_rate =
+///                       "auto" outside PBF (Simulation::create sets it to 0)
+///   spawn_center [x, y, z]   auto_height (resolve_source: "auto"/"channel" only)
+///   source_shape = "point"   spawn_half_extent (spawn, LatticeSource: one point)
+///   sink.kind other than "box"   sink.min, sink.max
+///   springs.stiffness = 0    min_distance, max_distance, mode (no spring force)
+///   collision.mode = "none"  damping, offset, query (no terrain contact; radius stays:
+///                            the tunneled counter reads it)
+///   collision.mode = "paper" query (the paper's response walks the AABB tree)
+///   terrain.source = "file"  width, height, seed (the PNG's size; no procedure)
+///   terrain.source = strict | bowl | flat   seed (only "valley" is random); heightmap
+///   terrain.source = valley              heightmap
+///   pbf.scorr_k = 0          scorr_n, scorr_dq (no tensile correction: pbf.cpp)
+///   bullet.max_substeps = 0  bullet.dt (one Bullet step of the frame's time)
+///   bullet.springs = true    bullet.sleep = true (spheres with springs never sleep)
+/// The viewer's live editor can change any value after loading; a key is judged by the
+/// scene as written, as the solver scope is.
+void refuse_irrelevant_keys(const toml::table& root, Reader& r, const SceneDef& d) {
+    auto given = [&](const char* table, const char* key) {
+        const toml::table* t = root[table].as_table();
+        return t && t->get(key) != nullptr;
+    };
+    auto ignored = [&](const std::string& key, const std::string& when, const std::string& fix) {
+        r.fail(key, fmt::format("ignored when {}: {}", when, fix));
+    };
+    auto each = [&](const char* table, std::initializer_list<const char*> keys, const std::string& when,
+                    const std::string& fix) {
+        for (const char* k : keys)
+            if (given(table, k)) ignored(fmt::format("{}.{}", table, k), when, fix);
+    };
+
+    const bool surface_table = root["surface"].is_table();
+    const std::string off = surface_table ? "surface.enabled = false" : "surface = false";
+    if (!d.surface)
+        each("field", {"kernel", "bounds", "radius", "bounds_offset", "threshold"},
+             off + " (no field or surface is built; field.resolution stays, the default voxel size of --export "
+                   "--format vdb)",
+             fmt::format("remove it or set {} = true", surface_table ? "surface.enabled" : "surface"));
+    else if (d.field.kernel == FieldKernel::InverseSquare)
+        each("field", {"radius"}, "field.kernel = \"inverse_square\" (1/r^2 has no radius)",
+             "remove it or use field.kernel = \"radius_over_r\" or \"poly6\"");
+
+    // The smoothing ([surface]): smooth_surface (src/surface/smoothing.cpp) returns at
+    // once for method "none" or 0 iterations; Taubin steps lambda|mu and never restores
+    // the volume; Laplacian's uniform steps are lambda, its Chebyshev steps come from
+    // pass_band; feature weights read a poly6 field (Simulation::step passes none else).
+    if (surface_table) {
+        const SmoothingDef& m = d.smoothing;
+        if (!d.surface)
+            each("surface", {"method", "steps", "iterations", "lambda", "pass_band", "feature_count", "keep_volume",
+                             "normal_iterations"},
+                 "surface.enabled = false (nothing is smoothed)", "remove it or set enabled = true");
+        else if (m.method == SmoothingMethod::None)
+            each("surface", {"steps", "iterations", "lambda", "pass_band", "feature_count", "keep_volume", "normal_iterations"},
+                 "surface.method = \"none\" (the mesh as extracted)", "remove it or choose a method");
+        else if (m.iterations == 0)
+            each("surface", {"steps", "lambda", "pass_band", "feature_count", "keep_volume", "normal_iterations"},
+                 "surface.iterations = 0 (no smoothing step)", "remove it or give iterations");
+        else {
+            if (m.method == SmoothingMethod::Taubin)
+                each("surface", {"steps", "keep_volume"},
+                     "surface.method = \"taubin\" (lambda|mu steps, which keep the volume themselves)",
+                     "remove it or use method = \"laplacian\"");
+            else if (m.steps == SmoothingSteps::Uniform)
+                each("surface", {"pass_band"}, "surface.steps = \"uniform\" (every step is lambda)",
+                     "remove it or use steps = \"chebyshev\"");
+            else
+                each("surface", {"lambda"}, "surface.steps = \"chebyshev\" (the step sizes come from pass_band)",
+                     "remove it or use steps = \"uniform\"");
+            if (d.field.kernel != FieldKernel::Poly6 && m.feature_count != 0.0f)
+                each("surface", {"feature_count"},
+                     fmt::format("field.kernel = \"{}\" (feature weights read a poly6 field)", to_string(d.field.kernel)),
+                     "remove it or use field.kernel = \"poly6\"");
+        }
+    }
+
+    // The source: a rate (flow_rate > 0, or "auto" sized for a PBF river) or one
+    // activation every spawn_interval frames. Bullet's flow_rate is 0 here already.
+    const bool auto_rate = d.spawn.auto_rate() && d.solver == SolverKind::Pbf;
+    const bool by_rate = auto_rate || (!d.spawn.auto_rate() && d.spawn.particles_per_second() > 0.0f);
+    const bool flow_given = given("particles", "flow_rate");
+    if (by_rate) {
+        const std::string rate =
+            auto_rate ? fmt::format("particles.flow_rate = \"auto\"{} (the source emits at the river's sized rate)",
+                                    flow_given ? "" : " (the default river's)")
+                      : fmt::format("particles.flow_rate > 0 (the source emits {} {} per second)", d.spawn.flow_rate,
+                                    d.spawn.litres_per_particle > 0.0f ? "litres" : "particles");
+        each("particles", {"spawn_interval"}, rate, "remove it or set flow_rate = 0");
+    }
+    if (d.spawn.auto_rate() && flow_given && d.solver != SolverKind::Pbf)
+        r.fail("particles.flow_rate",
+               fmt::format("\"auto\" sizes a PBF river (solver = \"pbf\"); solver = \"{}\" would run it as 0 (one "
+                           "activation every spawn_interval frames): give a rate in particles per second, or 0",
+                           to_string(d.solver)));
+    if (!by_rate && given("particles", "litres_per_particle") && d.spawn.litres_per_particle > 0.0f)
+        ignored("particles.litres_per_particle",
+                flow_given ? "particles.flow_rate = 0 (it is flow_rate's unit)"
+                           : fmt::format("particles.flow_rate is 0 (solver = \"{}\" without a flow_rate; it is "
+                                         "flow_rate's unit)", to_string(d.solver)),
+                "remove it or give a flow_rate");
+    if (!d.spawn.auto_center)
+        each("particles", {"auto_height"}, "particles.spawn_center is [x, y, z] (it places an \"auto\" or \"channel\" centre)",
+             "remove it or set spawn_center = \"auto\"");
+    if (d.spawn.shape == SourceShape::Point)
+        each("particles", {"spawn_half_extent"}, "particles.source_shape = \"point\" (every particle starts at the centre)",
+             "remove it or use source_shape = \"box\" or \"disc\"");
+    if (d.sink.kind != SinkKind::Box)
+        each("sink", {"min", "max"}, fmt::format("sink.kind = \"{}\" (only a box sink has corners)",
+                                                 d.sink.kind == SinkKind::None ? "none" : "edges"),
+             "remove it or set kind = \"box\"");
+
+    // Springs, where the solver reads [springs] at all (solver scope refused the rest).
+    if (d.springs.stiffness == 0.0f && (d.solver == SolverKind::Springs || (d.solver == SolverKind::Bullet && d.bullet.springs)))
+        each("springs", {"min_distance", "max_distance", "mode"}, "springs.stiffness = 0 (no spring force)",
+             "remove it or give a stiffness");
+
+    if (d.solver != SolverKind::Bullet) {
+        if (d.collision.mode == CollisionMode::None)
+            each("collision", {"damping", "offset", "query"},
+                 "collision.mode = \"none\" (particles pass through the terrain)", "remove it or set mode = \"robust\"");
+        else if (d.collision.mode == CollisionMode::Paper)
+            each("collision", {"query"}, "collision.mode = \"paper\" (the paper's response walks the AABB tree; query "
+                                         "picks robust mode's)",
+                 "remove it or set mode = \"robust\"");
+    }
+
+    const std::string source = fmt::format("terrain.source = \"{}\"", to_string(d.source.kind));
+    if (d.source.kind == TerrainSource::File)
+        each("terrain", {"width", "height", "seed"}, source + " (the PNG gives the size; nothing is generated)",
+             "remove it or use a procedural source");
+    else {
+        each("terrain", {"heightmap"}, source + " (a procedural terrain)", "remove it or set source = \"file\"");
+        if (d.source.kind != TerrainSource::Valley)
+            each("terrain", {"seed"}, source + " (only \"valley\" is random)", "remove it or use source = \"valley\"");
+    }
+
+    if (d.solver == SolverKind::Pbf && d.pbf.scorr_k == 0.0f)
+        each("pbf", {"scorr_n", "scorr_dq"}, "pbf.scorr_k = 0 (no tensile-instability correction)",
+             "remove it or give a scorr_k");
+    if (d.solver == SolverKind::Bullet) {
+        if (d.bullet.max_substeps == 0)
+            each("bullet", {"dt"}, "bullet.max_substeps = 0 (one Bullet step of the frame's time)",
+                 "remove it or allow substeps (max_substeps >= 1)");
+        if (d.bullet.springs && d.bullet.sleep && given("bullet", "sleep"))
+            ignored("bullet.sleep", "bullet.springs = true (spheres with springs never sleep)",
+                    "remove it or set sleep = false");
     }
 }
 
@@ -450,6 +623,7 @@ Result<SceneDef> parse_scene_toml_lines(std::string_view text, const std::string
         r.boolean(*t, p, "springs", d.bullet.springs);
     }
     if (!r.failed()) apply_solver_scope(root, r, d);
+    if (!r.failed()) refuse_irrelevant_keys(root, r, d);
     if (r.failed()) return Error{r.error()};
     if (d.source.kind == TerrainSource::File && d.source.heightmap.empty())
         return Error{fmt::format("{}: terrain.heightmap: required when terrain.source = \"file\"", origin)};

@@ -284,6 +284,8 @@ TEST_F(Cli, BadPresetsScenesAndOptions) {
     expect_bad("run --collision paper", "--collision: solver = \"pbf\" slides along the terrain");
     expect_bad("run --scene " + write("b.toml", "solver = \"bullet\"\n").string() + " --collision robust",
                "--collision: solver = \"bullet\" does not use it");
+    // Issue 13: --seed with PBF, which draws no random number (its lattice source places every particle).
+    expect_bad("run --seed 3", "--seed: solver = \"pbf\" does not use it");
     expect_bad("run --frames many", "--frames");
     expect_bad("run --preset default --scene x.toml", "--preset");
     expect_bad("fly", "fly");

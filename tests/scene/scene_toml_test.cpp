@@ -27,14 +27,16 @@ TEST(SceneToml, EmptyFileIsTheDefaultScene) {
 }
 
 TEST(SceneToml, EveryKeyIsRead) {
+    // One scene where every key is read (issue 13: a key another key's value makes
+    // irrelevant is an error, so the file source, the automatic centre's height and
+    // the surface's absence are checked on their own below).
     auto r = parse(R"(
 name = "mine"
 solver = "springs"
 seed = 42
-surface = false
+surface = true
 [terrain]
-source = "file"
-heightmap = "maps/h.png"
+source = "valley"
 width = 10
 height = 12
 seed = 3
@@ -48,7 +50,6 @@ spawn_center = [1, 2, 3]
 spawn_half_extent = [0.5, 0.25, 1]
 spawn_interval = 4
 initial_velocity = [0, -1, 2]
-auto_height = 3
 [forces]
 gravity = 3.5
 [springs]
@@ -75,9 +76,8 @@ threshold = 0.4
     const SceneDef& d = r.value();
     EXPECT_EQ(d.name, "mine");
     EXPECT_EQ(d.seed, 42u);
-    EXPECT_FALSE(d.surface);
-    EXPECT_EQ(d.source.kind, TerrainSource::File);
-    EXPECT_EQ(d.source.heightmap, "dir/maps/h.png");  // relative to the scene file
+    EXPECT_TRUE(d.surface);
+    EXPECT_EQ(d.source.kind, TerrainSource::Valley);
     EXPECT_EQ(d.source.width, 10);
     EXPECT_EQ(d.source.height, 12);
     EXPECT_EQ(d.source.seed, 3u);
@@ -91,7 +91,6 @@ threshold = 0.4
     EXPECT_EQ(d.spawn.half_extent, Vec3(0.5f, 0.25f, 1));
     EXPECT_EQ(d.spawn.interval, 4);
     EXPECT_EQ(d.spawn.initial_velocity, Vec3(0, -1, 2));
-    EXPECT_FLOAT_EQ(d.spawn.auto_height, 3.0f);
     EXPECT_FLOAT_EQ(d.integrator.gravity, 3.5f);
     EXPECT_FLOAT_EQ(d.springs.stiffness, 12.0f);
     EXPECT_FLOAT_EQ(d.springs.min_distance, 1.5f);
@@ -107,6 +106,18 @@ threshold = 0.4
     EXPECT_FLOAT_EQ(d.field.resolution, 3.0f);
     EXPECT_FLOAT_EQ(d.field.bounds_offset, 2.5f);
     EXPECT_FLOAT_EQ(d.field.threshold, 0.4f);
+
+    auto file = parse("[terrain]\nheightmap = \"maps/h.png\"\n");
+    ASSERT_TRUE(file.ok()) << file.error().message;
+    EXPECT_EQ(file->source.kind, TerrainSource::File);
+    EXPECT_EQ(file->source.heightmap, "dir/maps/h.png");  // relative to the scene file
+    auto height = parse("[particles]\nspawn_center = \"auto\"\nauto_height = 3\n");
+    ASSERT_TRUE(height.ok()) << height.error().message;
+    EXPECT_FLOAT_EQ(height->spawn.auto_height, 3.0f);
+    auto off = parse("surface = false\n[field]\nresolution = 2\n");  // the VDB export's voxel size
+    ASSERT_TRUE(off.ok()) << off.error().message;
+    EXPECT_FALSE(off->surface);
+    EXPECT_FLOAT_EQ(off->field.resolution, 2.0f);
 }
 
 TEST(SceneToml, SpawnCenterAuto) {
@@ -275,10 +286,113 @@ TEST(SceneToml, OptionsTheSpringsAndPbfSolversIgnoreAreErrorsNamingTheKey) {
     // What each solver reads is accepted.
     for (const char* ok : {"solver = \"springs\"\n[springs]\nstiffness = 2.0\nmode = \"grid\"\n[collision]\nmode = \"paper\"\n"
                            "[integrator]\nsubsteps = 2\n",
-                           "solver = \"pbf\"\n[pbf]\nxsph = 0.1\n[collision]\nmode = \"none\"\ndamping = 0.1\n[integrator]\nsubsteps = 3\n",
+                           "solver = \"pbf\"\n[pbf]\nxsph = 0.1\n[collision]\nmode = \"none\"\nradius = 0.1\n[integrator]\nsubsteps = 3\n",
                            "solver = \"bullet\"\n[springs]\nstiffness = 0.0\n",
                            "solver = \"bullet\"\n[bullet]\nsprings = true\n[springs]\nstiffness = 2.0\nmin_distance = 1.0\nmax_distance = 0.5\n"
                            "[integrator]\ndt = 0.02\n"}) {
+        auto r = parse(ok);
+        EXPECT_TRUE(r.ok()) << ok << (r.ok() ? "" : r.error().message);
+    }
+}
+
+TEST(SceneToml, KeysAnotherKeysValueMakesIrrelevantAreErrorsNamingBoth) {
+    // Issue 13, "no silent option": each of these keys was accepted and then never read,
+    // because of the value of another key (written or inherited from the default scene).
+    // The error names the ignored key, the key/value that makes it irrelevant and the way out.
+    const std::string springs = "solver = \"springs\"\n";
+    // The surface is off: no field is built (field.resolution stays, see EveryKeyIsRead).
+    expect_error("surface = false\n[field]\nthreshold = 0.3\n",
+                 "field.threshold: ignored when surface = false (no field or surface is built");
+    expect_error("surface = false\n[field]\nresolution = 2\nkernel = \"poly6\"\n", "field.kernel: ignored when surface = false");
+    expect_error(springs + "surface = false\n[field]\nbounds_offset = 1.0\n", "remove it or set surface = true");
+    // A rate decides the activations; spawn_interval only schedules them without one.
+    expect_error("[particles]\nflow_rate = 50.0\nspawn_interval = 4\n",
+                 "particles.spawn_interval: ignored when particles.flow_rate > 0 (the source emits 50 particles per second): "
+                 "remove it or set flow_rate = 0");
+    expect_error(springs + "[particles]\nflow_rate = 5.0\nspawn_interval = 4\n", "particles.spawn_interval: ignored when");
+    expect_error("[particles]\nspawn_interval = 4\n",  // the default river's rate is "auto": inherited, still a rate
+                 "particles.spawn_interval: ignored when particles.flow_rate = \"auto\" (the default river's)");
+    // ... and without a rate, its unit and "auto" (a PBF river's sizing) are not read.
+    expect_error("[particles]\nflow_rate = 0.0\nlitres_per_particle = 2.0\n",
+                 "particles.litres_per_particle: ignored when particles.flow_rate = 0");
+    expect_error(springs + "[particles]\nlitres_per_particle = 2.0\n", "particles.litres_per_particle: ignored when");
+    expect_error(springs + "[particles]\nflow_rate = \"auto\"\n", "particles.flow_rate: \"auto\" sizes a PBF river");
+    // The source's placement and shape.
+    expect_error("[particles]\nspawn_center = [10, 5, 80]\nauto_height = 2.0\n",
+                 "particles.auto_height: ignored when particles.spawn_center is [x, y, z]");
+    expect_error("[particles]\nsource_shape = \"point\"\nspawn_half_extent = [1, 1, 1]\n",
+                 "particles.spawn_half_extent: ignored when particles.source_shape = \"point\"");
+    expect_error("[sink]\nkind = \"edges\"\nmin = [0, 0, 0]\n", "sink.min: ignored when sink.kind = \"edges\"");
+    expect_error(springs + "[particles]\nflow_rate = 0.0\n[sink]\nkind = \"none\"\nmax = [1, 1, 1]\n",
+                 "sink.max: ignored when sink.kind = \"none\"");
+    // Springs without a stiffness: no force, so no rest length, reach or pair search.
+    for (const char* k : {"min_distance = 3.0", "max_distance = 5.0", "mode = \"grid\""})
+        expect_error(springs + "[springs]\nstiffness = 0.0\n" + k + "\n",
+                     "ignored when springs.stiffness = 0 (no spring force): remove it or give a stiffness");
+    expect_error("solver = \"bullet\"\n[bullet]\nsprings = true\n[springs]\nstiffness = 0.0\nmax_distance = 5.0\n",
+                 "springs.max_distance: ignored when springs.stiffness = 0");
+    // Collision: no terrain contact with mode "none"; the paper's response has one query.
+    expect_error(springs + "[collision]\nmode = \"none\"\ndamping = 0.5\n", "collision.damping: ignored when collision.mode = \"none\"");
+    expect_error("[collision]\nmode = \"none\"\noffset = 0.1\n", "collision.offset: ignored when collision.mode = \"none\"");
+    expect_error(springs + "[collision]\nmode = \"paper\"\nquery = \"heightfield\"\n",
+                 "collision.query: ignored when collision.mode = \"paper\"");
+    // The terrain: a PNG has its own size and no procedure; only the valley is random.
+    expect_error("[terrain]\nheightmap = \"h.png\"\nwidth = 33\n", "terrain.width: ignored when terrain.source = \"file\"");
+    expect_error("[terrain]\nsource = \"file\"\nheightmap = \"h.png\"\nseed = 3\n", "terrain.seed: ignored when terrain.source = \"file\"");
+    expect_error("[terrain]\nsource = \"bowl\"\nseed = 3\n", "terrain.seed: ignored when terrain.source = \"bowl\"");
+    expect_error("[terrain]\nsource = \"valley\"\nheightmap = \"h.png\"\n",
+                 "terrain.heightmap: ignored when terrain.source = \"valley\"");
+    // The field's kernel: 1/r^2 has no radius.
+    expect_error(springs + "[field]\nkernel = \"inverse_square\"\nradius = 2.0\n",
+                 "field.radius: ignored when field.kernel = \"inverse_square\"");
+    // PBF: the tensile correction's shape without its strength.
+    expect_error("[pbf]\nscorr_k = 0.0\nscorr_n = 2\n", "pbf.scorr_n: ignored when pbf.scorr_k = 0");
+    expect_error("[pbf]\nscorr_k = 0.0\nscorr_dq = 0.2\n", "pbf.scorr_dq: ignored when pbf.scorr_k = 0");
+    // Bullet: no fixed step without substeps; spheres with springs never sleep.
+    expect_error("solver = \"bullet\"\n[bullet]\nmax_substeps = 0\ndt = 0.01\n", "bullet.dt: ignored when bullet.max_substeps = 0");
+    expect_error("solver = \"bullet\"\n[bullet]\nsprings = true\nsleep = true\n", "bullet.sleep: ignored when bullet.springs = true");
+    // The surface's smoothing (issue 11's [surface]): what smooth_surface reads for the method.
+    expect_error("[surface]\nenabled = false\nmethod = \"taubin\"\n", "surface.method: ignored when surface.enabled = false");
+    expect_error("[surface]\nenabled = false\n[field]\nthreshold = 0.3\n",
+                 "field.threshold: ignored when surface.enabled = false");
+    expect_error("[surface]\nmethod = \"none\"\niterations = 4\n", "surface.iterations: ignored when surface.method = \"none\"");
+    expect_error("[surface]\niterations = 0\nnormal_iterations = 2\n",
+                 "surface.normal_iterations: ignored when surface.iterations = 0");
+    expect_error("[surface]\nmethod = \"taubin\"\nkeep_volume = false\n", "surface.keep_volume: ignored when surface.method = \"taubin\"");
+    expect_error("[surface]\nmethod = \"taubin\"\nsteps = \"uniform\"\n", "surface.steps: ignored when surface.method = \"taubin\"");
+    expect_error("[surface]\nsteps = \"uniform\"\npass_band = 0.2\n", "surface.pass_band: ignored when surface.steps = \"uniform\"");
+    expect_error("[surface]\nlambda = 0.5\n",  // the default scene's Chebyshev steps, inherited
+                 "surface.lambda: ignored when surface.steps = \"chebyshev\"");
+    expect_error(springs + "[field]\nkernel = \"inverse_square\"\n[surface]\nmethod = \"laplacian\"\nfeature_count = 4\n",
+                 "surface.feature_count: ignored when field.kernel = \"inverse_square\"");
+    // The spawn seed: PBF draws no random number (a solver scope, as fb17bfe's).
+    expect_error("seed = 3\n", "seed: solver = \"pbf\" does not use it");
+    expect_error("solver = \"pbf\"\nseed = 3\n", "seed: solver = \"pbf\"");
+
+    // Inherited values never trigger it, and what each scene reads is accepted.
+    for (const char* ok :
+         {"[particles]\nflow_rate = 0.0\nspawn_interval = 4\n",  // PBF without a rate: the interval schedules
+          "solver = \"springs\"\n[particles]\nspawn_interval = 4\n",  // "auto" is 0 outside PBF
+          "solver = \"springs\"\n[particles]\nflow_rate = 5.0\nlitres_per_particle = 2.0\n",
+          "[particles]\nlitres_per_particle = 2.0\n",  // the default river's "auto" rate in litres
+          "[particles]\nflow_rate = 0.0\nlitres_per_particle = 0.0\n",  // 0 agrees: off
+          "[particles]\nspawn_center = \"channel\"\nauto_height = 2.0\n",
+          "[particles]\nsource_shape = \"point\"\n", "[sink]\nkind = \"box\"\nmin = [0, 0, 0]\nmax = [1, 1, 1]\n",
+          "surface = false\n", "solver = \"springs\"\nsurface = false\n",
+          "solver = \"springs\"\nseed = 3\n[springs]\nstiffness = 0.0\n",
+          "solver = \"springs\"\n[springs]\nstiffness = 2.0\nmin_distance = 3.0\nmax_distance = 5.0\nmode = \"grid\"\n",
+          "solver = \"springs\"\n[collision]\nmode = \"paper\"\ndamping = 0.7\noffset = 0.07\nradius = 0.1\n",
+          "[collision]\nmode = \"none\"\nradius = 0.1\n",  // the tunneled counter reads the radius
+          "[collision]\nquery = \"tree\"\n", "[terrain]\nsource = \"valley\"\nseed = 3\nwidth = 33\n",
+          "[terrain]\nsource = \"bowl\"\nwidth = 33\n",
+          "solver = \"springs\"\n[field]\nkernel = \"radius_over_r\"\nradius = 2.0\n", "[field]\nradius = 2.0\n",
+          "[pbf]\nscorr_k = 0.01\nscorr_n = 2\nscorr_dq = 0.2\n", "[pbf]\nscorr_k = 0.0\n",
+          "solver = \"bullet\"\nseed = 3\n[bullet]\nmax_substeps = 0\n",
+          "solver = \"bullet\"\n[bullet]\nmax_substeps = 2\ndt = 0.01\n",
+          "solver = \"bullet\"\n[bullet]\nsprings = true\nsleep = false\n",
+          "[surface]\nmethod = \"taubin\"\nlambda = 0.6\npass_band = 0.05\n", "[surface]\npass_band = 0.2\nkeep_volume = false\n",
+          "[surface]\nmethod = \"none\"\n", "[surface]\nenabled = false\n", "[surface]\nenabled = false\n[field]\nresolution = 2\n",
+          "solver = \"springs\"\n[field]\nkernel = \"inverse_square\"\n[surface]\nmethod = \"laplacian\"\nfeature_count = 0\n"}) {
         auto r = parse(ok);
         EXPECT_TRUE(r.ok()) << ok << (r.ok() ? "" : r.error().message);
     }
@@ -426,28 +540,31 @@ TEST(SceneToml, SurfaceTableChoosesTheSmoothing) {
         ASSERT_TRUE(p.ok()) << name;
         EXPECT_EQ(p->smoothing.method, SmoothingMethod::None) << name << " keeps the paper's surface";
     }
+    // Taubin reads neither steps nor keep_volume (issue 13: a key the scene does not read
+    // is an error): those two are read with Laplacian's uniform steps below.
     auto r = parse(R"(
 [surface]
 enabled = true
 method = "taubin"
-steps = "uniform"
 iterations = 30
 lambda = 0.6
 pass_band = 0.05
 feature_count = 5
-keep_volume = false
 normal_iterations = 2
 )");
     ASSERT_TRUE(r.ok()) << r.error().message;
     EXPECT_TRUE(r->surface);
     EXPECT_EQ(r->smoothing.method, SmoothingMethod::Taubin);
-    EXPECT_EQ(r->smoothing.steps, SmoothingSteps::Uniform);
     EXPECT_EQ(r->smoothing.iterations, 30);
     EXPECT_FLOAT_EQ(r->smoothing.lambda, 0.6f);
     EXPECT_FLOAT_EQ(r->smoothing.pass_band, 0.05f);
     EXPECT_FLOAT_EQ(r->smoothing.feature_count, 5.0f);
-    EXPECT_FALSE(r->smoothing.keep_volume);
     EXPECT_EQ(r->smoothing.normal_iterations, 2);
+    auto uniform = parse("[surface]\nmethod = \"laplacian\"\nsteps = \"uniform\"\nlambda = 0.5\nkeep_volume = false\n");
+    ASSERT_TRUE(uniform.ok()) << uniform.error().message;
+    EXPECT_EQ(uniform->smoothing.steps, SmoothingSteps::Uniform);
+    EXPECT_FLOAT_EQ(uniform->smoothing.lambda, 0.5f);
+    EXPECT_FALSE(uniform->smoothing.keep_volume);
     auto none = parse("[surface]\nmethod = \"none\"\n");
     ASSERT_TRUE(none.ok()) << none.error().message;
     EXPECT_EQ(none->smoothing.method, SmoothingMethod::None);
@@ -466,8 +583,8 @@ normal_iterations = 2
     expect_error("[surface]\nsteps = \"fast\"\n", "surface.steps: must be one of chebyshev, uniform");
     expect_error("[surface]\niterations = 101\n", "surface.iterations: must be in [0, 100]");
     expect_error("[surface]\niterations = 2.5\n", "surface.iterations: must be an integer");
-    expect_error("[surface]\nlambda = 0\n", "surface.lambda: must be in (0, 1]");
-    expect_error("[surface]\nlambda = 1.5\n", "surface.lambda: must be in (0, 1]");
+    expect_error("[surface]\nsteps = \"uniform\"\nlambda = 0\n", "surface.lambda: must be in (0, 1]");
+    expect_error("[surface]\nsteps = \"uniform\"\nlambda = 1.5\n", "surface.lambda: must be in (0, 1]");
     expect_error("[surface]\npass_band = 1\n", "surface.pass_band: must be in (0, 1)");
     expect_error("[surface]\npass_band = nan\n", "surface.pass_band");
     expect_error("[surface]\nfeature_count = 1\n", "surface.feature_count: must be 0 (off) or in [2, 1000]");

@@ -132,5 +132,29 @@ TEST(Simulation, ATerrainFieldBoxTooLargeForAnIntIsRefusedNamingTheKey) {
     EXPECT_TRUE(Simulation::create(d, flat_heightmap(4097, 2)).ok());
 }
 
+TEST(Simulation, APointSourceIsCheckedAsAPointAndADiscAsItsRadius) {
+    // Issue 13: a point source reads no spawn_half_extent (the scene file refuses one), yet
+    // the edge-sink check measured it with the inherited half extent (2.5 m): a point
+    // source 1 m from the edge was refused, naming a key the scene may not set. A disc's
+    // extent is its radius (spawn_half_extent.x) on both axes, not .z.
+    const auto terrain = Terrain::build(flat_heightmap(33, 33), TerrainDef{});
+    ASSERT_TRUE(terrain.ok()) << terrain.error().message;
+    SceneDef d = default_scene();
+    d.sink.kind = SinkKind::Edges;
+    d.spawn.auto_center = false;
+    d.spawn.center = Vec3(1.0f, 2.0f, 16.0f);
+    d.spawn.half_extent = Vec3(2.5f, 0.5f, 2.5f);
+    d.spawn.shape = SourceShape::Point;
+    EXPECT_TRUE(validate_on_terrain(d, terrain.value()).ok());
+    d.spawn.shape = SourceShape::Box;  // a box that wide does cross the edge
+    EXPECT_FALSE(validate_on_terrain(d, terrain.value()).ok());
+    d.spawn.shape = SourceShape::Disc;
+    d.spawn.center = Vec3(16.0f, 2.0f, 1.0f);
+    d.spawn.half_extent = Vec3(0.5f, 0.5f, 2.5f);  // radius 0.5: inside; .z is not read
+    EXPECT_TRUE(validate_on_terrain(d, terrain.value()).ok());
+    d.spawn.half_extent = Vec3(2.5f, 0.5f, 0.5f);  // radius 2.5 crosses z = 0
+    EXPECT_FALSE(validate_on_terrain(d, terrain.value()).ok());
+}
+
 }  // namespace
 }  // namespace mr
