@@ -182,31 +182,41 @@ void ParticleSolver::collide_fluid(size_t i, StepCounts& c) {
 // concave crease the new point can be under the neighbouring triangle: a few rounds,
 // then the particle stays where it started the step (`fallback`, above the ground): a
 // vertical lift out of a narrow pit or off a spike's flank would fling it. After a
-// push, a point within half the offset of its target counts as out: on a plane the
-// push lands exactly on the target, and float rounding lands it a hair below half
-// the time; without the slack three such rounds sent a particle sliding down a steep
-// face back to `fallback` every few steps, and it stuck to the wall.
+// push, a point still on the triangle it was pushed out of and within half the offset
+// of its target counts as out: on a plane the push lands exactly on the target, and
+// float rounding lands it a hair below half the time; without the slack three such
+// rounds sent a particle sliding down a steep face back to `fallback` every few steps,
+// and it stuck to the wall. The slack is for that rounding only: a push along a steep
+// wall's normal that lands on the floor at the wall's foot leaves the point up to the
+// slack under the floor's plane, and accepting it there kept particles in the crease
+// bobbing by the slack every few steps, never at rest (the box basin of
+// tests/scene/sound_water_test.cpp); the floor's own push follows instead.
 bool ParticleSolver::push_out_of_terrain(Vec3& x, const Vec3& fallback) const {
     const float lift = collision_.radius + collision_.offset;
     const float slack = 0.5f * collision_.offset;
-    bool pushed = false;
+    constexpr uint32_t kNone = ~0u;
+    uint32_t pushed_off = kNone;  // the triangle of the last push
+    const auto tolerance = [&](const Vec3& p) {
+        return pushed_off != kNone && terrain_.triangle_at(p.x, p.z) == pushed_off ? slack : 0.0f;
+    };
     for (int round = 0; round < 3; ++round) {
-        if (!terrain_.contains_xz(x.x, x.z)) return pushed;
+        if (!terrain_.contains_xz(x.x, x.z)) return pushed_off != kNone;
         const float h = terrain_.height_mesh(x.x, x.z) + lift;
-        if (x.y >= (pushed ? h - slack : h)) return pushed;
+        if (x.y >= h - tolerance(x)) return pushed_off != kNone;
         // Deeper under the ground than the step moved it: it did not sink through the
         // surface it was on, it ran into a cliff face between two samples. Lifting it
         // onto the ground above would launch it up the cliff (tens of m/s): it stops at
         // the face.
-        const Vec3 nrm = terrain_.normal_mesh(x.x, x.z);
+        const uint32_t tri = terrain_.triangle_at(x.x, x.z);
+        const Vec3 nrm = terrain_.triangle_normal(tri);
         if (round == 0 && (h - x.y) * nrm.y > glm::length(x - fallback) + lift) {
             x = fallback;
             return true;
         }
         x += ((h - x.y) * nrm.y) * nrm;
-        pushed = true;
+        pushed_off = tri;
     }
-    if (terrain_.contains_xz(x.x, x.z) && x.y < terrain_.height_mesh(x.x, x.z) + lift - slack) x = fallback;
+    if (terrain_.contains_xz(x.x, x.z) && x.y < terrain_.height_mesh(x.x, x.z) + lift - tolerance(x)) x = fallback;
     return true;
 }
 
