@@ -6,13 +6,20 @@
 #   river: the river table (issue 10): scale, particles, channel coverage,
 #          outflow/inflow (main outlet), steady, time to outlet, spray, tunneled,
 #          guarded, frame median.
+#   gallery: the river rendered headless at the last frame, an oblique view and a view
+#          from above side by side, one JPEG per map in GALLERY_DIR (default
+#          docs/images/gallery), and one markdown row per map naming it.
 # Maps: the procedural terrains, the tunneling test's torture terrains and random maps
 # (scripts/torture_maps.py), the paper's maps and the real DEMs in ../shared.
-# Usage: bash scripts/map_table.sh sound|river [FRAMES] [OUT_DIR]
+# Usage: bash scripts/map_table.sh sound|river|gallery [FRAMES] [OUT_DIR]
 set -euo pipefail
 cd "$(dirname "$0")/.."
-MODE=${1:?usage: map_table.sh sound|river [FRAMES] [OUT_DIR]}
-case "$MODE" in sound) DEFAULT_FRAMES=1800 ;; river) DEFAULT_FRAMES=7200 ;; *) echo "mode: sound or river" >&2; exit 2 ;; esac
+MODE=${1:?usage: map_table.sh sound|river|gallery [FRAMES] [OUT_DIR]}
+case "$MODE" in
+  sound) DEFAULT_FRAMES=1800 ;;
+  river | gallery) DEFAULT_FRAMES=7200 ;;
+  *) echo "mode: sound, river or gallery" >&2; exit 2 ;;
+esac
 B=${METARIVER:-build/default/apps/metariver}  # METARIVER=path: another build
 FRAMES=${2:-$DEFAULT_FRAMES}
 OUT=${3:-out/${MODE}_table}
@@ -36,7 +43,12 @@ else:
           f"{j['tunneled']} | {j['guarded']} | {j['stage_ms']['total']['median']:.1f} |")
 PY
 }
-if [ "$MODE" = sound ]; then
+GALLERY=${GALLERY_DIR:-docs/images/gallery}
+if [ "$MODE" = gallery ]; then
+  mkdir -p "$GALLERY"
+  echo "| map | at $((FRAMES / 60)) s: oblique, and from above |"
+  echo "|---|---|"
+elif [ "$MODE" = sound ]; then
   echo "| map | size | active | particle-steps | tunneled | guarded | respawned | max speed m/s | final speed p95 m/s | spray fraction |"
   echo "|---|---|---|---|---|---|---|---|---|---|"
 else
@@ -46,11 +58,24 @@ fi
 # NO_SURFACE=1: the default scene with surface = false (the same physics, no field or
 # mesh: the frame ms column is then the simulation alone).
 BASE=()
-if [ "${NO_SURFACE:-0}" = 1 ]; then printf 'surface = false\n' > "$OUT/no_surface.toml"; BASE=(--scene "$OUT/no_surface.toml"); fi
+if [ "${NO_SURFACE:-0}" = 1 ] && [ "$MODE" != gallery ]; then printf 'surface = false\n' > "$OUT/no_surface.toml"; BASE=(--scene "$OUT/no_surface.toml"); fi
 run_map() {  # name, extra args...
   local name=$1; shift
   if [ ${#BASE[@]} -gt 0 ] && [[ " $* " != *" --scene "* ]]; then set -- "${BASE[@]}" "$@"; fi
-  local s="$OUT/$(echo "$name" | tr '/ ,' '___').json"
+  local file; file=$(echo "$name" | tr '/ ,()' '_____')
+  if [ "$MODE" = gallery ]; then
+    local view cam
+    for view in oblique top; do
+      cam=(); [ $view = top ] && cam=(--camera top)
+      "$B" render --frames 1 --warmup $((FRAMES - 1)) --size 480x270 --no-progress --out "$OUT/$file.$view" \
+        "${cam[@]}" "$@" >/dev/null 2>"$OUT/last_stderr.txt" || { echo "| $name | failed: $(tail -1 "$OUT/last_stderr.txt") |"; return; }
+    done
+    ffmpeg -loglevel error -y -i "$OUT/$file.oblique/frame_00000.png" -i "$OUT/$file.top/frame_00000.png" \
+      -filter_complex hstack -q:v 5 "$GALLERY/$file.jpg"
+    echo "| $name | ![$name]($(realpath --relative-to=docs "$GALLERY")/$file.jpg) |"
+    return
+  fi
+  local s="$OUT/$file.json"
   "$B" run --frames "$FRAMES" --stats "$s" "$@" >/dev/null 2>"$OUT/last_stderr.txt" || { echo "| $name | failed: $(tail -1 "$OUT/last_stderr.txt") |"; return; }
   row "$name" "$s"
 }

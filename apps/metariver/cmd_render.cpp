@@ -140,9 +140,10 @@ int render(const RenderOptions& o) {
     if (o.water == "gouraud") shading = render::WaterShading::Gouraud;
     else if (o.water != "realistic")
         return fail(kExitBadInput, fmt::format("--water: must be realistic or gouraud (got '{}')", o.water));
-    if (!o.camera.empty()) {
+    if (!o.camera.empty() && o.camera != "top") {
         render::Camera probe;
-        if (auto s = render::parse_camera(o.camera, probe); !s) return fail(kExitBadInput, s.error().message);
+        if (auto s = render::parse_camera(o.camera, probe); !s)
+            return fail(kExitBadInput, s.error().message + ", or top");
     }
     std::optional<render::Image> texture;
     if (!o.texture.empty()) {
@@ -258,8 +259,9 @@ int render(const RenderOptions& o) {
             return fail(kExitBadInput, fmt::format("--texture {}: {}", o.texture, s.error().message));
         }
     }
-    render::Camera camera = render::frame_terrain(sim->terrain());
-    if (!o.camera.empty()) (void)render::parse_camera(o.camera, camera);  // checked above
+    render::Camera camera = o.camera == "top" ? render::frame_terrain_from_above(sim->terrain(), float(width) / float(height))
+                                              : render::frame_terrain(sim->terrain());
+    if (!o.camera.empty() && o.camera != "top") (void)render::parse_camera(o.camera, camera);  // checked above
     render::RenderSettings settings;
     settings.shading = shading;
     settings.particles = o.particles;
@@ -395,7 +397,7 @@ void register_render(CLI::App& app, std::function<int()>& action) {
     cmd->add_option("--frames", opts->frames, "images to render (default 60)");
     cmd->add_option("--size", opts->size, "image size WIDTHxHEIGHT, each in [16, 8192] (default 1280x720)");
     cmd->add_option("--out", opts->out, "folder for frame_NNNNN.png, or a FILE.mp4 (needs ffmpeg) (default out/render)");
-    cmd->add_option("--camera", opts->camera, "orbit camera YAW,PITCH,DISTANCE[,TX,TY,TZ] in degrees and metres (default: frames the terrain)");
+    cmd->add_option("--camera", opts->camera, "orbit camera YAW,PITCH,DISTANCE[,TX,TY,TZ] in degrees and metres, or top: straight above, the whole terrain in view (default: frames the terrain, oblique)");
     cmd->add_option("--orbit", opts->orbit_deg, "degrees the camera turns around the target over the sequence (default 0)");
     cmd->add_option("--warmup", opts->warmup, "simulation frames before the first image (default 0)");
     cmd->add_option("--steps", opts->steps, "simulation frames per image (default 1)");

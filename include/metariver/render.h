@@ -51,6 +51,9 @@ struct Camera {
 
 /// A camera that frames the terrain (and its near/far planes fitted to it).
 Camera frame_terrain(const Terrain& terrain);
+/// A camera straight above the terrain (pitch 89 degrees, x across the image) at the
+/// distance that fits its whole rectangle into a view of this aspect (width / height).
+Camera frame_terrain_from_above(const Terrain& terrain, float aspect);
 /// Fits near/far to the terrain's bounds for the camera's current eye.
 void fit_clip_planes(Camera& camera, const Terrain& terrain);
 

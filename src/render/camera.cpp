@@ -61,6 +61,22 @@ Camera frame_terrain(const Terrain& terrain) {
     return c;
 }
 
+Camera frame_terrain_from_above(const Terrain& terrain, float aspect) {
+    Camera c;
+    const Aabb& b = terrain.bounds();
+    const Vec3 ext = b.extent();
+    c.target = Vec3(b.center().x, b.min.y, b.center().z);
+    c.yaw_deg = 0.0f;
+    c.pitch_deg = 89.0f;
+    const float t = std::tan(glm::radians(c.fov_y_deg) * 0.5f);
+    // Half the rectangle on each axis fits the half view at the height of the highest
+    // ground (ext.y above the target), with a 4 % margin.
+    const float fit = std::max(0.5f * ext.z / t, 0.5f * ext.x / (t * std::max(aspect, 1e-3f)));
+    c.distance = std::clamp(1.04f * fit + ext.y, 1.0f, 1e5f);
+    fit_clip_planes(c, terrain);
+    return c;
+}
+
 Status parse_camera(const std::string& text, Camera& camera) {
     std::vector<float> v;
     std::stringstream ss(text);

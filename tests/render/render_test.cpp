@@ -285,3 +285,34 @@ TEST(Camera, ParseCameraChecksItsInput) {
     EXPECT_FALSE(render::parse_camera("0,95,10", c).ok());
     EXPECT_FALSE(render::parse_camera("0,10,-1", c).ok());
 }
+
+TEST(Camera, FromAboveFitsTheWholeTerrainIntoTheView) {
+    // Wide and tall rectangles with relief, into wide and tall views: every corner of
+    // the terrain's box (at the lowest and the highest ground) lands inside the image,
+    // and the fit is tight (some corner beyond 85 % of the half width or height).
+    for (const auto [w, h] : {std::pair{121, 31}, std::pair{17, 65}}) {
+        Heightmap m = flat_heightmap(w, h);
+        for (size_t i = 0; i < m.samples.size(); ++i) m.samples[i] = float(i % 7) / 6.0f;
+        auto t = Terrain::build(m, TerrainDef{.area_scale = 2.0f, .height_scale = 20.0f});
+        ASSERT_TRUE(t.ok()) << t.error().message;
+        const Aabb& b = t.value().bounds();
+        for (const float aspect : {16.0f / 9.0f, 9.0f / 16.0f}) {
+            const render::Camera cam = render::frame_terrain_from_above(t.value(), aspect);
+            EXPECT_GE(cam.pitch_deg, 85.0f);
+            const glm::mat4 vp = cam.projection(aspect) * cam.view();
+            float reach = 0.0f;
+            for (const float x : {b.min.x, b.max.x})
+                for (const float y : {b.min.y, b.max.y})
+                    for (const float z : {b.min.z, b.max.z}) {
+                        const glm::vec4 c = vp * glm::vec4(x, y, z, 1.0f);
+                        ASSERT_GT(c.w, 0.0f) << "a corner behind the camera";
+                        const float nx = c.x / c.w, ny = c.y / c.w, nz = c.z / c.w;
+                        EXPECT_LE(std::abs(nx), 1.0f) << w << "x" << h << " aspect " << aspect;
+                        EXPECT_LE(std::abs(ny), 1.0f) << w << "x" << h << " aspect " << aspect;
+                        EXPECT_LE(std::abs(nz), 1.0f) << "clipped by the near or far plane";
+                        reach = std::max({reach, std::abs(nx), std::abs(ny)});
+                    }
+            EXPECT_GT(reach, 0.85f) << w << "x" << h << " aspect " << aspect << ": the terrain fills too little";
+        }
+    }
+}
