@@ -62,6 +62,10 @@ struct SceneDef {
     FieldDef field;
     bool surface = true;  ///< build the field and the surface every frame
     SmoothingDef smoothing;  ///< [surface]: how the extracted mesh is smoothed (none in the paper's presets)
+    /// Metres, > 0 or 0: the PBF spacing the carved channel and the source's basin are
+    /// sized for (carve_def); 0 = pbf.spacing. Not a scene-file key: pbf_river_scene()
+    /// sets it to keep the default river's terrain while it refines the spacing.
+    float carve_spacing = 0.0f;
 };
 
 /// The built-in default scene: a PBF river on the procedural valley (source at the head
@@ -114,7 +118,7 @@ Status validate_on_terrain(const SceneDef& def, const Terrain& terrain);
 TerrainCondition resolved_condition(const SceneDef& def);
 /// The carved channel's cross-section for a scene (condition Carve): a flat bed
 /// max(3 samples, 4 pbf.spacing) wide, walls max(1.5 samples, 2 pbf.spacing) wide on
-/// each side, the bed 2 pbf.spacing deep.
+/// each side, the bed 2 pbf.spacing deep (carve_spacing instead when it is set).
 CarveDef carve_def(const SceneDef& def, float area_scale);
 
 /// The self-sized river (docs/river.md, "Sizing"): `particles.count = "auto"` and

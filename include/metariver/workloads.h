@@ -33,4 +33,20 @@ inline constexpr float kW2Radius = 0.5f;
 /// upper channel, spacing shrinking as n grows so the river keeps its size.
 SceneDef river_scene(int n);
 
+/// Particles the default PBF river (default_scene(), spacing 0.5 m) holds on the valley
+/// once its flow is steady (measured: 786-805 active at 35-120 s, docs/benchmarks.md).
+inline constexpr float kPbfRiverSteadyParticles = 800.0f;
+/// Field samples per metre pbf_river_scene() stays under (the dense count of the
+/// river's bounding box must stay under kMaxFieldSamples).
+inline constexpr float kPbfRiverMaxFieldResolution = 9.0f;
+/// The default PBF river resolved with about n particles in steady flow (`bench
+/// --scenario pbf`): the same terrain, carved channel and volume of water per second,
+/// at the spacing s = 0.5 m x cbrt(kPbfRiverSteadyParticles / n) (clamped to [0.05,
+/// 1] m). Everything sized in spacings scales with it (kernel radius 2 s, collision
+/// radius 0.2 s and offset 0.01 s, field radius 2 s and 1.5 / s samples per metre, at
+/// most kPbfRiverMaxFieldResolution); the
+/// flow rate is the self-sized default's (size_river) times (0.5 m / s)^3; the budget
+/// is 1.5 n, so the source never waits for recycled water.
+SceneDef pbf_river_scene(int n);
+
 }  // namespace mr

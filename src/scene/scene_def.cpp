@@ -316,6 +316,7 @@ Status validate(const SceneDef& d) {
     // pbf.spacing too (the channel's depth and width: carve_def).
     if (d.solver == SolverKind::Pbf || d.terrain.condition == TerrainCondition::Carve)
         c.range("pbf.spacing", d.pbf.spacing, 1e-3, 1e3);
+    c.range("carve_spacing", d.carve_spacing, 0.0, 1e3);  // programmatic only (SceneDef::carve_spacing)
     if (d.solver == SolverKind::Pbf) {
         if (c.error.empty() && !(d.pbf.kernel_radius > d.pbf.spacing && d.pbf.kernel_radius <= 4.0f * d.pbf.spacing))
             c.error = fmt::format("pbf.kernel_radius: must be in (pbf.spacing, 4 pbf.spacing] = ({}, {}] (got {})",

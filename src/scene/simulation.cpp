@@ -191,10 +191,15 @@ TerrainCondition resolved_condition(const SceneDef& def) {
     return river ? TerrainCondition::Carve : TerrainCondition::None;
 }
 
+namespace {
+/// The spacing the carve and the source's basin are sized for (SceneDef::carve_spacing).
+float carve_spacing_of(const SceneDef& def) { return def.carve_spacing > 0.0f ? def.carve_spacing : def.pbf.spacing; }
+}  // namespace
+
 CarveDef carve_def(const SceneDef& def, float area_scale) {
     // A flat bed three samples (or four spacings) wide, walls 1.5 samples (or two
     // spacings) wide on each side, two spacings deep.
-    const float d = def.pbf.spacing;
+    const float d = carve_spacing_of(def);
     const float floor = std::max(3.0f * area_scale, 4.0f * d);
     return CarveDef{.width_m = floor + 2.0f * std::max(1.5f * area_scale, 2.0f * d), .floor_m = floor, .depth_m = 2.0f * d};
 }
@@ -257,7 +262,7 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, cons
                 spawn.shape == SourceShape::Point
                     ? 0.0f
                     : std::max(spawn.half_extent.x, spawn.shape == SourceShape::Disc ? 0.0f : spawn.half_extent.z) +
-                          def.pbf.spacing;
+                          carve_spacing_of(def);
             terrain->carve_channel(path, carve);
         }
     }

@@ -69,4 +69,30 @@ SceneDef river_scene(int n) {
     return d;
 }
 
+SceneDef pbf_river_scene(int n) {
+    SceneDef d = default_scene();
+    const float s0 = d.pbf.spacing;  // 0.5 m: the spacing the default river sizes itself for
+    const float s = std::clamp(s0 * std::cbrt(kPbfRiverSteadyParticles / float(std::max(n, 1))), 0.05f, 1.0f);
+    const float k = s / s0;
+    d.name = "pbf-river-" + std::to_string(n);
+    d.carve_spacing = s0;  // the default's channel and basin, whatever the spacing
+    d.pbf.spacing = s;
+    d.pbf.kernel_radius *= k;
+    d.collision.radius *= k;
+    d.collision.offset *= k;
+    d.field.radius *= k;
+    d.field.bounds_offset *= k;
+    // Samples per metre follow the spacing up to kPbfRiverMaxFieldResolution: the field's
+    // box spans the river's bounding box (up to 65 x 97 x 25 m), whose dense sample
+    // count must stay under kMaxFieldSamples.
+    d.field.resolution = std::min(kPbfRiverMaxFieldResolution, d.field.resolution / k);
+    // The default's self-sized rate (27 particles/s of 0.125 m^3 on the valley: carve
+    // 3 m x 1 m, kRiverFill at kRiverSpeed) as a volume: the same river, finer.
+    SceneDef sized = default_scene();
+    const float rate0 = size_river(sized, sized.terrain.area_scale, 0.0f).rate;
+    d.spawn.flow_rate = rate0 / (k * k * k);
+    d.spawn.count = std::max(1, int(std::ceil(1.5f * float(n))));
+    return d;
+}
+
 }  // namespace mr

@@ -2,6 +2,7 @@
 // particles.flow_rate = "auto" derive the budget and the rate from the carved channel's
 // section and the main channel's length; each can be given instead.
 #include <metariver/scene.h>
+#include <metariver/workloads.h>
 
 #include <gtest/gtest.h>
 
@@ -96,6 +97,30 @@ TEST(Sizing, EachDerivedValueCanBeGivenInstead) {
     auto bad_rate = parse_scene_toml("[particles]\nflow_rate = \"fast\"\n", "bad.toml", default_scene());
     ASSERT_FALSE(bad_rate.ok());
     EXPECT_NE(bad_rate.error().message.find("particles.flow_rate: must be \"auto\""), std::string::npos);
+}
+
+// `bench --scenario pbf` (issue 12): the default river at a finer spacing keeps the
+// default's terrain (carve and basin sized for 0.5 m) and its volume of water per second.
+TEST(Sizing, ThePbfBenchRiverIsTheDefaultRiverFiner) {
+    auto base = make(default_scene());
+    const SceneDef d = pbf_river_scene(6400);  // 8x the default's steady particles: half the spacing
+    EXPECT_NEAR(d.pbf.spacing, 0.25f, 1e-5f);
+    EXPECT_NEAR(d.pbf.kernel_radius, 0.5f, 1e-5f);
+    ASSERT_TRUE(base && base->sizing());
+    EXPECT_NEAR(d.spawn.flow_rate * std::pow(d.pbf.spacing, 3.0f), base->sizing()->rate * 0.125f, 1e-3f);
+    auto fine = make(d);
+    ASSERT_TRUE(fine);
+    EXPECT_FALSE(fine->sizing().has_value()) << "count and rate are given";
+    const Terrain& a = base->terrain();
+    const Terrain& b = fine->terrain();
+    ASSERT_EQ(a.rows(), b.rows());
+    ASSERT_EQ(a.columns(), b.columns());
+    for (int i = 0; i < a.rows(); ++i)
+        for (int j = 0; j < a.columns(); ++j) ASSERT_EQ(a.sample(i, j), b.sample(i, j)) << i << ", " << j;
+    // Without carve_spacing the finer river would carve a shallower channel.
+    SceneDef shallow = d;
+    shallow.carve_spacing = 0.0f;
+    EXPECT_LT(carve_def(shallow, 1.0f).depth_m, carve_def(d, 1.0f).depth_m);
 }
 
 TEST(Sizing, SolversThatDoNotSizeThemselvesKeepTheFixedBudget) {
