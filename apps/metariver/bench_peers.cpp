@@ -4,6 +4,7 @@
 //   three.js  node bench/peers/w1_three.mjs --cases N:R --frames 10 --warmup 3
 //   VTK       /usr/bin/python3 bench/peers/w1_vtk.py --cases N:R --reps 7 --configs fe:T,fe:1,mc
 //   Bullet    bench_w2_bullet --n N --shape hf|mesh --steps 600 --settle 120
+//   W3 anchor env OMP_NUM_THREADS=T bench_pbf_anchor NX 3   (one text line, not JSON)
 // A peer that is not installed, or whose driver fails, becomes one line in `missing`.
 #include "bench_peers.h"
 
@@ -30,6 +31,7 @@ constexpr const char* kSetupHint = "run bash bench/peers/setup.sh";
 struct ProcResult {
     int code = -1;                 ///< exit status; 124/137 when `timeout` stopped it, 127 not found
     std::vector<json> lines;       ///< stdout lines that parsed as JSON objects
+    std::vector<std::string> text; ///< every non-empty stdout line
     std::string last_err;          ///< last non-empty stderr line
 };
 
@@ -63,6 +65,7 @@ ProcResult run_process(const std::vector<std::string>& argv, int timeout_s) {
         std::istringstream lines(out);
         std::string line;
         while (std::getline(lines, line)) {
+            if (!line.empty()) r.text.push_back(line);
             if (line.empty() || line.front() != '{') continue;
             json j = json::parse(line, nullptr, false);
             if (!j.is_discarded() && j.is_object()) r.lines.push_back(std::move(j));
@@ -105,19 +108,29 @@ fs::path find_peers_dir(const std::string& requested) {
     return {};
 }
 
-/// The built Bullet driver: the requested path, the build's (compile definition), or next
-/// to the metariver binary (<build>/apps/metariver -> <build>/bench/peers/bench_w2_bullet).
-fs::path find_bullet_driver(const std::string& requested) {
+/// A built driver: the requested path, the build's (a compile definition, "" when not
+/// built), or next to the metariver binary (<build>/apps/metariver ->
+/// <build>/bench/peers/<target>).
+fs::path find_built_driver(const std::string& requested, const char* compiled, const char* target) {
     std::vector<fs::path> candidates;
     if (!requested.empty()) candidates.emplace_back(requested);
-#ifdef METARIVER_BULLET_DRIVER
-    candidates.emplace_back(METARIVER_BULLET_DRIVER);
-#endif
-    if (const fs::path d = self_dir(); !d.empty()) candidates.push_back(d.parent_path() / "bench/peers/bench_w2_bullet");
+    if (compiled && *compiled) candidates.emplace_back(compiled);
+    if (const fs::path d = self_dir(); !d.empty()) candidates.push_back(d.parent_path() / "bench/peers" / target);
     for (const auto& c : candidates)
         if (access(c.c_str(), X_OK) == 0) return c;
     return {};
 }
+
+#ifdef METARIVER_BULLET_DRIVER
+constexpr const char* kBulletDriver = METARIVER_BULLET_DRIVER;
+#else
+constexpr const char* kBulletDriver = "";
+#endif
+#ifdef METARIVER_PBF_ANCHOR
+constexpr const char* kPbfAnchor = METARIVER_PBF_ANCHOR;
+#else
+constexpr const char* kPbfAnchor = "";
+#endif
 
 double median_of(const json& j, const char* key) {
     const json& v = j.at(key);
@@ -199,6 +212,39 @@ void run_bullet(const fs::path& exe, const PeerRequest& q, int n, const std::str
     if (!got) missing.push_back(failure_line("Bullet", what, p, q.timeout_s));
 }
 
+/// W3 with the PBF anchor: `particles=N avg_neighbors=A threads=T iters=I  nsearch=X ms
+/// constraint_iters=Y ms  total=Z ms/step` (the mean over its 20 measured steps).
+void run_anchor(const fs::path& exe, const PeerRequest& q, int nx, std::vector<PeerRow>& rows,
+                std::vector<std::string>& missing) {
+    const std::string what = fmt::format("W3 nx={}", nx);
+    fmt::print(stderr, "peers: PBF anchor (CompactNSearch), {} ...\n", what);
+    const int t = std::max(1, q.threads);
+    const ProcResult p = run_process(
+        {"env", fmt::format("OMP_NUM_THREADS={}", t), exe.string(), std::to_string(nx), "3"}, q.timeout_s);
+    for (const std::string& line : p.text) {
+        long n = 0;
+        int threads = 0, iters = 0;
+        double neighbours = 0, nsearch = 0, constraint = 0, total = 0;
+        if (std::sscanf(line.c_str(), "particles=%ld avg_neighbors=%lf threads=%d iters=%d nsearch=%lf ms "
+                                      "constraint_iters=%lf ms total=%lf",
+                        &n, &neighbours, &threads, &iters, &nsearch, &constraint, &total) != 7)
+            continue;
+        rows.push_back(PeerRow{.workload = "w3",
+                               .peer = fmt::format("PBF anchor ({} thr)", threads),
+                               .n = int(n),
+                               .r = nx,
+                               .median_ms = total,
+                               .covers = "step",
+                               .triangles = 0,
+                               .extra = {{"particles", n}, {"avg_neighbors", neighbours}, {"threads", threads},
+                                         {"iterations", iters}, {"ms_nsearch_mean", nsearch},
+                                         {"ms_constraint_iters_mean", constraint}, {"ms_step_mean", total},
+                                         {"line", line}}});
+        return;
+    }
+    missing.push_back(failure_line("PBF anchor", what, p, q.timeout_s));
+}
+
 std::string fmt_ms(double ms) {
     if (ms <= 0.0) return "-";
     return ms < 10.0 ? fmt::format("{:.2f}", ms) : ms < 1000.0 ? fmt::format("{:.1f}", ms) : fmt::format("{:.0f}", ms);
@@ -231,7 +277,7 @@ std::vector<PeerRow> run_peers(const PeerRequest& req, std::vector<std::string>&
         }
     }
     if (!request.w2_sizes.empty()) {
-        const fs::path exe = find_bullet_driver(request.bullet_driver);
+        const fs::path exe = find_built_driver(request.bullet_driver, kBulletDriver, "bench_w2_bullet");
         if (exe.empty()) {
             missing.push_back(
                 "Bullet: driver bench_w2_bullet not built: run bash bench/peers/setup.sh (libbullet-dev), "
@@ -243,6 +289,16 @@ std::vector<PeerRow> run_peers(const PeerRequest& req, std::vector<std::string>&
                 if (request.bullet_mesh && n <= 10000 && missing.size() == before)
                     run_bullet(exe, request, n, "mesh", rows, missing);
             }
+        }
+    }
+    if (!request.w3_nx.empty()) {
+        const fs::path exe = find_built_driver(request.pbf_anchor, kPbfAnchor, "bench_pbf_anchor");
+        if (exe.empty()) {
+            missing.push_back(
+                "PBF anchor: bench_pbf_anchor not built (CMake builds it when ../shared/peers/pbf_anchor and OpenMP "
+                "are there: cmake --build <build dir> --target bench_pbf_anchor)");
+        } else {
+            for (int nx : request.w3_nx) run_anchor(exe, request, nx, rows, missing);
         }
     }
     return rows;
@@ -257,7 +313,9 @@ json print_peers_side_by_side(const std::vector<OursRow>& ours, const std::vecto
                "thread{}\n",
                threads, threads == 1 ? "" : "s");
     fmt::print("  W1: three.js's full frame (field + surface) against our field + surface; VTK extracts from a ready\n"
-               "      field, against our surface stage only. W2: one 1/60 s step, median over steps 121..600.\n");
+               "      field, against our surface stage only. W2: one 1/60 s step, median over steps 121..600.\n"
+               "  W3: the anchor's neighbour search + 3 constraint iterations (mean of 20 steps) against our full\n"
+               "      PBF step (median of 20 steps after 3).\n");
     fmt::print("{:<4} {:<15} {:>9} {:<15} {:<28} {:>9} {:<15} {:>8} {:>10} {:>10}\n", "", "size", "ours ms",
                "ours covers", "peer", "peer ms", "peer covers", "ratio", "tris ours", "tris peer");
     std::string last_size;
@@ -273,8 +331,9 @@ json print_peers_side_by_side(const std::vector<OursRow>& ours, const std::vecto
             else ours_ms = o->step_ms, ours_covers = "step";
         }
         const double ratio = ours_ms > 0.0 ? p.median_ms / ours_ms : 0.0;
-        const std::string size =
-            p.workload == "w1" ? fmt::format("N={} R={}", p.n, p.r) : fmt::format("spheres={}", p.n);
+        const std::string size = p.workload == "w1"   ? fmt::format("N={} R={}", p.n, p.r)
+                                 : p.workload == "w3" ? fmt::format("nx={} ({})", p.r, p.n)
+                                                      : fmt::format("spheres={}", p.n);
         const bool first = size != last_size;
         last_size = size;
         std::string quality;
@@ -282,7 +341,7 @@ json print_peers_side_by_side(const std::vector<OursRow>& ours, const std::vecto
             quality = fmt::format("  tunneled {} pen>0.25 {} outside {}", p.extra.value("tunneled", 0),
                                   p.extra.value("penetrating_0_25", 0), p.extra.value("outside", 0));
         fmt::print("{:<4} {:<15} {:>9} {:<15} {:<28} {:>9} {:<15} {:>8} {:>10} {:>10}{}\n",
-                   first ? (p.workload == "w1" ? "W1" : "W2") : "", first ? size : "", fmt_ms(ours_ms), ours_covers,
+                   first ? (p.workload == "w1" ? "W1" : p.workload == "w3" ? "W3" : "W2") : "", first ? size : "", fmt_ms(ours_ms), ours_covers,
                    p.peer, fmt_ms(p.median_ms), p.covers, ratio > 0.0 ? fmt::format("{:.1f}x", ratio) : "-",
                    o && p.workload == "w1" ? std::to_string(o->triangles) : "-",
                    p.workload == "w1" ? std::to_string(p.triangles) : "-", quality);

@@ -1,11 +1,14 @@
 // `metariver bench`: per-stage timings of the project's workloads, and (with --peers)
 // the installed peers on the same workloads in the same run, side by side.
-// Scenarios: the paper's scenes (own physics, as the paper), the default river at
-// 1k/10k/50k/100k particles (fast pipeline), W1 and W2 exactly as
-// ../shared/peers/README.md defines them, and the export of the default river in each
-// format (docs/export.md). Medians and p95 over measured frames.
+// Scenarios: the paper's scenes (own physics, as the paper), the springs river at
+// 1k/10k/50k/100k particles (fast pipeline), the PBF river at 4k/16k/50k/100k in steady
+// flow, W1, W2 and W3 exactly as ../shared/peers/README.md and pbf_anchor/README.md
+// define them, and the export of the default river in each format (docs/export.md).
+// Medians and p95 over measured frames; with --json also a plot (SVG) of ms per frame
+// against particles beside it.
 #include "commands.h"
 #include "bench_peers.h"
+#include "bench_plot.h"
 
 #include <metariver/export.h>
 #include <metariver/io.h>
@@ -24,6 +27,7 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <random>
 #include <sstream>
 #include <thread>
 #include <unistd.h>
@@ -44,7 +48,11 @@ struct BenchOptions {
     int res = 0;
     int spheres = 0;
     int particles = 0;
+    bool particles_given = false;  ///< --particles was on the command line (0 is then an error)
+    int nx = 0;
+    bool nx_given = false;
     int frames = 0;
+    int warmup = -1;  ///< -1: per scenario
     int threads = 0;
     std::string json_path;
     std::string maps_dir = "../shared/heightmaps/metawater";
@@ -237,6 +245,75 @@ ScenarioResult bench_w2(int n) {
     return r;
 }
 
+/// Allowed sizes of the PBF river and of W3 (bad values exit 2 naming the range).
+constexpr int kPbfMinParticles = 100, kPbfMaxParticles = 400'000;
+constexpr int kW3MinNx = 4, kW3MaxNx = 100;  // nx = 100: 500,000 particles
+/// The PBF river's warm-up: 40 s of flow; the default river's water reaches the outlet
+/// after about 23 s and the particles on the terrain level off at 35-40 s
+/// (docs/benchmarks.md).
+constexpr int kPbfWarmupFrames = 2400;
+
+/// The default PBF river resolved with about n particles (pbf_river_scene), measured
+/// after `warmup` frames of flow.
+ScenarioResult bench_pbf_river(int n, int warmup, int frames) {
+    const SceneDef def = pbf_river_scene(n);
+    ScenarioResult r = bench_simulation(fmt::format("pbf {}", n), def, warmup, frames);
+    r.params["target_particles"] = n;
+    r.params["spacing"] = def.pbf.spacing;
+    r.params["kernel_radius"] = def.pbf.kernel_radius;
+    r.params["flow_rate"] = def.spawn.flow_rate;
+    r.params["field_resolution"] = def.field.resolution;
+    r.params["substeps"] = def.integrator.substeps;
+    r.params["iterations"] = def.pbf.iterations;
+    return r;
+}
+
+/// W3 (../shared/peers/pbf_anchor/README.md): nx * nx * nx/2 particles at 0.1 m with 1 %
+/// jitter (std::mt19937 seed 1, the anchor's draws in its order), h = 0.2 m, 3
+/// iterations, no gravity, run by our full PBF step (predict, grid and sort, 3
+/// iterations, velocities, XSPH, sleeping; terrain collision off: the block floats 1 m
+/// above a flat ground), 1/120 s per step. `warmup` steps, then `steps` timed.
+ScenarioResult bench_w3(int nx, int warmup, int steps) {
+    ScenarioResult r;
+    r.name = fmt::format("w3 nx={}", nx);
+    constexpr float d = 0.1f;
+    std::vector<Vec3> block;
+    std::mt19937 rng(1);
+    std::uniform_real_distribution<float> jitter(-0.01f * d, 0.01f * d);
+    const float margin = 2.0f;  // metres of ground around the block
+    for (int a = 0; a < nx; ++a)
+        for (int b = 0; b < nx; ++b)
+            for (int c = 0; c < nx / 2; ++c) {
+                const float x = float(a) * d + jitter(rng), y = float(c) * d + jitter(rng), z = float(b) * d + jitter(rng);
+                block.emplace_back(margin + x, 1.0f + y, margin + z);
+            }
+    const float side = float(nx) * d + 2.0f * margin;
+    auto terrain = Terrain::build(flat_heightmap(9, 9), TerrainDef{.area_scale = side / 8.0f, .height_scale = 1.0f});
+    auto bvh = Bvh::build(terrain.value(), BvhDef{});
+    const int n = int(block.size());
+    SpawnDef spawn{.count = n, .center = Vec3(side / 2, 2, side / 2), .half_extent = Vec3(0.0f), .interval = 0};
+    PbfDef pbf{.spacing = d, .kernel_radius = 2.0f * d, .iterations = 3};
+    const float dt = 1.0f / 120.0f;
+    ParticleSolver solver(terrain.value(), bvh.value(), spawn, SpringDef{}, CollisionDef{.mode = CollisionMode::None},
+                          IntegratorDef{.gravity = 0.0f, .fixed_dt = dt, .substeps = 1}, 1u, pbf, SinkDef{});
+    solver.place(block);
+    float density_max = 0.0f;
+    for (int s = -warmup; s < steps; ++s) {
+        const auto t0 = Clock::now();
+        solver.step_frame(dt);
+        const double ms = ms_since(t0);
+        if (s < 0) continue;
+        r.sample("step", ms);
+        density_max = std::max(density_max, solver.counters().density_error_max);
+    }
+    r.particles = solver.particles().active_count();
+    r.params = {{"nx", nx},         {"spacing", d},       {"kernel_radius", 2.0 * d}, {"iterations", pbf.iterations},
+                {"gravity", 0.0},   {"dt", dt},           {"warmup", warmup},         {"steps", steps},
+                {"particles", n}};
+    r.quality = {{"density_error_max", density_max}, {"max_speed", solver.counters().max_speed}};
+    return r;
+}
+
 /// Export cost by format: the default river (or `particles` of it) after `warmup` frames,
 /// then every frame written in every format (water + particles, encode + write) into a
 /// temporary folder that the unfinished export removes again. Stages: ms per frame by
@@ -318,7 +395,61 @@ void print_table(const std::vector<ScenarioResult>& results) {
                        first ? r.quality.dump() : "");
             first = false;
         }
+        if (!r.note.empty()) fmt::print("{:<24} note: {}\n", "", r.note);
     }
+}
+
+/// The PBF river rows once more, times and plausibility on one line each: speed must
+/// never silently buy a worse river.
+void print_pbf_summary(const std::vector<ScenarioResult>& results) {
+    bool header = false;
+    for (const auto& r : results) {
+        if (r.name.rfind("pbf ", 0) != 0 || r.stage_order.empty()) continue;
+        if (!header) {
+            fmt::print("\nPBF river in steady flow: ms per frame, median [p95]; plausibility beside\n");
+            fmt::print("{:<11} {:>9} {:>7} {:>17} {:>15} {:>15} {:>17} {:>9} {:>7} {:>7} {:>9} {:>8}\n", "scenario",
+                       "particles", "spacing", "simulate", "field", "surface", "total", "coverage", "out/in",
+                       "spray", "tunneled", "guarded");
+            header = true;
+        }
+        const auto cell = [&](const char* stage) {
+            const Percentiles p = percentiles(r.stage_ms.at(stage));
+            return fmt::format("{:.2f} [{:.2f}]", p.median, p.p95);
+        };
+        const json& q = r.quality;
+        fmt::print("{:<11} {:>9} {:>7.3f} {:>17} {:>15} {:>15} {:>17} {:>9.2f} {:>7.2f} {:>7.4f} {:>9} {:>8}\n", r.name,
+                   r.particles, r.params.value("spacing", 0.0), cell("simulate"), cell("field"), cell("surface"),
+                   cell("total"), q.value("channel_coverage", 0.0), q.value("outflow_over_inflow", 0.0),
+                   q.value("spray_fraction", 0.0), q.value("tunneled", 0), q.value("guarded", 0));
+    }
+}
+
+/// ms per frame against particles: the PBF river's stages, our W3 step and the anchor's.
+PlotDef bench_plot(const std::vector<ScenarioResult>& results, const json& peers) {
+    PlotDef plot{.title = "metariver bench: ms per frame (median) vs particles",
+                 .budget_ms = 1000.0 / 60.0,
+                 .budget_label = "16.7 ms = 60 fps"};
+    const char* colors[] = {"#1f77b4", "#2ca02c", "#9467bd", "#000000"};
+    const char* stages[] = {"simulate", "field", "surface", "total"};
+    for (int k = 0; k < 4; ++k) {
+        PlotSeries s{.name = fmt::format("PBF river {}", stages[k]), .color = colors[k]};
+        for (const auto& r : results)
+            if (r.name.rfind("pbf ", 0) == 0 && r.stage_ms.count(stages[k]))
+                s.points.emplace_back(double(r.particles), percentiles(r.stage_ms.at(stages[k])).median);
+        plot.series.push_back(std::move(s));
+    }
+    PlotSeries w3{.name = "W3 block: our PBF step", .color = "#d62728"};
+    for (const auto& r : results)
+        if (r.name.rfind("w3 ", 0) == 0 && r.stage_ms.count("step"))
+            w3.points.emplace_back(double(r.particles), percentiles(r.stage_ms.at("step")).median);
+    plot.series.push_back(std::move(w3));
+    PlotSeries anchor{.name = "W3 block: PBF anchor", .color = "#ff7f0e", .dashed = true};
+    if (peers.is_object() && peers.contains("rows"))
+        for (const json& row : peers["rows"])
+            if (row.value("workload", "") == "w3")
+                anchor.points.emplace_back(row.value("n", 0.0), row.value("median_ms", 0.0));
+    plot.series.push_back(std::move(anchor));
+    return plot;
 }
 
 int run_bench(const BenchOptions& o) {
@@ -327,16 +458,44 @@ int run_bench(const BenchOptions& o) {
         fmt::print(stderr, "metariver bench: --threads: must be in [0, 256] (got {})\n", o.threads);
         return kExitBadInput;
     }
-    const std::vector<std::string> known = {"paper", "river", "w1", "w2", "export"};
-    if (!o.scenario.empty() && std::find(known.begin(), known.end(), o.scenario) == known.end()) {
-        fmt::print(stderr, "metariver bench: --scenario: must be one of paper, river, w1, w2, export (got '{}')\n", o.scenario);
+    const std::vector<std::string> known = {"paper", "river", "pbf", "w1", "w2", "w3", "export"};
+    std::vector<std::string> chosen;  // --scenario a,b: several in one run (one JSON, one plot)
+    for (std::string rest = o.scenario; !rest.empty();) {
+        const size_t comma = rest.find(',');
+        chosen.push_back(rest.substr(0, comma));
+        rest = comma == std::string::npos ? "" : rest.substr(comma + 1);
+        if (std::find(known.begin(), known.end(), chosen.back()) == known.end()) {
+            fmt::print(stderr,
+                       "metariver bench: --scenario: must be one or more (comma-separated) of paper, river, pbf, w1, w2, "
+                       "w3, export (got '{}')\n",
+                       o.scenario);
+            return kExitBadInput;
+        }
+    }
+    const auto want = [&](const char* s) {
+        return chosen.empty() || std::find(chosen.begin(), chosen.end(), s) != chosen.end();
+    };
+    if (want("pbf") && o.particles_given &&
+        (o.particles < kPbfMinParticles || o.particles > kPbfMaxParticles)) {
+        fmt::print(stderr, "metariver bench: --particles: the PBF river must have [{}, {}] particles (got {})\n",
+                   kPbfMinParticles, kPbfMaxParticles, o.particles);
+        return kExitBadInput;
+    }
+    if (o.nx_given && (o.nx < kW3MinNx || o.nx > kW3MaxNx)) {
+        fmt::print(stderr, "metariver bench: --nx: must be in [{}, {}] (nx * nx * nx/2 particles; got {})\n", kW3MinNx,
+                   kW3MaxNx, o.nx);
+        return kExitBadInput;
+    }
+    if (o.warmup < -1 || o.warmup > 100000) {
+        fmt::print(stderr, "metariver bench: --warmup: must be in [0, 100000] (got {})\n", o.warmup);
         return kExitBadInput;
     }
     if (o.balls < 0 || o.balls > 10'000'000 || o.res < 0 || (o.res != 0 && o.res < 2) || o.res > 1024) {
         fmt::print(stderr, "metariver bench: --balls must be in [1, 10000000] and --res in [2, 1024]\n");
         return kExitBadInput;
     }
-    if (o.spheres < 0 || o.spheres > 1'000'000 || o.particles < 0 || o.particles > kMaxParticles) {
+    if (o.spheres < 0 || o.spheres > 1'000'000 || o.particles < 0 || o.particles > kMaxParticles ||
+        (o.particles_given && o.particles == 0)) {
         fmt::print(stderr, "metariver bench: --spheres must be in [1, 1000000], --particles in [1, {}]\n", kMaxParticles);
         return kExitBadInput;
     }
@@ -353,7 +512,6 @@ int run_bench(const BenchOptions& o) {
         }
     }
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
-    const auto want = [&](const char* s) { return o.scenario.empty() || o.scenario == s; };
     const int frames = o.frames;
     std::vector<ScenarioResult> results;
     PeerRequest peer_request{.peers_dir = o.peers_dir, .threads = threads};  // the W1/W2 sizes run, for --peers
@@ -392,6 +550,21 @@ int run_bench(const BenchOptions& o) {
             results.push_back(bench_simulation("default (pbf river)", default_scene(), 600, frames ? frames : 120));
         }
     }
+    if (want("pbf")) {
+        // The PBF river at about n particles in steady flow; big rivers measure fewer
+        // frames (the warm-up dominates the wall time anyway).
+        std::vector<int> sizes = {4000, 16000, 50000, 100000};
+        if (o.particles) sizes = {o.particles};
+        const int warmup = o.warmup >= 0 ? o.warmup : kPbfWarmupFrames;
+        for (int n : sizes) {
+            const int f = frames ? frames : (n > 50000 ? 30 : n > 16000 ? 60 : 120);
+            ScenarioResult r = bench_pbf_river(n, warmup, f);
+            if (r.note.empty())
+                r.note = fmt::format("{} warm-up frames ({:.0f} s of flow), {} measured frames{}", warmup, warmup / 60.0,
+                                     f, !frames && n > 16000 ? " (fewer for large rivers)" : "");
+            results.push_back(std::move(r));
+        }
+    }
     if (want("w1")) {
         std::vector<std::pair<int, int>> cases = {{50, 32}, {1000, 64}, {1000, 128}, {10000, 128}, {10000, 256}};
         if (o.balls || o.res) cases = {{o.balls ? o.balls : 1000, o.res ? o.res : 128}};
@@ -405,9 +578,18 @@ int run_bench(const BenchOptions& o) {
         peer_request.w2_sizes = sizes;
     }
 
+    if (want("w3")) {
+        // The anchor's sizes (pbf_anchor/README.md): 16,384, 48,668 and 97,556 particles.
+        std::vector<int> sides = {32, 46, 58};
+        if (o.nx) sides = {o.nx};
+        for (int nx : sides) results.push_back(bench_w3(nx, o.warmup >= 0 ? o.warmup : 3, frames ? frames : 20));
+        peer_request.w3_nx = sides;
+    }
+
     if (want("export")) results.push_back(bench_export(o.particles, 600, frames ? frames : 30));
 
     print_table(results);
+    print_pbf_summary(results);
     json peers_json;
     if (o.peers) {  // bench_peers.cpp: run the installed peers on the same sizes, print side by side
         std::vector<std::string> missing;
@@ -423,6 +605,9 @@ int run_bench(const BenchOptions& o) {
                                 .triangles = r.triangles});
             else if (r.params.contains("spheres"))
                 ours.push_back({.workload = "w2", .n = r.params["spheres"].get<int>(), .step_ms = med(r, "step")});
+            else if (r.params.contains("nx"))
+                ours.push_back({.workload = "w3", .n = int(r.particles), .r = r.params["nx"].get<int>(),
+                                .step_ms = med(r, "step")});
         peers_json = print_peers_side_by_side(ours, peer_rows, missing, threads);
     }
     if (!o.json_path.empty()) {
@@ -432,11 +617,24 @@ int run_bench(const BenchOptions& o) {
         for (const auto& r : results) arr.push_back(result_json(r, threads));
         j["results"] = arr;
         if (o.peers) j["peers"] = peers_json;
+        // The plot beside the JSON (bench.json -> bench.svg) when a PBF river or W3 ran.
+        const bool plotted = std::any_of(results.begin(), results.end(), [](const ScenarioResult& r) {
+            return r.name.rfind("pbf ", 0) == 0 || r.name.rfind("w3 ", 0) == 0;
+        });
+        const std::string svg_path = fs::path(o.json_path).replace_extension(".svg").string();
+        if (plotted) j["plot"] = svg_path;
         if (auto s = write_file_atomic(o.json_path, j.dump(2) + "\n"); !s) {
             fmt::print(stderr, "metariver bench: {}\n", s.error().message);
             return kExitFailure;
         }
         fmt::print("wrote {}\n", o.json_path);
+        if (plotted) {
+            if (auto s = write_file_atomic(svg_path, plot_svg(bench_plot(results, peers_json))); !s) {
+                fmt::print(stderr, "metariver bench: {}\n", s.error().message);
+                return kExitFailure;
+            }
+            fmt::print("wrote {}\n", svg_path);
+        }
     }
     return kExitOk;
 }
@@ -446,18 +644,28 @@ int run_bench(const BenchOptions& o) {
 void register_bench(CLI::App& app, std::function<int()>& action) {
     auto o = std::make_shared<BenchOptions>();
     CLI::App* cmd = app.add_subcommand("bench", "time every stage on the project's workloads (and peers with --peers)");
-    cmd->add_option("--scenario", o->scenario, "one of paper, river, w1, w2, export (default: all)");
+    cmd->add_option("--scenario", o->scenario, "one or more (comma-separated) of paper, river, pbf, w1, w2, w3, export (default: all)");
     cmd->add_option("--balls", o->balls, "W1: number of balls");
     cmd->add_option("--res", o->res, "W1: samples per axis");
     cmd->add_option("--spheres", o->spheres, "W2: number of spheres");
-    cmd->add_option("--particles", o->particles, "river, export: number of particles");
+    CLI::Option* particles = cmd->add_option(
+        "--particles", o->particles,
+        fmt::format("river, export: number of particles; pbf: particles in steady flow, [{}, {}]", kPbfMinParticles,
+                    kPbfMaxParticles));
+    CLI::Option* nx = cmd->add_option("--nx", o->nx, fmt::format("w3: block side, nx * nx * nx/2 particles, [{}, {}]",
+                                                                 kW3MinNx, kW3MaxNx));
+    cmd->add_option("--warmup", o->warmup, "frames (w3: steps) before measuring (default: per scenario)");
     cmd->add_option("--frames", o->frames, "measured frames per scenario (default: per scenario)");
     cmd->add_option("--threads", o->threads, "worker threads (default: all cores)");
     cmd->add_option("--json", o->json_path, "write the results as JSON");
     cmd->add_option("--maps", o->maps_dir, "folder with the paper's heightmaps (default ../shared/heightmaps/metawater)");
     cmd->add_flag("--peers", o->peers, "also run the installed peers on the same workloads");
     cmd->add_option("--peers-dir", o->peers_dir, "folder with the peer drivers (default bench/peers)");
-    cmd->callback([o, &action] { action = [o] { return run_bench(*o); }; });
+    cmd->callback([o, &action, particles, nx] {
+        o->particles_given = particles->count() > 0;
+        o->nx_given = nx->count() > 0;
+        action = [o] { return run_bench(*o); };
+    });
 }
 
 }  // namespace mr::app

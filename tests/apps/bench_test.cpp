@@ -94,6 +94,73 @@ TEST_F(Bench, ExportTimesEveryFormatWithItsSize) {
     EXPECT_GT(res["quality"]["mb_per_frame"]["obj"].get<double>(), res["quality"]["mb_per_frame"]["ply"].get<double>());
 }
 
+// The PBF river (issue 12) at a tiny size: the stages, the plausibility beside them, the
+// sizing in params, and the plot beside the JSON.
+TEST_F(Bench, PbfRiverHasStagesPlausibilityAndAPlot) {
+    const fs::path out = dir_ / "bench.json";
+    const BenchRun r = run("--scenario pbf --particles 300 --warmup 120 --frames 3 --json " + out.string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    const json j = json::parse(slurp(out));
+    ASSERT_EQ(j["results"].size(), 1u);
+    const json& res = j["results"][0];
+    ASSERT_FALSE(res.contains("note") && res["note"].get<std::string>().rfind("skipped", 0) == 0) << res.dump();
+    EXPECT_EQ(res["scenario"], "pbf 300");
+    EXPECT_GT(res["particles"].get<int>(), 0);  // 2 s of flow: on its way, not all of it yet
+    for (const char* stage : {"simulate", "field", "surface", "total"}) {
+        ASSERT_TRUE(res["stages"].contains(stage)) << stage;
+        EXPECT_EQ(res["stages"][stage]["samples"].get<int>(), 3) << stage;
+        EXPECT_GE(res["stages"][stage]["p95_ms"].get<double>(), res["stages"][stage]["median_ms"].get<double>()) << stage;
+    }
+    for (const char* key : {"channel_coverage", "outflow_over_inflow", "spray_fraction", "tunneled", "guarded"})
+        ASSERT_TRUE(res["quality"].contains(key)) << key;
+    EXPECT_EQ(res["quality"]["tunneled"].get<int>(), 0);
+    for (const char* key : {"spacing", "flow_rate", "target_particles", "warmup"}) EXPECT_TRUE(res["params"].contains(key)) << key;
+    // 300 particles in steady flow: a coarser spacing than the default's 0.5 m.
+    EXPECT_GT(res["params"]["spacing"].get<double>(), 0.5);
+    const fs::path svg = dir_ / "bench.svg";
+    ASSERT_TRUE(fs::exists(svg));
+    EXPECT_EQ(j["plot"].get<std::string>(), svg.string());
+    const std::string text = slurp(svg);
+    EXPECT_EQ(text.rfind("<svg", 0), 0u);
+    EXPECT_NE(text.find("PBF river total"), std::string::npos);
+    EXPECT_NE(text.find("<polyline"), std::string::npos);
+    EXPECT_NE(r.out.find("coverage"), std::string::npos) << "the summary table: " << r.out;
+}
+
+// W3 (the anchor's block) run by our solver, and with --peers the anchor beside it or
+// one missing line; the plot gets our step.
+TEST_F(Bench, W3StepAndAnchorOrMissingLine) {
+    const fs::path out = dir_ / "bench.json";
+    const BenchRun r = run("--scenario w3 --nx 8 --frames 3 --peers --json " + out.string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    const json j = json::parse(slurp(out));
+    const json& res = j["results"][0];
+    EXPECT_EQ(res["scenario"], "w3 nx=8");
+    EXPECT_EQ(res["particles"].get<int>(), 8 * 8 * 4);
+    EXPECT_EQ(res["stages"]["step"]["samples"].get<int>(), 3);
+    EXPECT_GT(res["stages"]["step"]["median_ms"].get<double>(), 0.0);
+    EXPECT_NEAR(res["params"]["kernel_radius"].get<double>(), 0.2, 1e-6);
+    const json& p = j["peers"];
+    EXPECT_FALSE(p["rows"].empty() && p["missing"].empty());
+    for (const json& row : p["rows"]) {
+        EXPECT_EQ(row["workload"], "w3");
+        EXPECT_EQ(row["n"].get<int>(), 256);
+        EXPECT_GT(row["ratio_peer_over_ours"].get<double>(), 0.0);
+        EXPECT_EQ(row["driver"]["particles"].get<int>(), 256) << "the anchor's block is ours";
+    }
+    EXPECT_TRUE(fs::exists(dir_ / "bench.svg"));
+}
+
+TEST_F(Bench, BadSizesNameTheOptionAndTheRange) {
+    expect_bad("--scenario pbf --particles 0", "--particles");
+    expect_bad("--scenario pbf --particles 0", "[100, 400000]");
+    expect_bad("--scenario pbf --particles 99999999", "[100, 400000]");
+    expect_bad("--scenario w3 --nx 0", "--nx: must be in [4, 100]");
+    expect_bad("--scenario w3 --nx 1000", "--nx: must be in [4, 100]");
+    expect_bad("--scenario river --particles 0", "--particles in [1,");
+    expect_bad("--scenario w3 --warmup -5", "--warmup");
+}
+
 TEST_F(Bench, BadOptionsExitTwoWithOneLine) {
     expect_bad("--scenario nope", "--scenario");
     expect_bad("--balls -1", "--balls");
