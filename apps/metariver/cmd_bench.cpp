@@ -136,6 +136,7 @@ ScenarioResult bench_simulation(const std::string& name, const SceneDef& def, in
                 {"surface_smoothing", std::string(to_string(def.smoothing.method))},
                 {"frames", frames},
                 {"warmup", warmup}};
+    if (const auto w = s.warnings(); !w.empty()) r.params["warnings"] = w;  // e.g. a flow rate the source capped
     // Plausibility (issues 5 and 9) beside the times: nothing through the ground (and how
     // often the guard had to lift a particle), outflow at the sinks over the measured
     // frames, water in the channel, density error, no explosion, no spray, settled speed.
