@@ -54,9 +54,17 @@ Camera frame_terrain(const Terrain& terrain) {
     // Look at the middle of the rectangle, a little above the mean ground.
     c.target = Vec3(b.center().x, b.min.y + 0.35f * ext.y, b.center().z);
     c.yaw_deg = 35.0f;
-    c.pitch_deg = 32.0f;
+    // 32 degrees down for ordinary relief; steeper where the relief is high for the
+    // terrain's width (the paper's 33 x 33 m maps at 24 m, spikes), or the near rim and
+    // the block's side hide everything inside: 10 degrees over the slope from the
+    // highest ground to the middle, at most 65.
+    const float half_width = 0.5f * std::max(std::min(ext.x, ext.z), 1e-3f);
+    c.pitch_deg = std::clamp(glm::degrees(std::atan2(ext.y, half_width)) + 10.0f, 32.0f, 65.0f);
     const float radius = 0.5f * std::sqrt(ext.x * ext.x + ext.z * ext.z + 0.25f * ext.y * ext.y);
-    c.distance = radius / std::tan(glm::radians(c.fov_y_deg) * 0.5f) * 0.8f;
+    // Closer than the bounding sphere for ordinary relief (the terrain fills the image);
+    // a steeper look sees more of the rectangle's depth, so it backs off up to 1.1.
+    const float back = 0.8f + 0.3f * (c.pitch_deg - 32.0f) / (65.0f - 32.0f);
+    c.distance = radius / std::tan(glm::radians(c.fov_y_deg) * 0.5f) * back;
     fit_clip_planes(c, terrain);
     return c;
 }

@@ -316,3 +316,31 @@ TEST(Camera, FromAboveFitsTheWholeTerrainIntoTheView) {
         }
     }
 }
+
+TEST(Camera, TheDefaultFramingSeesTheBottomOfADeepBowl) {
+    // A bowl 33 m across and 24 m deep (the paper's maps are that steep): at the 32
+    // degrees that suit ordinary relief the near rim hides the bottom, where the water
+    // gathers. The framing looks down more steeply there; a valley keeps 32 degrees.
+    SceneDef d = small_valley();
+    d.source = {.kind = TerrainSource::Bowl, .heightmap = {}, .width = 33, .height = 33, .seed = 7};
+    d.terrain.height_scale = 24.0f;
+    auto sim = Simulation::create(d);
+    ASSERT_TRUE(sim.ok()) << sim.error().message;
+    const Terrain& t = sim.value()->terrain();
+    const render::Camera cam = render::frame_terrain(t);
+    const Vec3 bottom(16.0f, t.height_mesh(16.0f, 16.0f), 16.0f);
+    const int w = 640, h = 360;
+    const glm::vec4 c = cam.projection(float(w) / float(h)) * cam.view() * glm::vec4(bottom, 1.0f);
+    ASSERT_GT(c.w, 0.0f);
+    const float px = (c.x / c.w * 0.5f + 0.5f) * float(w), py = (0.5f - c.y / c.w * 0.5f) * float(h);
+    ASSERT_TRUE(px >= 0.0f && px < float(w) && py >= 0.0f && py < float(h)) << "the bottom is outside the image";
+    auto hit = render::pick_terrain(cam, px, py, w, h, t, sim.value()->bvh());
+    ASSERT_TRUE(hit.has_value());
+    EXPECT_LT(glm::length(*hit - bottom), 1.0f) << "the ray to the bottom hits the rim at (" << hit->x << ", " << hit->y
+                                                << ", " << hit->z << ")";
+    SceneDef flat = small_valley();
+    flat.terrain.height_scale = 2.0f;
+    auto low = Simulation::create(flat);
+    ASSERT_TRUE(low.ok());
+    EXPECT_FLOAT_EQ(render::frame_terrain(low.value()->terrain()).pitch_deg, 32.0f) << "ordinary relief";
+}
