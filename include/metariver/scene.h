@@ -290,8 +290,10 @@ public:
     /// Where the outlet-edge sink took particles during the latest frame (Solver::last_exits).
     std::span<const Vec3> last_exits() const { return solver_->last_exits(); }
     /// The main channel: ChannelMap::path_from the source's channel cell (the main head
-    /// for the automatic channel source, else the channel cell nearest the source's
-    /// centre) to the border cell where it leaves the terrain (back()).
+    /// for the automatic channel source on terrain that is not carved, else the channel
+    /// cell nearest the source's centre: on a carved terrain the automatic source stays
+    /// at the head the carve was cut from) to the border cell where it leaves the
+    /// terrain (back()).
     std::span<const std::pair<int, int>> main_channel() const { return main_path_; }
     /// ChannelCoverage of the main channel by the current particles (1.5 samples, 3 m).
     float channel_coverage() const;

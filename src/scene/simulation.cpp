@@ -264,6 +264,17 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, cons
                     : std::max(spawn.half_extent.x, spawn.shape == SourceShape::Disc ? 0.0f : spawn.half_extent.z) +
                           carve_spacing_of(def);
             terrain->carve_channel(path, carve);
+            // The source stays where the carve was cut for it. Placed again on the carved
+            // ground, the main head moved elsewhere on some terrains (the carve changes
+            // the flow accumulation), and the river ran down an uncarved path while the
+            // carved channel stayed dry (colorado_rockies: a 1-sample breach with sills
+            // 4 m high at the diagonal steps; nothing reached the outlet in 120 s).
+            if (def.spawn.auto_center) {
+                resolved.spawn.center = spawn.center;
+                resolved.spawn.half_extent = spawn.half_extent;
+                resolved.spawn.auto_center = false;
+                fit_auto_source(terrain.value(), resolved.spawn);  // its height over the carved basin
+            }
         }
     }
     // Not a PBF river: the budget the default scene had before it sized itself.

@@ -7,6 +7,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace mr {
 namespace {
@@ -133,6 +138,56 @@ TEST(Sizing, SolversThatDoNotSizeThemselvesKeepTheFixedBudget) {
     ASSERT_TRUE(sim);
     EXPECT_FALSE(sim->sizing().has_value());
     EXPECT_EQ(sim->def().spawn.count, kFixedDefaultCount);
+}
+
+}  // namespace
+}  // namespace mr
+
+namespace mr {
+namespace {
+
+/// Share of the river's main channel (from its source) that lies in the carved channel:
+/// each cell lowered by at least half the carve's depth against the breached terrain.
+double carved_share(const SceneDef& d) {
+    auto carved = Simulation::create(d);
+    EXPECT_TRUE(carved.ok()) << carved.error().message;
+    SceneDef b = d;
+    b.terrain.condition = TerrainCondition::Breach;
+    auto breached = Simulation::create(b);
+    EXPECT_TRUE(breached.ok()) << breached.error().message;
+    if (!carved.ok() || !breached.ok()) return 0.0;
+    const Terrain& t = carved.value()->terrain();
+    const Terrain& u = breached.value()->terrain();
+    const auto path = carved.value()->main_channel();
+    if (path.empty()) return 0.0;
+    const float half_depth = d.pbf.spacing;  // the carve is two spacings deep
+    size_t in = 0;
+    for (const auto& [i, j] : path) in += t.sample(i, j) <= u.sample(i, j) - half_depth;
+    return double(in) / double(path.size());
+}
+
+TEST(Carve, TheRiverRunsDownTheChannelItsCarveWasCutFor) {
+    // The source is placed on the breached terrain and the channel carved from it; the
+    // river then has to start there. Placed again on the carved ground, the main head
+    // had moved on colorado_rockies (the carve changes the flow accumulation): the river
+    // ran down an uncarved path with 4 m sills at its diagonal steps while the carved
+    // channel stayed dry (share 0.0 there before the fix).
+    std::vector<std::pair<std::string, SceneDef>> maps{{"valley", default_scene()}};
+    const std::filesystem::path shared = std::filesystem::path(METARIVER_SHARED_DIR) / "heightmaps";
+    for (const char* name : {"real/alps.png", "real/andes_peru.png", "real/colorado_rockies.png", "real/pyrenees.png",
+                             "real/western_usa.png", "metawater/nile.png", "metawater/strict.png"}) {
+        if (!std::filesystem::exists(shared / name)) continue;
+        SceneDef d = default_scene();
+        d.source.kind = TerrainSource::File;
+        d.source.heightmap = (shared / name).string();
+        maps.emplace_back(name, d);
+    }
+    for (auto& [name, d] : maps) {
+        d.surface = false;
+        const double share = carved_share(d);
+        std::printf("%-26s main channel in the carved channel: %.2f\n", name.c_str(), share);
+        EXPECT_GE(share, 0.9) << name;
+    }
 }
 
 }  // namespace
