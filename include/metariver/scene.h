@@ -6,6 +6,7 @@
 #include <metariver/bullet_solver.h>
 #include <metariver/core.h>
 #include <metariver/field.h>
+#include <metariver/foam.h>
 #include <metariver/sparse_field.h>
 #include <metariver/particles.h>
 #include <metariver/surface.h>
@@ -62,6 +63,7 @@ struct SceneDef {
     FieldDef field;
     bool surface = true;  ///< build the field and the surface every frame
     SmoothingDef smoothing;  ///< [surface]: how the extracted mesh is smoothed (none in the paper's presets)
+    FoamDef foam;            ///< [foam]: diffuse spray, foam and bubbles (solver = pbf only; on in the default river)
     /// Metres, > 0 or 0: the PBF spacing the carved channel and the source's basin are
     /// sized for (carve_def); 0 = pbf.spacing. Not a scene-file key: pbf_river_scene()
     /// sets it to keep the default river's terrain while it refines the spacing.
@@ -233,6 +235,7 @@ struct FrameTimings {
     double simulate_ms = 0.0;
     double field_ms = 0.0;
     double surface_ms = 0.0;  ///< marching cubes and the smoothing ([surface])
+    double foam_ms = 0.0;     ///< diffuse particles ([foam]; 0 when off)
 };
 
 /// Owns one scene's terrain, tree, particles, solver, field and surface.
@@ -271,6 +274,8 @@ public:
     /// Numbers of the latest frame's smoothing (all 0 with surface.method = "none").
     const SmoothingStats& smoothing_stats() const { return smooth_ws_.stats; }
     const FrameTimings& last_timings() const { return timings_; }
+    /// The diffuse particles ([foam]); null when foam is off or the solver is not PBF.
+    const FoamSystem* foam() const { return foam_ ? &*foam_ : nullptr; }
     uint64_t frame() const { return solver_->frame(); }
     /// Frames whose field grid would have exceeded kMaxFieldSamples (surface skipped).
     uint64_t field_overflows() const { return field_overflows_; }
@@ -321,6 +326,7 @@ private:
     std::vector<std::pair<int, int>> main_path_;
     ChannelCoverage coverage_;
     std::optional<RiverSize> sizing_;
+    std::optional<FoamSystem> foam_;
 };
 
 }  // namespace mr

@@ -85,6 +85,9 @@ SceneDef default_scene() {
     // Chebyshev steps and with its volume given back: still water flat, drops kept
     // (docs/rendering.md, "Surface smoothing").
     d.smoothing = SmoothingDef{.method = SmoothingMethod::Laplacian};
+    // Diffuse spray, foam and bubbles where the river is fast or broken (docs/rendering.md,
+    // "Foam and spray": their cost measured there).
+    d.foam.enabled = true;
     return d;
 }
 
@@ -329,6 +332,30 @@ Status validate(const SceneDef& d) {
         c.range("pbf.xsph", d.pbf.xsph, 0.0, 1.0);
         c.range("pbf.vorticity", d.pbf.vorticity, 0.0, 100.0);
         c.range("pbf.sleep_threshold", d.pbf.sleep_threshold, 0.0, 1.0);
+    }
+    if (d.foam.enabled) {
+        const FoamDef& f = d.foam;
+        c.range("foam.max_particles", f.max_particles, 0, 1e6);
+        auto pair = [&](const char* lo_key, float lo, const char* hi_key, float hi, double top) {
+            c.range(lo_key, lo, 0.0, top);
+            if (c.error.empty() && !(hi > lo && hi <= top))
+                c.error = fmt::format("{}: must be in ({} = {}, {}] (got {})", hi_key, lo_key, lo, top, hi);
+        };
+        pair("foam.trapped_air_min", f.trapped_air_min, "foam.trapped_air_max", f.trapped_air_max, 1e3);
+        pair("foam.wave_crest_min", f.wave_crest_min, "foam.wave_crest_max", f.wave_crest_max, 1e3);
+        pair("foam.energy_min", f.energy_min, "foam.energy_max", f.energy_max, 1e6);
+        c.range("foam.trapped_air_rate", f.trapped_air_rate, 0.0, 1e4);
+        c.range("foam.wave_crest_rate", f.wave_crest_rate, 0.0, 1e4);
+        c.range("foam.lifetime_min", f.lifetime_min, 0.01, 1e3);
+        if (c.error.empty() && !(f.lifetime_max >= f.lifetime_min && f.lifetime_max <= 1e3f))
+            c.error = fmt::format("foam.lifetime_max: must be in [foam.lifetime_min = {}, 1000] (got {})",
+                                  f.lifetime_min, f.lifetime_max);
+        c.range("foam.spray_neighbours", f.spray_neighbours, 0, 1000);
+        if (c.error.empty() && !(f.bubble_neighbours >= f.spray_neighbours && f.bubble_neighbours <= 1000))
+            c.error = fmt::format("foam.bubble_neighbours: must be in [foam.spray_neighbours = {}, 1000] (got {})",
+                                  f.spray_neighbours, f.bubble_neighbours);
+        c.range("foam.buoyancy", f.buoyancy, 0.0, 100.0);
+        c.range("foam.drag", f.drag, 0.0, 1.0);
     }
     if (d.sink.kind == SinkKind::Box) {
         c.vec("sink.min", d.sink.min, -kBig, kBig);

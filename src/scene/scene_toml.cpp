@@ -164,6 +164,7 @@ private:
 ///   [collision] springs and PBF (PBF never reflects: no mode = "paper"); not Bullet
 ///   integrator.substeps: springs and PBF (Bullet substeps by bullet.dt)
 ///   seed        springs and Bullet (PBF's lattice source draws no random number)
+///   [foam]      solver = "pbf" (enabled = false is accepted anywhere)
 /// What a Bullet scene would otherwise inherit from the default river (its flow-rate
 /// source, edge sinks and spawn-all-at-once) is replaced by the paper's engine
 /// scene's spawning.
@@ -186,6 +187,12 @@ void apply_solver_scope(const toml::table& root, Reader& r, SceneDef& d) {
                                        "channel's depth)", solver));
         }
     }
+    if (const toml::table* ft = root["foam"].as_table(); ft && d.solver != SolverKind::Pbf)
+        for (const auto& [k, v] : *ft)
+            if (k.str() != "enabled" || d.foam.enabled)
+                r.fail("foam." + std::string(k.str()),
+                       fmt::format("only solver = \"pbf\" makes foam (diffuse particles need the fluid's kernel "
+                                   "neighbourhoods; {} has none): remove [foam]", solver));
     if (root.get("bullet") && d.solver != SolverKind::Bullet)
         r.fail("bullet", fmt::format("only solver = \"bullet\" reads [bullet] (this scene has {})", solver));
     if (st && d.solver == SolverKind::Pbf)
@@ -263,6 +270,7 @@ void apply_solver_scope(const toml::table& root, Reader& r, SceneDef& d) {
 ///   terrain.source = strict | bowl | flat   seed (only "valley" is random); heightmap
 ///   terrain.source = valley              heightmap
 ///   pbf.scorr_k = 0          scorr_n, scorr_dq (no tensile correction: pbf.cpp)
+///   foam.enabled = false     every other [foam] key (Simulation makes no FoamSystem)
 ///   bullet.max_substeps = 0  bullet.dt (one Bullet step of the frame's time)
 ///   bullet.springs = true    bullet.sleep = true (spheres with springs never sleep)
 /// The viewer's live editor can change any value after loading; a key is judged by the
@@ -386,6 +394,11 @@ void refuse_irrelevant_keys(const toml::table& root, Reader& r, const SceneDef& 
             each("terrain", {"seed"}, source + " (only \"valley\" is random)", "remove it or use source = \"valley\"");
     }
 
+    if (d.solver == SolverKind::Pbf && !d.foam.enabled)
+        each("foam", {"max_particles", "trapped_air_min", "trapped_air_max", "wave_crest_min", "wave_crest_max",
+                      "energy_min", "energy_max", "trapped_air_rate", "wave_crest_rate", "lifetime_min", "lifetime_max",
+                      "spray_neighbours", "bubble_neighbours", "buoyancy", "drag"},
+             "foam.enabled = false (no diffuse particles are made)", "remove it or set foam.enabled = true");
     if (d.solver == SolverKind::Pbf && d.pbf.scorr_k == 0.0f)
         each("pbf", {"scorr_n", "scorr_dq"}, "pbf.scorr_k = 0 (no tensile-instability correction)",
              "remove it or give a scorr_k");
@@ -441,7 +454,7 @@ Result<SceneDef> parse_scene_toml_lines(std::string_view text, const std::string
     SceneDef d = base;
     Reader r(origin);
     r.allow(root, "", {"name", "seed", "solver", "surface", "terrain", "particles", "forces", "springs", "collision",
-                       "integrator", "field", "bullet", "pbf", "sink"});
+                       "integrator", "field", "bullet", "pbf", "sink", "foam"});
     r.string(root, "", "name", d.name);
     r.seed(root, "", "seed", d.seed);
     // `surface` is either the switch (surface = false) or the table of the smoothing
@@ -552,6 +565,29 @@ Result<SceneDef> parse_scene_toml_lines(std::string_view text, const std::string
         r.number(*t, p, "xsph", d.pbf.xsph);
         r.number(*t, p, "vorticity", d.pbf.vorticity);
         r.number(*t, p, "sleep_threshold", d.pbf.sleep_threshold);
+    }
+    if (const toml::table* t = r.table(root, "foam")) {
+        const std::string p = "foam.";
+        r.allow(*t, p, {"enabled", "max_particles", "trapped_air_min", "trapped_air_max", "wave_crest_min",
+                        "wave_crest_max", "energy_min", "energy_max", "trapped_air_rate", "wave_crest_rate",
+                        "lifetime_min", "lifetime_max", "spray_neighbours", "bubble_neighbours", "buoyancy", "drag"});
+        FoamDef& f = d.foam;
+        r.boolean(*t, p, "enabled", f.enabled);
+        r.integer(*t, p, "max_particles", f.max_particles, 0, 1000000);
+        r.number(*t, p, "trapped_air_min", f.trapped_air_min);
+        r.number(*t, p, "trapped_air_max", f.trapped_air_max);
+        r.number(*t, p, "wave_crest_min", f.wave_crest_min);
+        r.number(*t, p, "wave_crest_max", f.wave_crest_max);
+        r.number(*t, p, "energy_min", f.energy_min);
+        r.number(*t, p, "energy_max", f.energy_max);
+        r.number(*t, p, "trapped_air_rate", f.trapped_air_rate);
+        r.number(*t, p, "wave_crest_rate", f.wave_crest_rate);
+        r.number(*t, p, "lifetime_min", f.lifetime_min);
+        r.number(*t, p, "lifetime_max", f.lifetime_max);
+        r.integer(*t, p, "spray_neighbours", f.spray_neighbours, 0, 1000);
+        r.integer(*t, p, "bubble_neighbours", f.bubble_neighbours, 0, 1000);
+        r.number(*t, p, "buoyancy", f.buoyancy);
+        r.number(*t, p, "drag", f.drag);
     }
     if (const toml::table* t = r.table(root, "sink")) {
         const std::string p = "sink.";

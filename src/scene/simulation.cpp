@@ -158,6 +158,7 @@ Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh)
         case SolverKind::Pbf:
             solver_ = std::make_unique<ParticleSolver>(terrain_, bvh_, spawn, def_.springs, def_.collision,
                                                        def_.integrator, def_.seed, def_.pbf, def_.sink);
+            if (def_.foam.enabled) foam_.emplace(def_.foam, def_.pbf.kernel_radius, def_.integrator.gravity);
             break;
         case SolverKind::Bullet:
             solver_ = std::make_unique<BulletSolver>(terrain_, spawn, def_.springs, def_.integrator, def_.bullet,
@@ -303,6 +304,12 @@ void Simulation::step(float frame_dt) {
     auto t0 = Clock::now();
     solver_->step_frame(frame_dt);
     timings_.simulate_ms = ms_since(t0);
+    if (foam_) {
+        t0 = Clock::now();
+        const float dt = def_.integrator.fixed_dt > 0.0f ? def_.integrator.fixed_dt : frame_dt;
+        foam_->step(solver_->particles(), terrain_, dt, solver_->frame());
+        timings_.foam_ms = ms_since(t0);
+    }
 
     if (!def_.surface) {
         timings_.field_ms = timings_.surface_ms = 0.0;

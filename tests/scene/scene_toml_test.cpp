@@ -596,3 +596,84 @@ normal_iterations = 2
 
 }  // namespace
 }  // namespace mr
+
+namespace mr {
+namespace {
+
+TEST(SceneToml, FoamKeysAreReadAndRangeChecked) {
+    // The default river makes foam; every [foam] key is read.
+    EXPECT_TRUE(default_scene().foam.enabled);
+    auto r = parse_scene_toml(R"(
+[foam]
+enabled = true
+max_particles = 5000
+trapped_air_min = 2.0
+trapped_air_max = 9.0
+wave_crest_min = 0.25
+wave_crest_max = 4.0
+energy_min = 1.0
+energy_max = 12.0
+trapped_air_rate = 30.0
+wave_crest_rate = 10.0
+lifetime_min = 1.0
+lifetime_max = 2.5
+spray_neighbours = 4
+bubble_neighbours = 25
+buoyancy = 1.5
+drag = 0.25
+)",
+                              "dir/s.toml", default_scene());
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    const FoamDef& f = r->foam;
+    EXPECT_EQ(f.max_particles, 5000);
+    EXPECT_FLOAT_EQ(f.trapped_air_min, 2.0f);
+    EXPECT_FLOAT_EQ(f.trapped_air_max, 9.0f);
+    EXPECT_FLOAT_EQ(f.wave_crest_min, 0.25f);
+    EXPECT_FLOAT_EQ(f.wave_crest_max, 4.0f);
+    EXPECT_FLOAT_EQ(f.energy_min, 1.0f);
+    EXPECT_FLOAT_EQ(f.energy_max, 12.0f);
+    EXPECT_FLOAT_EQ(f.trapped_air_rate, 30.0f);
+    EXPECT_FLOAT_EQ(f.wave_crest_rate, 10.0f);
+    EXPECT_FLOAT_EQ(f.lifetime_min, 1.0f);
+    EXPECT_FLOAT_EQ(f.lifetime_max, 2.5f);
+    EXPECT_EQ(f.spray_neighbours, 4);
+    EXPECT_EQ(f.bubble_neighbours, 25);
+    EXPECT_FLOAT_EQ(f.buoyancy, 1.5f);
+    EXPECT_FLOAT_EQ(f.drag, 0.25f);
+
+    auto bad = [](const std::string& text, const std::string& must_contain) {
+        auto b = parse_scene_toml(text, "dir/s.toml", default_scene());
+        ASSERT_FALSE(b.ok()) << "accepted: " << text;
+        EXPECT_NE(b.error().message.find(must_contain), std::string::npos)
+            << "message '" << b.error().message << "' lacks '" << must_contain << "'";
+    };
+    bad("[foam]\nmax_particles = -1\n", "foam.max_particles: must be in [0, 1000000] (got -1)");
+    bad("[foam]\nmax_particles = 2000000\n", "foam.max_particles: must be in [0, 1000000]");
+    bad("[foam]\ntrapped_air_min = -1\n", "foam.trapped_air_min: must be in [0, 1000]");
+    bad("[foam]\ntrapped_air_min = 5\ntrapped_air_max = 4\n", "foam.trapped_air_max: must be in (foam.trapped_air_min = 5, 1000]");
+    bad("[foam]\nwave_crest_max = 0.1\n", "foam.wave_crest_max: must be in (foam.wave_crest_min");
+    bad("[foam]\nenergy_max = 2e6\n", "foam.energy_max: must be in (foam.energy_min");
+    bad("[foam]\ntrapped_air_rate = -3\n", "foam.trapped_air_rate: must be in [0, 10000]");
+    bad("[foam]\nwave_crest_rate = 1e5\n", "foam.wave_crest_rate: must be in [0, 10000]");
+    bad("[foam]\nlifetime_min = 0\n", "foam.lifetime_min: must be in [0.01, 1000]");
+    bad("[foam]\nlifetime_min = 3\nlifetime_max = 2\n", "foam.lifetime_max: must be in [foam.lifetime_min = 3, 1000]");
+    bad("[foam]\nspray_neighbours = 30\n", "foam.bubble_neighbours: must be in [foam.spray_neighbours = 30, 1000]");
+    bad("[foam]\nbubble_neighbours = 5000\n", "foam.bubble_neighbours: must be in [0, 1000]");
+    bad("[foam]\nbuoyancy = 101\n", "foam.buoyancy: must be in [0, 100]");
+    bad("[foam]\ndrag = 1.5\n", "foam.drag: must be in [0, 1]");
+    bad("[foam]\nenabled = 1\n", "foam.enabled: must be true or false");
+    bad("[foam]\nspeed = 1\n", "foam.speed: unknown key");
+    // Keys foam.enabled = false makes irrelevant name both.
+    bad("[foam]\nenabled = false\nmax_particles = 10\n", "foam.max_particles: ignored when foam.enabled = false");
+    // Only PBF makes foam.
+    bad("solver = \"springs\"\n[foam]\nenabled = true\n", "foam.enabled: only solver = \"pbf\" makes foam");
+    bad("solver = \"springs\"\n[foam]\nlifetime_min = 1\n", "foam.lifetime_min: only solver = \"pbf\"");
+    for (const char* ok : {"[foam]\nenabled = false\n", "solver = \"springs\"\n[foam]\nenabled = false\n",
+                           "[foam]\nmax_particles = 0\n", "[foam]\nlifetime_min = 2\nlifetime_max = 2\n"}) {
+        auto o = parse_scene_toml(ok, "dir/s.toml", default_scene());
+        EXPECT_TRUE(o.ok()) << ok << (o.ok() ? "" : o.error().message);
+    }
+}
+
+}  // namespace
+}  // namespace mr
