@@ -122,9 +122,10 @@ ScenarioResult bench_simulation(const std::string& name, const SceneDef& def, in
         density_max = std::max(density_max, s.counters().density_error_max);
         const FrameTimings& t = s.last_timings();
         r.sample("simulate", t.simulate_ms);
+        if (s.foam()) r.sample("foam", t.foam_ms);  // [foam]: diffuse particles (issue 11)
         r.sample("field", t.field_ms);
         r.sample("surface", t.surface_ms);
-        r.sample("total", t.simulate_ms + t.field_ms + t.surface_ms);
+        r.sample("total", t.simulate_ms + t.foam_ms + t.field_ms + t.surface_ms);
     }
     r.particles = s.particles().active_count();
     r.triangles = s.surface().triangle_count();
@@ -154,6 +155,8 @@ ScenarioResult bench_simulation(const std::string& name, const SceneDef& def, in
                  {"spray_fraction", s.spray_fraction()},
                  {"outflow_over_inflow", inflow > 0.0 ? outlets.summary().main.rate / inflow : 0.0},
                  {"channel_coverage", s.channel_coverage()}};
+    if (const FoamSystem* f = s.foam())
+        r.quality["foam"] = {{"spray", f->stats().spray}, {"foam", f->stats().foam}, {"bubbles", f->stats().bubbles}};
     return r;
 }
 

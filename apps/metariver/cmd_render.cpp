@@ -47,6 +47,7 @@ struct RenderOptions {
     int fps = 30;
     std::string water = "realistic";
     bool particles = false;
+    bool foam = true;  ///< draw the diffuse particles ([foam])
     std::optional<int> bvh_level;
     std::string texture;
     std::string stats;
@@ -265,6 +266,7 @@ int render(const RenderOptions& o) {
     render::RenderSettings settings;
     settings.shading = shading;
     settings.particles = o.particles;
+    settings.foam = o.foam;
     if (o.bvh_level) {
         settings.bvh = true;
         settings.bvh_level = *o.bvh_level;
@@ -405,6 +407,7 @@ void register_render(CLI::App& app, std::function<int()>& action) {
     cmd->add_option("--fps", opts->fps, "MP4 frame rate (default 30)");
     cmd->add_option("--water", opts->water, "water shading: realistic or gouraud (the paper's look) (default realistic)");
     cmd->add_flag("--particles", opts->particles, "debug: draw the particles as spheres");
+    cmd->add_flag("!--no-foam", opts->foam, "do not draw foam and spray (the scene's [foam] still makes them)");
     cmd->add_option("--bvh", opts->bvh_level, "debug: draw the AABB tree's boxes at this depth (-1: the leaves)");
     cmd->add_option("--texture", opts->texture, "image draped over the terrain (PNG/JPEG)");
     cmd->add_option("--stats", opts->stats, "write render timings as JSON to this file");

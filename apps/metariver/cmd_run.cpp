@@ -173,7 +173,7 @@ int run(const RunOptions& o) {
     // Stage times (simulate, field, surface, total): every frame up to kTimingSamples,
     // then evenly spaced frames (Checkpoints), so memory stays constant for runs of up
     // to 1e8 frames; percentiles come from the kept samples.
-    Checkpoints stage_ms(kTimingSamples, 4);
+    Checkpoints stage_ms(kTimingSamples, 5);
     const int digits = std::max(5, static_cast<int>(std::to_string(o.frames - 1).size()));
     // Plausibility: outflow at the sinks, wet-channel and spray fractions (sampled every
     // 10 frames over the second half; spray also at the last frame), largest speed and
@@ -206,7 +206,8 @@ int run(const RunOptions& o) {
             ++spray_n;
         }
         const FrameTimings& t = sim.last_timings();
-        const double times[4] = {t.simulate_ms, t.field_ms, t.surface_ms, t.simulate_ms + t.field_ms + t.surface_ms};
+        const double times[5] = {t.simulate_ms, t.field_ms, t.surface_ms,
+                                 t.simulate_ms + t.foam_ms + t.field_ms + t.surface_ms, t.foam_ms};
         stage_ms.push(times);
         if (!o.obj_dir.empty() && (f % obj_every == 0 || f == o.frames - 1)) {
             const std::string path = (fs::path(o.obj_dir) / fmt::format("surface_{:0{}}.obj", f, digits)).string();
@@ -307,6 +308,33 @@ int run(const RunOptions& o) {
                          {"field", stage_json(stage_ms.column(1))},
                          {"surface", stage_json(stage_ms.column(2))},
                          {"total", stage_json(stage_ms.column(3))}};
+        if (sim.foam()) j["stage_ms"]["foam"] = stage_json(stage_ms.column(4));
+        // Diffuse particles at the last frame ([foam], issue 11).
+        if (const FoamSystem* f = sim.foam()) {
+            const FoamStats& fs = f->stats();
+            j["foam"] = {{"spray", fs.spray},
+                         {"foam", fs.foam},
+                         {"bubbles", fs.bubbles},
+                         {"total", fs.total()},
+                         {"max_particles", d.foam.max_particles},
+                         {"generated_total", fs.generated_total},
+                         {"capped_total", fs.capped_total}};
+            // The potentials of the active fluid particles at the last frame (what the
+            // [foam] thresholds are set against).
+            const Particles& fp = sim.particles();
+            auto potential = [&](std::span<const float> v) {
+                std::vector<double> a;
+                for (size_t i = 0; i < v.size(); ++i)
+                    if (fp.active[i]) a.push_back(double(v[i]));
+                const Percentiles q = percentiles(std::move(a));
+                return nlohmann::json{{"median", q.median}, {"p95", q.p95}, {"max", q.max}};
+            };
+            j["foam"]["potentials"] = {{"trapped_air", potential(f->trapped_air())},
+                                       {"wave_crest", potential(f->wave_crest())},
+                                       {"kinetic_energy", potential(f->kinetic_energy())}};
+        } else {
+            j["foam"] = nullptr;
+        }
         if (auto s = write_file_atomic(o.stats, j.dump(2) + "\n"); !s) {
             cleanup();
             return fail(kExitFailure, s.error().message);

@@ -48,6 +48,7 @@ struct ViewOptions {
     bool vsync = true;
     bool paused = false;
     bool particles = false;
+    bool foam = true;  ///< draw the diffuse particles (key O)
     std::optional<int> bvh_level;
     ExportOptions exp;    ///< Record (E): --export DIR (default metariver_export) --format ...
     bool record = false;  ///< --record: start recording at once
@@ -242,6 +243,18 @@ bool scene_editor(SceneDef& d) {
             commit |= drag_int("normal passes", sm.normal_iterations, 0.2f, 0, 100);
         }
     }
+    if (d.solver == SolverKind::Pbf && ImGui::CollapsingHeader("Foam")) {
+        // [foam]: diffuse spray, foam and bubbles (Ihmsen et al. 2012; docs/scene-format.md).
+        FoamDef& f = d.foam;
+        commit |= ImGui::Checkbox("make foam", &f.enabled);
+        if (f.enabled) {
+            commit |= drag_int("max particles", f.max_particles, 50.0f, 0, 1000000);
+            commit |= drag_float("trapped air rate", f.trapped_air_rate, 0.5f, 0.0f, 1e4f);
+            commit |= drag_float("wave crest rate", f.wave_crest_rate, 0.5f, 0.0f, 1e4f);
+            commit |= drag_float("lifetime min (s)", f.lifetime_min, 0.05f, 0.01f, 1e3f);
+            commit |= drag_float("lifetime max (s)", f.lifetime_max, 0.05f, 0.01f, 1e3f);
+        }
+    }
     return commit;
 }
 
@@ -382,6 +395,7 @@ int view(const ViewOptions& o) {
             render::Camera camera = render::frame_terrain(sim->terrain());
             render::RenderSettings settings;
             settings.particles = o.particles;
+            settings.foam = o.foam;
             if (o.bvh_level) {
                 settings.bvh = true;
                 settings.bvh_level = *o.bvh_level;
@@ -556,6 +570,7 @@ int view(const ViewOptions& o) {
                                 break;
                             case GLFW_KEY_B: settings.bvh = !settings.bvh; break;
                             case GLFW_KEY_V: settings.particles = !settings.particles; break;
+                            case GLFW_KEY_O: settings.foam = !settings.foam; break;
                             case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(window, GLFW_TRUE); break;
                             default: break;
                         }
@@ -622,6 +637,7 @@ int view(const ViewOptions& o) {
                     ImGui::Checkbox("particles (V)", &settings.particles);
                     ImGui::SameLine();
                     ImGui::DragFloat("##radius", &settings.particle_radius, 0.01f, 0.02f, 5.0f, "r %.2f m");
+                    ImGui::Checkbox("foam and spray (O)", &settings.foam);
                     ImGui::Checkbox("AABB tree (B)", &settings.bvh);
                     ImGui::SameLine();
                     ImGui::SliderInt("depth##bvh", &settings.bvh_level, -1, 16, settings.bvh_level < 0 ? "leaves" : "%d");
@@ -656,6 +672,10 @@ int view(const ViewOptions& o) {
                             steps_this_frame, static_cast<unsigned long long>(steps_dropped));
                 ImGui::Text("simulate %.2f ms  field %.2f ms  surface %.2f ms", t.simulate_ms, t.field_ms, t.surface_ms);
                 ImGui::Text("particles %zu / %zu", sim->particles().active_count(), sim->particles().size());
+                if (const FoamSystem* foam = sim->foam()) {
+                    const FoamStats& fs = foam->stats();
+                    ImGui::Text("foam %zu  spray %zu  bubbles %zu  (%.2f ms)", fs.foam, fs.spray, fs.bubbles, t.foam_ms);
+                }
                 ImGui::Text("water %zu triangles, terrain %zu", sim->surface().triangle_count(), rs.terrain_triangles);
                 ImGui::Text("tunneled %llu  guarded %llu  respawned %llu  collisions %llu",
                             static_cast<unsigned long long>(c.tunneled), static_cast<unsigned long long>(c.guarded),
@@ -719,6 +739,7 @@ void register_view(CLI::App& app, std::function<int()>& action) {
     cmd->add_flag("!--no-vsync", opts->vsync, "do not wait for the display's refresh (measure fps)");
     cmd->add_flag("--paused", opts->paused, "start paused");
     cmd->add_flag("--particles", opts->particles, "debug: draw the particles as spheres");
+    cmd->add_flag("!--no-foam", opts->foam, "start without drawing foam and spray (key O toggles; [foam] makes them)");
     cmd->add_option("--bvh", opts->bvh_level, "debug: draw the AABB tree's boxes at this depth (-1: the leaves)");
     opts->exp.add_to(*cmd);  // what Record (E) writes; frame numbers count from the start of a recording
     cmd->add_flag("--record", opts->record, "start recording (the export options) at once; it stops when the window closes");

@@ -83,6 +83,7 @@ struct RenderSettings {
     bool sky = true;
     bool particles = false;           ///< debug: the active particles as shaded spheres
     float particle_radius = 0.3f;     ///< metres, drawn radius of a particle sphere
+    bool foam = true;                 ///< diffuse particles ([foam]): foam on the water, spray, bubbles
     bool bvh = false;                 ///< debug: the AABB tree's boxes as lines
     int bvh_level = -1;               ///< tree depth to draw (0 = root); -1 = the leaves
     WaterShading shading = WaterShading::Realistic;
@@ -104,6 +105,7 @@ struct RenderStats {
     size_t water_triangles = 0;
     size_t terrain_triangles = 0;
     size_t particles = 0;
+    size_t foam_particles = 0;        ///< diffuse particles uploaded (spray, foam and bubbles)
     size_t bvh_boxes = 0;             ///< boxes drawn in the latest frame
 };
 

@@ -142,12 +142,12 @@ struct Target {
 
 struct Renderer::Impl {
     RenderStats stats;
-    GLuint prog_sky = 0, prog_terrain = 0, prog_water = 0, prog_particles = 0, prog_boxes = 0;
+    GLuint prog_sky = 0, prog_terrain = 0, prog_water = 0, prog_particles = 0, prog_boxes = 0, prog_foam = 0;
     GLuint ubo = 0;
-    GLuint vao_empty = 0, vao_terrain = 0, vao_water = 0, vao_particles = 0, vao_boxes = 0;
+    GLuint vao_empty = 0, vao_terrain = 0, vao_water = 0, vao_particles = 0, vao_boxes = 0, vao_foam = 0;
     GLuint terrain_vbo = 0, terrain_ibo = 0, cube_vbo = 0, box_vbo = 0;
     GLuint terrain_tex = 0;
-    DynamicBuffer water_pos, water_normal, water_idx, particle_pos;
+    DynamicBuffer water_pos, water_normal, water_idx, particle_pos, foam_buf;
     Target scene, final;
 
     size_t terrain_index_count = 0;
@@ -161,6 +161,7 @@ struct Renderer::Impl {
     const Simulation* last_sim = nullptr;
     uint64_t last_frame = ~uint64_t{0};
     std::vector<Vec3> scratch_positions;  // reused for the active particles
+    std::vector<glm::vec4> scratch_foam;  // reused: diffuse position, kind
 
     GLuint create_buffer() {
         GLuint b = 0;
@@ -204,7 +205,8 @@ struct Renderer::Impl {
                               {&prog_terrain, glsl::kTerrainVert, glsl::kTerrainFrag, "terrain"},
                               {&prog_water, glsl::kWaterVert, glsl::kWaterFrag, "water"},
                               {&prog_particles, glsl::kParticleVert, glsl::kParticleFrag, "particle"},
-                              {&prog_boxes, glsl::kBoxVert, glsl::kBoxFrag, "box"}};
+                              {&prog_boxes, glsl::kBoxVert, glsl::kBoxFrag, "box"},
+                              {&prog_foam, glsl::kFoamVert, glsl::kFoamFrag, "foam"}};
         for (const P& p : programs) {
             auto r = link(p.vs, p.fs, p.name);
             if (!r) return r.error();
@@ -249,6 +251,13 @@ struct Renderer::Impl {
         glEnableVertexArrayAttrib(vao_particles, 0);
         glVertexArrayAttribFormat(vao_particles, 0, 3, GL_FLOAT, GL_FALSE, 0);
         glVertexArrayAttribBinding(vao_particles, 0, 0);
+
+        foam_buf.id = create_buffer();
+        vao_foam = create_vao();
+        glVertexArrayVertexBuffer(vao_foam, 0, foam_buf.id, 0, sizeof(glm::vec4));
+        glEnableVertexArrayAttrib(vao_foam, 0);
+        glVertexArrayAttribFormat(vao_foam, 0, 4, GL_FLOAT, GL_FALSE, 0);
+        glVertexArrayAttribBinding(vao_foam, 0, 0);
 
         // The unit cube's 12 edges as 24 line endpoints.
         std::vector<Vec3> cube;
@@ -395,6 +404,13 @@ struct Renderer::Impl {
         sim.particles().gather_active_positions(scratch_positions);
         particle_pos.upload(scratch_positions.data(), scratch_positions.size() * sizeof(Vec3), stats);
         stats.particles = scratch_positions.size();
+        scratch_foam.clear();
+        if (const FoamSystem* f = sim.foam()) {
+            const DiffuseParticles& d = f->particles();
+            for (size_t i = 0; i < d.size(); ++i) scratch_foam.emplace_back(d.position[i], float(d.kind[i]));
+        }
+        foam_buf.upload(scratch_foam.data(), scratch_foam.size() * sizeof(glm::vec4), stats);
+        stats.foam_particles = scratch_foam.size();
         last_sim = &sim;
         last_frame = sim.frame();
     }
@@ -404,12 +420,12 @@ Renderer::Renderer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
 Renderer::~Renderer() {
     Impl& r = *impl_;
-    const GLuint programs[] = {r.prog_sky, r.prog_terrain, r.prog_water, r.prog_particles, r.prog_boxes};
+    const GLuint programs[] = {r.prog_sky, r.prog_terrain, r.prog_water, r.prog_particles, r.prog_boxes, r.prog_foam};
     for (GLuint p : programs) glDeleteProgram(p);
     const GLuint buffers[] = {r.ubo, r.terrain_vbo, r.terrain_ibo, r.cube_vbo, r.box_vbo, r.water_pos.id,
-                              r.water_normal.id, r.water_idx.id, r.particle_pos.id};
+                              r.water_normal.id, r.water_idx.id, r.particle_pos.id, r.foam_buf.id};
     glDeleteBuffers(static_cast<GLsizei>(std::size(buffers)), buffers);
-    const GLuint vaos[] = {r.vao_empty, r.vao_terrain, r.vao_water, r.vao_particles, r.vao_boxes};
+    const GLuint vaos[] = {r.vao_empty, r.vao_terrain, r.vao_water, r.vao_particles, r.vao_boxes, r.vao_foam};
     glDeleteVertexArrays(static_cast<GLsizei>(std::size(vaos)), vaos);
     const GLuint textures[] = {r.terrain_tex, r.scene.color, r.scene.depth, r.final.color, r.final.depth};
     glDeleteTextures(static_cast<GLsizei>(std::size(textures)), textures);
@@ -552,6 +568,18 @@ void Renderer::draw(const Camera& camera, int width, int height, const RenderSet
         glBindVertexArray(r.vao_water);
         glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(r.water_idx.size / sizeof(uint32_t)), GL_UNSIGNED_INT, nullptr);
         glDisable(GL_CULL_FACE);
+    }
+    if (s.foam && r.stats.foam_particles > 0) {
+        // Over the water, depth-tested against it and the terrain, not writing depth.
+        glEnable(GL_PROGRAM_POINT_SIZE);
+        glEnable(GL_BLEND);
+        glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+        glDepthMask(GL_FALSE);
+        glUseProgram(r.prog_foam);
+        glBindVertexArray(r.vao_foam);
+        glDrawArrays(GL_POINTS, 0, static_cast<GLsizei>(r.stats.foam_particles));
+        glDepthMask(GL_TRUE);
+        glDisable(GL_BLEND);
     }
     glBindVertexArray(0);
     glUseProgram(0);

@@ -235,6 +235,40 @@ void main() {
 }
 )";
 
+// ---- Diffuse particles ([foam]): foam as soft white discs on the water, spray as small
+// white points, bubbles as faint blue-white points. a_foam.w is the DiffuseKind (0
+// spray, 1 foam, 2 bubble). Foam and bubbles lie about a particle radius under the
+// metaball surface (the field's threshold surface encloses the particle centres), so
+// they are moved towards the eye by that much: on the water, still hidden by terrain.
+inline constexpr const char* kFoamVert = R"(
+layout(location = 0) in vec4 a_foam;
+out float v_kind;
+void main() {
+    int kind = int(a_foam.w + 0.5);
+    vec3 p = a_foam.xyz;
+    float lift = kind == 0 ? 0.0 : (kind == 1 ? 0.6 : 0.35);
+    p += normalize(u_eye.xyz - p) * lift;
+    float radius = kind == 1 ? 0.35 : 0.12;
+    gl_Position = u_viewproj * vec4(p, 1.0);
+    gl_PointSize = max(kind == 1 ? 2.5 : 1.5, radius * u_params.w * u_viewport.y / max(gl_Position.w, 1e-3));
+    v_kind = float(kind);
+}
+)";
+inline constexpr const char* kFoamFrag = R"(
+in float v_kind;
+out vec4 o_color;
+void main() {
+    vec2 q = gl_PointCoord * 2.0 - 1.0;
+    float r2 = dot(q, q);
+    if (r2 > 1.0) discard;
+    int kind = int(v_kind + 0.5);
+    vec3 c = kind == 2 ? vec3(0.78, 0.90, 0.95) : vec3(0.97, 0.98, 1.0);
+    float a = (kind == 1 ? 0.85 : (kind == 0 ? 0.9 : 0.45)) * (1.0 - r2 * r2);
+    float light = 0.75 + 0.25 * max(u_sun.y, 0.0);
+    o_color = vec4(to_srgb(c * light), a);
+}
+)";
+
 // ---- AABB tree boxes (debug): a unit cube's 12 edges, one instance per box ----
 inline constexpr const char* kBoxVert = R"(
 layout(location = 0) in vec3 a_corner;     // 0 or 1 per axis
