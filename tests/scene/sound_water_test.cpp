@@ -61,6 +61,7 @@ struct PoolRun {
     float p95_10s = 0.0f, vmax_10s = 0.0f;  ///< speeds after 10 s
     float density_max_late = 0.0f;
     SolverCounters counters;
+    uint64_t foam_made = 0, foam_made_late = 0;  ///< diffuse particles made in all, and after `settle_s`
 };
 
 /// 95th percentile and maximum of the active particles' speeds.
@@ -79,6 +80,10 @@ PoolRun run_pool(Simulation& s, int frames, float settle_s) {
         if (f == 600) std::tie(r.p95_10s, r.vmax_10s) = speeds(s);
         s.step(1.0f / 60.0f);
         r.max_speed = std::max(r.max_speed, s.counters().max_speed);
+        if (const FoamSystem* foam = s.foam()) {
+            r.foam_made += foam->stats().generated;
+            if (float(f + 1) / 60.0f >= settle_s) r.foam_made_late += foam->stats().generated;
+        }
         if (float(f + 1) / 60.0f >= settle_s) {
             r.density_max_late = std::max(r.density_max_late, s.counters().density_error_max);
             const Particles& p = s.particles();
@@ -130,6 +135,13 @@ TEST(SoundWater, StillPoolSettlesStaysInItsBowlAndNothingIsThrown) {
     EXPECT_LE(r.vmax_10s, 0.1f) << "the pool still moves after 10 s";
     EXPECT_LE(r.p95, 0.02f) << "the pool moves again after 15 s";
     EXPECT_LE(r.vmax, 0.1f) << "the pool moves again after 15 s";
+    // [foam] (on in the default river this pool is built on): the splash may foam, the
+    // pool at rest makes none, and what the splash made has died by 15 s (lives <= 2.5 s).
+    ASSERT_NE(s.foam(), nullptr);
+    std::printf("still pool foam: %llu made, %llu after 10 s, %zu alive at 15 s\n", (unsigned long long)r.foam_made,
+                (unsigned long long)r.foam_made_late, s.foam()->stats().total());
+    EXPECT_EQ(r.foam_made_late, 0u) << "a pool at rest made foam";
+    EXPECT_EQ(s.foam()->stats().total(), 0u);
 }
 
 TEST(SoundWater, StillWaterInABoxBasin) {
