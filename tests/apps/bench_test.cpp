@@ -106,13 +106,15 @@ TEST_F(Bench, PbfRiverHasStagesPlausibilityAndAPlot) {
     ASSERT_FALSE(res.contains("note") && res["note"].get<std::string>().rfind("skipped", 0) == 0) << res.dump();
     EXPECT_EQ(res["scenario"], "pbf 300");
     EXPECT_GT(res["particles"].get<int>(), 0);  // 2 s of flow: on its way, not all of it yet
-    for (const char* stage : {"simulate", "field", "surface", "total"}) {
+    // foam: the river is the default scene's, which makes foam ([foam], issue 11).
+    for (const char* stage : {"simulate", "foam", "field", "surface", "total"}) {
         ASSERT_TRUE(res["stages"].contains(stage)) << stage;
         EXPECT_EQ(res["stages"][stage]["samples"].get<int>(), 3) << stage;
         EXPECT_GE(res["stages"][stage]["p95_ms"].get<double>(), res["stages"][stage]["median_ms"].get<double>()) << stage;
     }
-    for (const char* key : {"channel_coverage", "outflow_over_inflow", "spray_fraction", "tunneled", "guarded"})
+    for (const char* key : {"channel_coverage", "outflow_over_inflow", "spray_fraction", "tunneled", "guarded", "foam"})
         ASSERT_TRUE(res["quality"].contains(key)) << key;
+    for (const char* kind : {"spray", "foam", "bubbles"}) EXPECT_TRUE(res["quality"]["foam"].contains(kind)) << kind;
     EXPECT_EQ(res["quality"]["tunneled"].get<int>(), 0);
     for (const char* key : {"spacing", "flow_rate", "target_particles", "warmup"}) EXPECT_TRUE(res["params"].contains(key)) << key;
     // 300 particles in steady flow: a coarser spacing than the default's 0.5 m.

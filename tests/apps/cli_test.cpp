@@ -89,6 +89,28 @@ TEST_F(Cli, RunWritesStatsAndObjs) {
     EXPECT_EQ(faces, j["triangles"].get<size_t>());
 }
 
+TEST_F(Cli, RunStatsCountFoamWhereTheSceneMakesIt) {
+    // The default river makes foam ([foam], issue 11): counts, the potentials and a stage.
+    const fs::path stats = dir_ / "f.json";
+    CliResult r = run("run --frames 90 --no-progress --stats " + stats.string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    auto j = nlohmann::json::parse(slurp(stats));
+    ASSERT_TRUE(j["foam"].is_object()) << j["foam"].dump();
+    const auto& f = j["foam"];
+    for (const char* key : {"spray", "foam", "bubbles", "total", "max_particles", "generated_total", "capped_total"})
+        EXPECT_TRUE(f.contains(key)) << key;
+    EXPECT_EQ(f["total"].get<size_t>(), f["spray"].get<size_t>() + f["foam"].get<size_t>() + f["bubbles"].get<size_t>());
+    EXPECT_LE(f["total"].get<int>(), f["max_particles"].get<int>());
+    for (const char* p : {"trapped_air", "wave_crest", "kinetic_energy"}) EXPECT_TRUE(f["potentials"][p].contains("p95")) << p;
+    EXPECT_TRUE(j["stage_ms"]["foam"].contains("median"));
+    // The paper's scenes (springs) make none: null, and no foam stage.
+    CliResult p = run("run --preset paper-bowl --frames 5 --no-progress --stats " + stats.string());
+    ASSERT_EQ(p.code, 0) << p.err;
+    j = nlohmann::json::parse(slurp(stats));
+    EXPECT_TRUE(j["foam"].is_null());
+    EXPECT_FALSE(j["stage_ms"].contains("foam"));
+}
+
 TEST_F(Cli, RunObjEveryWritesEveryNthAndTheLastFrame) {
     const fs::path objs = dir_ / "objs";
     CliResult r = run("run --preset paper-bowl --frames 12 --obj-every 5 --obj-dir " + objs.string());
