@@ -1,7 +1,9 @@
 #include <metariver/scene.h>
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
+#include <tuple>
 #include <type_traits>
 
 #include <map>
@@ -77,6 +79,26 @@ TEST(Simulation, DefaultSceneRunsAndKeepsEveryParticleAboveGround) {
     EXPECT_GT(s.surface().triangle_count(), 100u);
     // The auto spawn sits over the valley's upstream end (high z).
     EXPECT_GT(s.def().spawn.center.z, 0.8f * float(s.terrain().rows() - 1) * s.terrain().area_scale());
+}
+
+TEST(Simulation, DefaultRiverFoamIsTheSameForAnyThreadCount) {
+    // [foam] on in the default river: the diffuse particles made from the PBF fluid are
+    // the same with 1 and 2 worker threads (as the fluid is), and there are some.
+    SceneDef d = default_scene();
+    d.surface = false;
+    auto run = [&](int threads) {
+        tbb::global_control gc(tbb::global_control::max_allowed_parallelism, size_t(threads));
+        auto sim = Simulation::create(d);
+        EXPECT_TRUE(sim.ok());
+        for (int f = 0; f < 400; ++f) sim.value()->step(1.0f / 60.0f);
+        const FoamSystem* foam = sim.value()->foam();
+        EXPECT_NE(foam, nullptr);
+        if (!foam) return std::make_tuple(uint64_t{0}, uint64_t{0}, uint64_t{0});
+        EXPECT_GT(foam->stats().generated_total, 0u) << "the source's falling water foams";
+        return std::make_tuple(sim.value()->state_hash(), foam->state_hash(), foam->stats().generated_total);
+    };
+    const auto one = run(1);
+    EXPECT_EQ(run(2), one);
 }
 
 TEST(Simulation, SurfaceCanBeTurnedOff) {
