@@ -4,6 +4,8 @@
 // include/metariver/foam.h; the thresholds' scaling in docs/scene-format.md ([foam]).
 #include <metariver/foam.h>
 
+#include "grid_runs.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -38,37 +40,26 @@ float phi(float i, float lo, float hi) { return (std::min(i, hi) - std::min(i, l
 /// For every binned fluid particle i, in parallel over the grid's cell runs: calls
 /// f(i, each), where each(g) calls g(j, x^_ij, W~(r_ij)) for every neighbour j != i
 /// within h in a fixed order. Positions come from the grid's sorted copies and each
-/// cell run's neighbour ranges are gathered once for all its particles (as pbf.cpp).
+/// cell run's neighbour ranges are gathered once for all its particles (grid_runs.h).
 template <class F>
 void for_each_fluid(const NeighborGrid& grid, float h, F&& f) {
     const auto order = grid.order();
     const auto sx = grid.sorted_x(), sy = grid.sorted_y(), sz = grid.sorted_z();
     const float h2 = h * h;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.run_count(), 8), [&](const tbb::blocked_range<size_t>& runs) {
-        for (size_t r = runs.begin(); r < runs.end(); ++r) {
-            uint32_t rb[27], re[27];
-            int nr = 0;
-            grid.for_each_neighbor_range(r, [&](uint32_t b, uint32_t e) {
-                rb[nr] = b;
-                re[nr] = e;
-                ++nr;
-            });
-            for (uint32_t k = grid.run_start(r); k < grid.run_start(r + 1); ++k) {
-                const float xi = sx[k], yi = sy[k], zi = sz[k];
-                auto each = [&](auto&& g) {
-                    for (int q = 0; q < nr; ++q)
-                        for (uint32_t m = rb[q]; m < re[q]; ++m) {
-                            if (m == k) continue;
-                            const Vec3 d(xi - sx[m], yi - sy[m], zi - sz[m]);
-                            const float r2 = glm::dot(d, d);
-                            if (r2 >= h2 || r2 <= 1e-12f) continue;
-                            const float rr = std::sqrt(r2);
-                            g(order[m], d / rr, 1.0f - rr / h);
-                        }
-                };
-                f(order[k], each);
-            }
-        }
+    for_each_run(grid, [&](uint32_t k, const Ranges& rg) {
+        const float xi = sx[k], yi = sy[k], zi = sz[k];
+        auto each = [&](auto&& g) {
+            for (int q = 0; q < rg.n; ++q)
+                for (uint32_t m = rg.s[q]; m < rg.e[q]; ++m) {
+                    if (m == k) continue;
+                    const Vec3 d(xi - sx[m], yi - sy[m], zi - sz[m]);
+                    const float r2 = glm::dot(d, d);
+                    if (r2 >= h2 || r2 <= 1e-12f) continue;
+                    const float rr = std::sqrt(r2);
+                    g(order[m], d / rr, 1.0f - rr / h);
+                }
+        };
+        f(order[k], each);
     });
 }
 

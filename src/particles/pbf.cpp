@@ -28,6 +28,8 @@
 // result for any thread count (each particle's sum runs in a fixed order).
 #include <metariver/particles.h>
 
+#include "grid_runs.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -60,31 +62,6 @@ struct Kernels {
         return (spiky * a * a / r) * d;
     }
 };
-
-/// Collects the index ranges of the 27 cells around cell run r (at most 27).
-struct Ranges {
-    uint32_t s[27], e[27];
-    int n = 0;
-};
-Ranges ranges_of(const NeighborGrid& g, size_t run) {
-    Ranges rg;
-    g.for_each_neighbor_range(run, [&](uint32_t s, uint32_t e) {
-        rg.s[rg.n] = s;
-        rg.e[rg.n] = e;
-        ++rg.n;
-    });
-    return rg;
-}
-
-template <class F>
-void for_each_run(const NeighborGrid& g, F&& f) {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, g.run_count(), 8), [&](const tbb::blocked_range<size_t>& range) {
-        for (size_t run = range.begin(); run != range.end(); ++run) {
-            const Ranges rg = ranges_of(g, run);
-            for (uint32_t i = g.run_start(run); i < g.run_start(run + 1); ++i) f(i, rg);
-        }
-    });
-}
 
 }  // namespace
 
