@@ -7,6 +7,8 @@
 // change of the look: METARIVER_UPDATE_GOLDEN=1 ctest -R Golden (then look at them).
 #include <metariver/render.h>
 
+#include "bowl_drop.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -291,7 +293,7 @@ TEST(Camera, FromAboveFitsTheWholeTerrainIntoTheView) {
     // Wide and tall rectangles with relief, into wide and tall views: every corner of
     // the terrain's box (at the lowest and the highest ground) lands inside the image,
     // and the fit is tight (some corner beyond 85 % of the half width or height).
-    for (const auto [w, h] : {std::pair{121, 31}, std::pair{17, 65}}) {
+    for (const auto& [w, h] : {std::pair{121, 31}, std::pair{17, 65}}) {
         Heightmap m = flat_heightmap(w, h);
         for (size_t i = 0; i < m.samples.size(); ++i) m.samples[i] = float(i % 7) / 6.0f;
         auto t = Terrain::build(m, TerrainDef{.area_scale = 2.0f, .height_scale = 20.0f});
@@ -349,20 +351,9 @@ TEST(Camera, TheDefaultFramingSeesTheBottomOfADeepBowl) {
 /// A splash: 1500 PBF particles thrown down into the procedural bowl (the default
 /// river's fluid and [foam]), broken water within a few frames.
 SceneDef splash_scene() {
-    SceneDef d = default_scene();
+    SceneDef d = test::bowl_drop(1500, Vec3(16, 7, 16), Vec3(3, 1.5f, 3));
     d.name = "foam splash";
-    d.source = {.kind = TerrainSource::Bowl, .heightmap = {}, .width = 33, .height = 33, .seed = 7};
-    d.terrain.height_scale = 7.0f;
-    d.spawn.count = 1500;
-    d.spawn.auto_center = false;
-    d.spawn.auto_channel = false;
-    d.spawn.center = Vec3(16, 7, 16);
-    d.spawn.half_extent = Vec3(3, 1.5f, 3);
-    d.spawn.interval = 0;
-    d.spawn.flow_rate = 0.0f;
-    d.spawn.shape = SourceShape::Box;
     d.spawn.initial_velocity = Vec3(4.0f, -8.0f, 0.0f);
-    d.sink.kind = SinkKind::None;
     d.foam.enabled = true;
     return d;
 }

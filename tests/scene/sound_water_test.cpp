@@ -21,6 +21,7 @@
 // (first outflow at 23 s) without tunneling, and its steady 60-120 s at full size only.
 #include <metariver/scene.h>
 
+#include "bowl_drop.h"
 #include "long_scale.h"
 
 #include <gtest/gtest.h>
@@ -36,20 +37,9 @@ namespace {
 
 /// The still pool: 2500 PBF particles dropped into the procedural bowl.
 SceneDef still_pool(int count) {
-    SceneDef d = default_scene();
+    SceneDef d = test::bowl_drop(count, Vec3(16, 6, 16), Vec3(5, 2, 5));
     d.name = "still pool";
     d.surface = false;
-    d.source = {.kind = TerrainSource::Bowl, .heightmap = {}, .width = 33, .height = 33, .seed = 7};
-    d.terrain.height_scale = 7.0f;
-    d.spawn.count = count;
-    d.spawn.auto_center = false;
-    d.spawn.auto_channel = false;
-    d.spawn.center = Vec3(16, 6, 16);
-    d.spawn.half_extent = Vec3(5, 2, 5);
-    d.spawn.interval = 0;
-    d.spawn.flow_rate = 0.0f;
-    d.spawn.shape = SourceShape::Box;
-    d.sink.kind = SinkKind::None;
     return d;
 }
 
