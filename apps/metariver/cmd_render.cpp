@@ -260,9 +260,9 @@ int render(const RenderOptions& o) {
             return fail(kExitBadInput, fmt::format("--texture {}: {}", o.texture, s.error().message));
         }
     }
-    render::Camera camera = o.camera == "top" ? render::frame_terrain_from_above(sim->terrain(), float(width) / float(height))
-                                              : render::frame_terrain(sim->terrain());
-    if (!o.camera.empty() && o.camera != "top") (void)render::parse_camera(o.camera, camera);  // checked above
+    render::Camera camera = render::frame_terrain(sim->terrain());
+    if (o.camera == "top") camera = render::frame_terrain_from_above(sim->terrain(), float(width) / float(height));
+    else if (!o.camera.empty()) (void)render::parse_camera(o.camera, camera);  // checked above
     render::RenderSettings settings;
     settings.shading = shading;
     settings.particles = o.particles;
