@@ -64,7 +64,7 @@ Result<std::array<uint32_t, 2>> check_png_structure(std::span<const uint8_t> byt
         return fail(name, "not a PNG image (bad signature)");
     }
     size_t pos = kPngSignature.size();
-    bool first = true;
+    bool first = true, image_data = false;
     std::array<uint32_t, 2> size{0, 0};
     for (;;) {
         if (bytes.size() - pos < 12) {
@@ -93,6 +93,13 @@ Result<std::array<uint32_t, 2>> check_png_structure(std::span<const uint8_t> byt
             }
             size = {read_be32(type + 4), read_be32(type + 8)};
             first = false;
+        }
+        if (type_name == "IDAT") {
+            // stb_image copies an IDAT chunk into its buffer before it has one when the
+            // first is empty (memcpy to a null pointer: undefined; found by fuzzing).
+            if (length == 0 && !image_data)
+                return fail(name, "unsupported PNG (an empty IDAT chunk before the image data)");
+            image_data = true;
         }
         pos += 12u + length;
         if (type_name == "IEND") break;

@@ -244,6 +244,19 @@ TEST(HeightmapErrors, CorruptCrcAndData) {
     expect_error(load_heightmap_png_memory(short_data, "short.png"), "short.png", "short.png: ");
 }
 
+TEST(HeightmapErrors, AnEmptyIdatBeforeTheImageDataIsRefusedBeforeStbReadsIt) {
+    // stb_image memcpy'd a first, empty IDAT chunk to its null buffer (undefined
+    // behaviour; UBSan in the png_heightmap fuzzer). An empty IDAT after the data is fine.
+    const auto good = test::encode_png_raw(3, 3, 1, 8, std::vector<uint16_t>(9, 5));
+    const std::vector<uint8_t> empty_idat{0, 0, 0, 0, 'I', 'D', 'A', 'T', 0x35, 0xaf, 0x06, 0x1e};
+    auto before = good;
+    before.insert(before.begin() + 33, empty_idat.begin(), empty_idat.end());  // after IHDR (8 + 25)
+    expect_error(load_heightmap_png_memory(before, "empty_idat.png"), "empty_idat.png", "empty IDAT");
+    auto after = good;
+    after.insert(after.end() - 12, empty_idat.begin(), empty_idat.end());  // before IEND
+    EXPECT_TRUE(load_heightmap_png_memory(after, "late_empty_idat.png").ok());
+}
+
 TEST(HeightmapErrors, RandomCorruptionNeverCrashes) {
     // Flip random bytes of a valid file; the loader must return (ok or a named error).
     const auto base = test::encode_png8(6, 5, 4, std::vector<uint8_t>(120, 99));
