@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <map>
 #include <set>
 
@@ -256,6 +257,72 @@ TEST(NeighborGrid, GridSpringForcesEqualThePaperPairLoop) {
             }
         }
     }
+}
+
+TEST(NeighborLists, HoldExactlyTheBruteForcePairsWithinReachInRangeOrder) {
+    for (float spread : {4.0f, 12.0f, 150.0f, 3000.0f}) {  // dense, dense, blocked, hashed
+        Particles p = random_particles(1500, 11, Vec3(spread, spread * 0.3f, spread));
+        NeighborGrid g;
+        g.build(p.position, p.active, 1.0f);
+        // Relabel as the solver does: binned particle k at index k.
+        const std::vector<uint32_t> order(g.order().begin(), g.order().end());
+        std::vector<Vec3> x(order.size());
+        for (size_t k = 0; k < order.size(); ++k) x[k] = p.position[order[k]];
+        g.relabel_identity();
+        for (const float reach : {1.0f, 0.6f}) {
+            NeighborLists lists;
+            lists.build(g, x, reach);
+            ASSERT_EQ(lists.size(), x.size());
+            size_t pairs = 0;
+            for (uint32_t i = 0; i < x.size(); ++i) {
+                std::vector<uint32_t> want;
+                for (uint32_t j = 0; j < x.size(); ++j)
+                    if (glm::dot(x[i] - x[j], x[i] - x[j]) < reach * reach) want.push_back(j);
+                const auto l = lists.of(i);
+                std::vector<uint32_t> got(l.begin(), l.end());
+                // The same set; the list keeps the 27-cell ranges' order, so sort to compare.
+                std::vector<uint32_t> sorted = got;
+                std::sort(sorted.begin(), sorted.end());
+                ASSERT_EQ(sorted, want) << "spread " << spread << " particle " << i;
+                // ... and that order is the ranges' order: the candidate loop, filtered.
+                std::vector<uint32_t> ranged;
+                size_t run = 0;
+                while (g.run_start(run + 1) <= i) ++run;
+                g.for_each_neighbor_range(run, [&](uint32_t s, uint32_t e) {
+                    for (uint32_t j = s; j < e; ++j)
+                        if (glm::dot(x[i] - x[j], x[i] - x[j]) < reach * reach) ranged.push_back(j);
+                });
+                ASSERT_EQ(got, ranged);
+                pairs += got.size();
+            }
+            EXPECT_EQ(lists.entries(), pairs);
+            if (spread < 20.0f) {
+                EXPECT_GT(pairs, 3 * x.size()) << "the case must have neighbours";
+            }
+        }
+    }
+}
+
+TEST(NeighborLists, StaleOnceAParticleHasMovedNearlyHalfTheSkin) {
+    Particles p = random_particles(800, 5, Vec3(6, 2, 6), 0.0f);
+    NeighborGrid g;
+    g.build(p.position, p.active, 1.0f);
+    std::vector<Vec3> x(g.order().size());
+    for (size_t k = 0; k < x.size(); ++k) x[k] = p.position[g.order()[k]];
+    g.relabel_identity();
+    NeighborLists lists;
+    const float skin = 0.2f;
+    lists.build(g, x, 1.0f + skin);
+    EXPECT_EQ(lists.builds(), 1u);
+    EXPECT_FALSE(lists.stale(x, skin));
+    std::vector<Vec3> y = x;
+    y[417].x += 0.4f * skin;  // under the 0.45 skin limit: every pair within 1 m is still listed
+    EXPECT_FALSE(lists.stale(y, skin));
+    y[417].x += 0.1f * skin;
+    EXPECT_TRUE(lists.stale(y, skin));
+    y = x;
+    y[3].z = std::nanf("");
+    EXPECT_TRUE(lists.stale(y, skin)) << "a NaN position must force a rebuild";
 }
 
 }  // namespace
