@@ -52,6 +52,12 @@ inline constexpr float kSleepAfterSeconds = 0.1f;
 /// asleep particle with nothing under it moves faster than that in its first step.
 inline constexpr float kSleepCapOfFallStep = 0.9f;
 
+/// Skin of the PBF neighbour lists, as a fraction of h: the lists hold the pairs within
+/// h (1 + skin) at the step's binning and are rebuilt once a particle has moved 0.45
+/// skin since (NeighborLists::stale). 10 % of h: 1.33x the pairs within h, and a step's
+/// density corrections rarely move a particle that far.
+inline constexpr float kPbfListSkin = 0.1f;
+
 /// Largest particle budget a scene may ask for.
 inline constexpr int kMaxParticles = 10'000'000;
 /// `SpawnDef::count` asking for a budget sized to the terrain (`particles.count = "auto"`).
@@ -266,6 +272,16 @@ public:
     void pbf_densities_brute_force(std::vector<float>& out) const;
     /// PBF rest number density (lattice sum of the poly6 kernel).
     float pbf_rest_density() const { return rest_density_; }
+    /// PBF passes through per-particle neighbour lists built once per step (true, the
+    /// default) or through the 27 cells around each particle's cell (false: the slow
+    /// twin; the same pairs in the same order, so the same result bit for bit). `skin`:
+    /// the lists' reach beyond h, as a fraction of h (a smaller skin rebuilds more often).
+    void set_pbf_neighbor_lists(bool on, float skin = kPbfListSkin) {
+        pbf_lists_on_ = on;
+        pbf_list_skin_ = skin;
+    }
+    /// The lists of the latest PBF step (their builds() counts rebuilds too).
+    const NeighborLists& pbf_neighbor_lists() const { return pbf_lists_; }
     /// Takes active particle i out (it joins the inactive pool; arrays stay a prefix).
     void deactivate(size_t i);
 
@@ -337,6 +353,10 @@ private:
     /// kSleepAfterSeconds' worth).
     std::vector<uint16_t> slow_steps_;
     std::vector<Vec3> delta_, omega_;
+    NeighborLists pbf_lists_;
+    bool pbf_lists_on_ = true;
+    float pbf_list_skin_ = kPbfListSkin;
+    std::vector<float> pair_cache_;  ///< PBF: per list entry, W and the grad factor of the density pass
     // Reorder scratch (reused; no allocation once warm).
     std::vector<uint32_t> perm_;
     std::vector<Vec3> scratch_vec_;

@@ -25,7 +25,12 @@
 // Every pass is a per-particle gather over the 27 cells around the particle's cell
 // (the arrays are sorted by cell, so each neighbour cell row is one contiguous index
 // range), written only to the particle's own slot: parallel, no atomics, and the same
-// result for any thread count (each particle's sum runs in a fixed order).
+// result for any thread count (each particle's sum runs in a fixed order). The fast
+// path walks per-particle neighbour lists instead (NeighborLists: the pairs within
+// h + skin, built once per step after binning, rebuilt before a pass when a particle
+// has moved 0.45 skin), the same pairs in the same order, and the density pass keeps
+// each pair's W and grad factor for the correction pass at the same positions: the
+// same step bit for bit as the 27-cell twin (set_pbf_neighbor_lists(false); tested).
 #include <metariver/particles.h>
 
 #include "grid_runs.h"
@@ -55,13 +60,41 @@ struct Kernels {
         const float d = h2 - r2;
         return poly6 * d * d * d;
     }
-    /// grad W_spiky at d = x_i - x_j (w.r.t. x_i).
-    Vec3 grad(const Vec3& d, float r) const {
-        if (r >= h || r <= 1e-9f) return Vec3(0.0f);
+    /// grad W_spiky at d = x_i - x_j (w.r.t. x_i) is grad_factor(|d|) * d.
+    float grad_factor(float r) const {
+        if (r >= h || r <= 1e-9f) return 0.0f;
         const float a = h - r;
-        return (spiky * a * a / r) * d;
+        return spiky * a * a / r;
     }
+    Vec3 grad(const Vec3& d, float r) const { return grad_factor(r) * d; }
 };
+
+/// Calls f(i, each) for every binned particle i, in parallel; each(g) calls g(j, e) for
+/// i's candidates j: its neighbour list (`lists` set; e = the list entry) or the 27
+/// cells around its cell run (e = 0). After the caller's own distance test both give
+/// the same j in the same order.
+template <class F>
+void for_each_binned(const NeighborGrid& grid, const NeighborLists* lists, F&& f) {
+    if (lists) {
+        tbb::parallel_for(tbb::blocked_range<uint32_t>(0, uint32_t(lists->size()), 256),
+                          [&](const tbb::blocked_range<uint32_t>& r) {
+                              const uint32_t* const index = lists->index();
+                              for (uint32_t i = r.begin(); i != r.end(); ++i) {
+                                  const uint32_t b = lists->first(i), e = lists->first(i + 1);
+                                  f(i, [&](auto&& g) {
+                                      for (uint32_t q = b; q < e; ++q) g(index[q], q);
+                                  });
+                              }
+                          });
+        return;
+    }
+    for_each_run(grid, [&](uint32_t i, const Ranges& rg) {
+        f(i, [&](auto&& g) {
+            for (int q = 0; q < rg.n; ++q)
+                for (uint32_t j = rg.s[q]; j < rg.e[q]; ++j) g(j, 0u);
+        });
+    });
+}
 
 }  // namespace
 
@@ -227,45 +260,74 @@ void ParticleSolver::step_pbf(float dt) {
     contact_.assign(n, 0);
     density_.assign(n, 0.0f);
     delta_.assign(n, Vec3(0.0f));
+    // Neighbour lists of the binned positions, rebuilt before a pass when stale.
+    const float skin = pbf_list_skin_ * d.kernel_radius;
+    if (pbf_lists_on_) pbf_lists_.build(grid_, p.position, d.kernel_radius + skin);
+    const auto lists = [&]() -> const NeighborLists* {
+        if (!pbf_lists_on_) return nullptr;
+        if (pbf_lists_.stale(p.position, skin)) pbf_lists_.build(grid_, p.position, d.kernel_radius + skin);
+        return &pbf_lists_;
+    };
 
-    // 3. Density constraint iterations.
+    // 3. Density constraint iterations. With lists, the density pass keeps each pair's
+    // W and grad factor (positions do not change before the correction pass reads
+    // them); W = -1 marks a pair the correction skips (beyond h, or i itself).
     for (int it = 0; it < d.iterations; ++it) {
-        for_each_run(grid_, [&](uint32_t i, const Ranges& rg) {
+        const NeighborLists* const nl = lists();
+        float* const cache = nl ? (pair_cache_.resize(2 * nl->entries()), pair_cache_.data()) : nullptr;
+        for_each_binned(grid_, nl, [&](uint32_t i, auto&& each) {
             const Vec3 xi = p.position[i];
             float rho = 0.0f, sum_g2 = 0.0f;
             Vec3 gi(0.0f);
-            for (int q = 0; q < rg.n; ++q)
-                for (uint32_t j = rg.s[q]; j < rg.e[q]; ++j) {
-                    const Vec3 dd = xi - p.position[j];
-                    const float r2 = glm::dot(dd, dd);
-                    if (r2 >= k.h2) continue;
-                    rho += k.W(r2);
-                    const Vec3 gr = k.grad(dd, std::sqrt(r2)) * inv_rho0;
-                    gi += gr;
-                    sum_g2 += glm::dot(gr, gr);
+            each([&](uint32_t j, uint32_t e) {
+                const Vec3 dd = xi - p.position[j];
+                const float r2 = glm::dot(dd, dd);
+                if (r2 >= k.h2) {
+                    if (cache) cache[2 * e] = -1.0f;
+                    return;
                 }
+                const float w = k.W(r2), g = k.grad_factor(std::sqrt(r2));
+                if (cache) {
+                    cache[2 * e] = j == i ? -1.0f : w;
+                    cache[2 * e + 1] = g;
+                }
+                rho += w;
+                const Vec3 gr = (g * dd) * inv_rho0;
+                gi += gr;
+                sum_g2 += glm::dot(gr, gr);
+            });
             sum_g2 += glm::dot(gi, gi);
             const float C = rho * inv_rho0 - 1.0f;
             density_[i] = C;
             lambda_[i] = -std::max(C, 0.0f) / (sum_g2 + eps);
         });
-        for_each_run(grid_, [&](uint32_t i, const Ranges& rg) {
+        const auto scorr = [&](float w) {
+            const float w2 = w * w;
+            float sc = w2 * w2;  // n = 4
+            for (int e = 4; e < d.scorr_n; ++e) sc *= w;
+            if (d.scorr_n < 4) sc = std::pow(w, float(d.scorr_n));
+            return sc;
+        };
+        for_each_binned(grid_, nl, [&](uint32_t i, auto&& each) {
             const Vec3 xi = p.position[i];
             const float li = lambda_[i];
             Vec3 dx(0.0f);
-            for (int q = 0; q < rg.n; ++q)
-                for (uint32_t j = rg.s[q]; j < rg.e[q]; ++j) {
-                    if (j == i) continue;
+            if (cache) {  // the density pass's W and grad factor, the same values
+                each([&](uint32_t j, uint32_t e) {
+                    const float wc = cache[2 * e];
+                    if (wc < 0.0f) return;
+                    const Vec3 dd = xi - p.position[j];
+                    dx += (li + lambda_[j] - scorr_scale * scorr(wc * inv_wdq)) * (cache[2 * e + 1] * dd);
+                });
+            } else {
+                each([&](uint32_t j, uint32_t) {
+                    if (j == i) return;
                     const Vec3 dd = xi - p.position[j];
                     const float r2 = glm::dot(dd, dd);
-                    if (r2 >= k.h2) continue;
-                    const float w = k.W(r2) * inv_wdq;
-                    const float w2 = w * w;
-                    float sc = w2 * w2;  // n = 4
-                    for (int e = 4; e < d.scorr_n; ++e) sc *= w;
-                    if (d.scorr_n < 4) sc = std::pow(w, float(d.scorr_n));
-                    dx += (li + lambda_[j] - scorr_scale * sc) * k.grad(dd, std::sqrt(r2));
-                }
+                    if (r2 >= k.h2) return;
+                    dx += (li + lambda_[j] - scorr_scale * scorr(k.W(r2) * inv_wdq)) * k.grad(dd, std::sqrt(r2));
+                });
+            }
             dx *= inv_rho0;
             const float len = glm::length(dx);
             if (len > max_move) dx *= max_move / len;
@@ -321,28 +383,27 @@ void ParticleSolver::step_pbf(float dt) {
     if (d.xsph > 0.0f || d.vorticity > 0.0f) {
         if (d.vorticity > 0.0f) {
             omega_.assign(n, Vec3(0.0f));
-            for_each_run(grid_, [&](uint32_t i, const Ranges& rg) {
+            for_each_binned(grid_, lists(), [&](uint32_t i, auto&& each) {
                 Vec3 w(0.0f);
-                for (int q = 0; q < rg.n; ++q)
-                    for (uint32_t j = rg.s[q]; j < rg.e[q]; ++j) {
-                        const Vec3 dd = p.position[i] - p.position[j];
-                        const float r = glm::length(dd);
-                        w += glm::cross(p.velocity[j] - p.velocity[i], -k.grad(dd, r));
-                    }
+                each([&](uint32_t j, uint32_t) {
+                    const Vec3 dd = p.position[i] - p.position[j];
+                    const float r = glm::length(dd);
+                    if (r >= k.h) return;  // grad is 0 there: the same sum
+                    w += glm::cross(p.velocity[j] - p.velocity[i], -k.grad(dd, r));
+                });
                 omega_[i] = w * inv_rho0;
             });
         }
-        for_each_run(grid_, [&](uint32_t i, const Ranges& rg) {
+        for_each_binned(grid_, lists(), [&](uint32_t i, auto&& each) {
             const Vec3 xi = p.position[i], vi = p.velocity[i];
             Vec3 visc(0.0f), eta(0.0f);
-            for (int q = 0; q < rg.n; ++q)
-                for (uint32_t j = rg.s[q]; j < rg.e[q]; ++j) {
-                    const Vec3 dd = xi - p.position[j];
-                    const float r2 = glm::dot(dd, dd);
-                    if (r2 >= k.h2) continue;
-                    visc += (p.velocity[j] - vi) * k.W(r2);
-                    if (d.vorticity > 0.0f) eta += glm::length(omega_[j]) * k.grad(dd, std::sqrt(r2));
-                }
+            each([&](uint32_t j, uint32_t) {
+                const Vec3 dd = xi - p.position[j];
+                const float r2 = glm::dot(dd, dd);
+                if (r2 >= k.h2) return;
+                visc += (p.velocity[j] - vi) * k.W(r2);
+                if (d.vorticity > 0.0f) eta += glm::length(omega_[j]) * k.grad(dd, std::sqrt(r2));
+            });
             Vec3 v = vi + d.xsph * inv_rho0 * visc;
             if (d.vorticity > 0.0f) {
                 const float el = glm::length(eta);
