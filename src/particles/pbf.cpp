@@ -260,12 +260,17 @@ void ParticleSolver::step_pbf(float dt) {
     contact_.assign(n, 0);
     density_.assign(n, 0.0f);
     delta_.assign(n, Vec3(0.0f));
-    // Neighbour lists of the binned positions, rebuilt before a pass when stale.
+    // Neighbour lists of the binned positions. A stale list is rebuilt before a pass
+    // when the new one serves `passes` >= 2 passes at these positions (a rebuild scans
+    // the candidates twice); a single pass walks the 27 cells instead (the same pairs).
     const float skin = pbf_list_skin_ * d.kernel_radius;
     if (pbf_lists_on_) pbf_lists_.build(grid_, p.position, d.kernel_radius + skin);
-    const auto lists = [&]() -> const NeighborLists* {
+    const auto lists = [&](int passes) -> const NeighborLists* {
         if (!pbf_lists_on_) return nullptr;
-        if (pbf_lists_.stale(p.position, skin)) pbf_lists_.build(grid_, p.position, d.kernel_radius + skin);
+        if (pbf_lists_.stale(p.position, skin)) {
+            if (passes < 2) return nullptr;
+            pbf_lists_.build(grid_, p.position, d.kernel_radius + skin);
+        }
         return &pbf_lists_;
     };
 
@@ -273,7 +278,7 @@ void ParticleSolver::step_pbf(float dt) {
     // W and grad factor (positions do not change before the correction pass reads
     // them); W = -1 marks a pair the correction skips (beyond h, or i itself).
     for (int it = 0; it < d.iterations; ++it) {
-        const NeighborLists* const nl = lists();
+        const NeighborLists* const nl = lists(2);  // the density and correction passes
         float* const cache = nl ? (pair_cache_.resize(2 * nl->entries()), pair_cache_.data()) : nullptr;
         for_each_binned(grid_, nl, [&](uint32_t i, auto&& each) {
             const Vec3 xi = p.position[i];
@@ -381,9 +386,10 @@ void ParticleSolver::step_pbf(float dt) {
 
     // 5. XSPH viscosity and vorticity confinement (gathers of the velocities).
     if (d.xsph > 0.0f || d.vorticity > 0.0f) {
+        const NeighborLists* const nl = lists(d.vorticity > 0.0f ? 2 : 1);
         if (d.vorticity > 0.0f) {
             omega_.assign(n, Vec3(0.0f));
-            for_each_binned(grid_, lists(), [&](uint32_t i, auto&& each) {
+            for_each_binned(grid_, nl, [&](uint32_t i, auto&& each) {
                 Vec3 w(0.0f);
                 each([&](uint32_t j, uint32_t) {
                     const Vec3 dd = p.position[i] - p.position[j];
@@ -394,7 +400,7 @@ void ParticleSolver::step_pbf(float dt) {
                 omega_[i] = w * inv_rho0;
             });
         }
-        for_each_binned(grid_, lists(), [&](uint32_t i, auto&& each) {
+        for_each_binned(grid_, nl, [&](uint32_t i, auto&& each) {
             const Vec3 xi = p.position[i], vi = p.velocity[i];
             Vec3 visc(0.0f), eta(0.0f);
             each([&](uint32_t j, uint32_t) {
