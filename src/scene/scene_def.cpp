@@ -3,6 +3,7 @@
 // The paper's scenes come from its repository's Unity scene files (see docs/scenes.md):
 // FullVersion (own physics) on strict17.png, Nile on nile.png.
 #include <metariver/scene.h>
+#include <metariver/scene_keys.h>
 
 #include <fmt/format.h>
 
@@ -222,148 +223,58 @@ Result<SceneDef> preset(std::string_view name) {
     return Error{fmt::format("unknown preset '{}' (known: {})", name, known)};
 }
 
-namespace {
-
-struct Checker {
-    std::string error;
-
-    void range(const char* key, double v, double lo, double hi) {
-        if (!error.empty()) return;
-        if (!std::isfinite(v) || v < lo || v > hi)
-            error = fmt::format("{}: must be in [{}, {}] (got {})", key, lo, hi, v);
-    }
-    void positive(const char* key, double v, double hi) {
-        if (!error.empty()) return;
-        if (!std::isfinite(v) || v <= 0.0 || v > hi)
-            error = fmt::format("{}: must be in (0, {}] (got {})", key, hi, v);
-    }
-    void vec(const char* key, const Vec3& v, double lo, double hi) {
-        if (!error.empty()) return;
-        for (int c = 0; c < 3; ++c) {
-            if (!std::isfinite(v[c]) || v[c] < lo || v[c] > hi) {
-                error = fmt::format("{}: every component must be in [{}, {}] (got [{}, {}, {}])", key, lo,
-                                    hi, v.x, v.y, v.z);
-                return;
-            }
-        }
-    }
-};
-
-}  // namespace
-
 Status validate(const SceneDef& d) {
-    Checker c;
-    constexpr double kBig = 1e6;  // metres: anything beyond is a typo, not a terrain
-    if (d.source.kind != TerrainSource::File) {
-        c.range("terrain.width", d.source.width, 2, kMaxHeightmapSide);
-        c.range("terrain.height", d.source.height, 2, kMaxHeightmapSide);
-    }
-    c.positive("terrain.area_scale", d.terrain.area_scale, 1e4);
-    c.positive("terrain.height_scale", d.terrain.height_scale, 1e5);
-    if (d.spawn.count != kAutoCount) c.range("particles.count", d.spawn.count, 1, kMaxParticles);
-    c.vec("particles.spawn_center", d.spawn.center, -kBig, kBig);
-    c.vec("particles.spawn_half_extent", d.spawn.half_extent, 0.0, kBig);
-    c.range("particles.spawn_interval", d.spawn.interval, 0, 1e6);
-    c.vec("particles.initial_velocity", d.spawn.initial_velocity, -1e4, 1e4);
-    c.range("particles.auto_height", d.spawn.auto_height, 0.0, 1e4);
-    c.range("springs.stiffness", d.springs.stiffness, 0.0, 1e6);
-    c.range("springs.min_distance", d.springs.min_distance, 0.0, 1e4);
-    c.range("springs.max_distance", d.springs.max_distance, 0.0, 1e4);
-    c.range("collision.damping", d.collision.damping, 0.0, 1.0);
-    c.range("collision.offset", d.collision.offset, 0.0, 10.0);
-    c.range("collision.bvh_leaf_triangles", d.collision.leaf_triangles, 2, 4096);
-    c.range("collision.radius", d.collision.radius, 0.0, 100.0);
-    c.range("forces.gravity", d.integrator.gravity, -1000.0, 1000.0);
-    if (d.integrator.fixed_dt != 0.0f) c.positive("integrator.dt", d.integrator.fixed_dt, 1.0);
-    c.range("integrator.substeps", d.integrator.substeps, 1, 1000);
-    c.positive("field.resolution", d.field.resolution, 64.0);
-    c.positive("field.radius", d.field.radius, 1e4);
-    c.range("field.bounds_offset", d.field.bounds_offset, 0.0, 1e4);
-    c.positive("field.threshold", d.field.threshold, 1e9);
-    c.range("surface.iterations", d.smoothing.iterations, 0, 100);
-    c.positive("surface.lambda", d.smoothing.lambda, 1.0);
-    if (c.error.empty() && !(d.smoothing.pass_band > 0.0f && d.smoothing.pass_band < 1.0f))
-        c.error = fmt::format("surface.pass_band: must be in (0, 1) (got {})", d.smoothing.pass_band);
-    if (c.error.empty() && d.smoothing.feature_count != 0.0f &&
-        !(d.smoothing.feature_count >= 2.0f && d.smoothing.feature_count <= 1000.0f))
-        c.error = fmt::format("surface.feature_count: must be 0 (off) or in [2, 1000] (got {})", d.smoothing.feature_count);
-    c.range("surface.normal_iterations", d.smoothing.normal_iterations, 0, 100);
+    // Every key's own range where the scene reads it (scene_keys(): a key no solver of
+    // this scene reads keeps whatever value; the viewer shows it once it is read).
+    for (const SceneKey& k : scene_keys())
+        if (k.readers(d))
+            if (std::string e = key_range_error(k, d); !e.empty()) return Error{fmt::format("{}: {}", k.name, e)};
+    // Ranges that depend on another key, and sizes the reference paths cannot finish.
+    std::string error;
+    auto check = [&](bool ok, std::string_view message, const auto&... args) {
+        if (error.empty() && !ok) error = fmt::vformat(message, fmt::make_format_args(args...));
+    };
+    const float carve = d.carve_spacing;  // programmatic only (SceneDef::carve_spacing)
+    check(std::isfinite(carve) && carve >= 0.0f && carve <= 1e3f, "carve_spacing: must be in [0, 1000] (got {})", carve);
     // Accepted input must finish a frame in bounded time: the O(N^2) and O(balls x
     // samples) reference paths are refused above a size, naming the fast alternative.
-    if (c.error.empty() && d.solver == SolverKind::Springs && d.springs.stiffness > 0.0f &&
-        d.springs.mode == SpringMode::Pairs && d.spawn.count > kMaxPairsParticles)
-        c.error = fmt::format("springs.mode: \"pairs\" (the paper's O(N^2) serial loop) is limited to {} particles "
-                              "(got particles.count = {}): use springs.mode = \"grid\" (same forces)",
-                              kMaxPairsParticles, d.spawn.count);
-    if (c.error.empty() && d.surface && d.field.kernel != FieldKernel::Poly6 && d.spawn.count > kMaxDenseFieldBalls)
-        c.error = fmt::format("field.kernel: the paper's kernels reach every grid sample (O(balls x samples)) and are "
-                              "limited to {} balls (got particles.count = {}): use field.kernel = \"poly6\" or "
-                              "surface = false",
-                              kMaxDenseFieldBalls, d.spawn.count);
-    if (c.error.empty() && d.solver == SolverKind::Bullet && d.spawn.count > kMaxBulletBodies)
-        c.error = fmt::format("particles.count: solver = \"bullet\" is limited to {} rigid bodies (got {}); use "
-                              "solver = \"pbf\" or \"springs\" for more",
-                              kMaxBulletBodies, d.spawn.count);
-    if (c.error.empty() && d.field.bounds == FieldBounds::Terrain && d.field.kernel != FieldKernel::Poly6)
-        c.error = "field.bounds: \"terrain\" needs a compact kernel (field.kernel = \"poly6\"); the paper's kernels reach every sample";
-    c.positive("bullet.sphere_radius", d.bullet.sphere_radius, 1e3);
-    c.positive("bullet.mass", d.bullet.mass, 1e6);
-    c.range("bullet.friction", d.bullet.friction, 0.0, 100.0);
-    c.range("bullet.restitution", d.bullet.restitution, 0.0, 1.0);
-    c.positive("bullet.dt", d.bullet.fixed_dt, 1.0);
-    c.range("bullet.max_substeps", d.bullet.max_substeps, 0, 1000);
-    c.range("bullet.solver_iterations", d.bullet.solver_iterations, 1, 1000);
-    if (!d.spawn.auto_rate()) c.range("particles.flow_rate", d.spawn.flow_rate, 0.0, 1e7);
-    c.range("particles.litres_per_particle", d.spawn.litres_per_particle, 0.0, 1e9);
-    // Below 1 mm the kernel constants overflow float. Any solver carving a channel reads
-    // pbf.spacing too (the channel's depth and width: carve_def).
-    if (d.solver == SolverKind::Pbf || d.terrain.condition == TerrainCondition::Carve)
-        c.range("pbf.spacing", d.pbf.spacing, 1e-3, 1e3);
-    c.range("carve_spacing", d.carve_spacing, 0.0, 1e3);  // programmatic only (SceneDef::carve_spacing)
-    if (d.solver == SolverKind::Pbf) {
-        if (c.error.empty() && !(d.pbf.kernel_radius > d.pbf.spacing && d.pbf.kernel_radius <= 4.0f * d.pbf.spacing))
-            c.error = fmt::format("pbf.kernel_radius: must be in (pbf.spacing, 4 pbf.spacing] = ({}, {}] (got {})",
-                                  d.pbf.spacing, 4.0f * d.pbf.spacing, d.pbf.kernel_radius);
-        c.range("pbf.iterations", d.pbf.iterations, 1, 100);
-        c.positive("pbf.relaxation", d.pbf.relaxation, 1e3);
-        c.range("pbf.scorr_k", d.pbf.scorr_k, 0.0, 1.0);
-        c.range("pbf.scorr_n", d.pbf.scorr_n, 1, 8);
-        c.range("pbf.scorr_dq", d.pbf.scorr_dq, 1e-3, 0.999);
-        c.range("pbf.xsph", d.pbf.xsph, 0.0, 1.0);
-        c.range("pbf.vorticity", d.pbf.vorticity, 0.0, 100.0);
-        c.range("pbf.sleep_threshold", d.pbf.sleep_threshold, 0.0, 1.0);
-    }
-    if (d.foam.enabled) {
+    check(!(d.solver == SolverKind::Springs && d.springs.stiffness > 0.0f && d.springs.mode == SpringMode::Pairs &&
+            d.spawn.count > kMaxPairsParticles),
+          "springs.mode: \"pairs\" (the paper's O(N^2) serial loop) is limited to {} particles (got particles.count = "
+          "{}): use springs.mode = \"grid\" (same forces)",
+          kMaxPairsParticles, d.spawn.count);
+    check(!(d.surface && d.field.kernel != FieldKernel::Poly6 && d.spawn.count > kMaxDenseFieldBalls),
+          "field.kernel: the paper's kernels reach every grid sample (O(balls x samples)) and are limited to {} balls "
+          "(got particles.count = {}): use field.kernel = \"poly6\" or surface = false",
+          kMaxDenseFieldBalls, d.spawn.count);
+    check(!(d.solver == SolverKind::Bullet && d.spawn.count > kMaxBulletBodies),
+          "particles.count: solver = \"bullet\" is limited to {} rigid bodies (got {}); use solver = \"pbf\" or "
+          "\"springs\" for more",
+          kMaxBulletBodies, d.spawn.count);
+    check(!(d.field.bounds == FieldBounds::Terrain && d.field.kernel != FieldKernel::Poly6),
+          "field.bounds: \"terrain\" needs a compact kernel (field.kernel = \"poly6\"); the paper's kernels reach every sample");
+    if (d.solver == SolverKind::Pbf)
+        check(d.pbf.kernel_radius > d.pbf.spacing && d.pbf.kernel_radius <= 4.0f * d.pbf.spacing,
+              "pbf.kernel_radius: must be in (pbf.spacing, 4 pbf.spacing] = ({}, {}] (got {})", d.pbf.spacing,
+              4.0f * d.pbf.spacing, d.pbf.kernel_radius);
+    if (d.solver == SolverKind::Pbf && d.foam.enabled) {
         const FoamDef& f = d.foam;
-        c.range("foam.max_particles", f.max_particles, 0, 1e6);
-        auto pair = [&](const char* lo_key, float lo, const char* hi_key, float hi, double top) {
-            c.range(lo_key, lo, 0.0, top);
-            if (c.error.empty() && !(hi > lo && hi <= top))
-                c.error = fmt::format("{}: must be in ({} = {}, {}] (got {})", hi_key, lo_key, lo, top, hi);
+        auto above = [&](const char* hi_key, float hi, const char* lo_key, float lo) {
+            check(hi > lo, "{}: must be in ({} = {}, {}] (got {})", hi_key, lo_key, lo, find_scene_key(hi_key)->range.hi, hi);
         };
-        pair("foam.trapped_air_min", f.trapped_air_min, "foam.trapped_air_max", f.trapped_air_max, 1e3);
-        pair("foam.wave_crest_min", f.wave_crest_min, "foam.wave_crest_max", f.wave_crest_max, 1e3);
-        pair("foam.energy_min", f.energy_min, "foam.energy_max", f.energy_max, 1e6);
-        c.range("foam.trapped_air_rate", f.trapped_air_rate, 0.0, 1e4);
-        c.range("foam.wave_crest_rate", f.wave_crest_rate, 0.0, 1e4);
-        c.range("foam.lifetime_min", f.lifetime_min, 0.01, 1e3);
-        if (c.error.empty() && !(f.lifetime_max >= f.lifetime_min && f.lifetime_max <= 1e3f))
-            c.error = fmt::format("foam.lifetime_max: must be in [foam.lifetime_min = {}, 1000] (got {})",
-                                  f.lifetime_min, f.lifetime_max);
-        c.range("foam.spray_neighbours", f.spray_neighbours, 0, 1000);
-        if (c.error.empty() && !(f.bubble_neighbours >= f.spray_neighbours && f.bubble_neighbours <= 1000))
-            c.error = fmt::format("foam.bubble_neighbours: must be in [foam.spray_neighbours = {}, 1000] (got {})",
-                                  f.spray_neighbours, f.bubble_neighbours);
-        c.range("foam.buoyancy", f.buoyancy, 0.0, 100.0);
-        c.range("foam.drag", f.drag, 0.0, 1.0);
+        above("foam.trapped_air_max", f.trapped_air_max, "foam.trapped_air_min", f.trapped_air_min);
+        above("foam.wave_crest_max", f.wave_crest_max, "foam.wave_crest_min", f.wave_crest_min);
+        above("foam.energy_max", f.energy_max, "foam.energy_min", f.energy_min);
+        check(f.lifetime_max >= f.lifetime_min, "foam.lifetime_max: must be in [foam.lifetime_min = {}, 1000] (got {})",
+              f.lifetime_min, f.lifetime_max);
+        check(f.bubble_neighbours >= f.spray_neighbours,
+              "foam.bubble_neighbours: must be in [foam.spray_neighbours = {}, 1000] (got {})", f.spray_neighbours,
+              f.bubble_neighbours);
     }
-    if (d.sink.kind == SinkKind::Box) {
-        c.vec("sink.min", d.sink.min, -kBig, kBig);
-        c.vec("sink.max", d.sink.max, -kBig, kBig);
-        if (c.error.empty() && (d.sink.min.x > d.sink.max.x || d.sink.min.y > d.sink.max.y || d.sink.min.z > d.sink.max.z))
-            c.error = "sink.max: every component must be >= sink.min's";
-    }
-    if (!c.error.empty()) return Error{c.error};
+    if (d.solver != SolverKind::Bullet && d.sink.kind == SinkKind::Box)
+        check(d.sink.min.x <= d.sink.max.x && d.sink.min.y <= d.sink.max.y && d.sink.min.z <= d.sink.max.z,
+              "sink.max: every component must be >= sink.min's");
+    if (!error.empty()) return Error{error};
     return Ok{};
 }
 

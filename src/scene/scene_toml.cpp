@@ -1,20 +1,27 @@
 // Scene files in TOML (toml++). Every key is checked: unknown keys, wrong types and
-// out-of-range values are one-line errors naming the file and the key. The full
-// reference is docs/scene-format.md.
+// out-of-range values are one-line errors naming the file and the key. The keys, their
+// types and ranges come from the table in scene_keys.cpp (docs/scene-format.md is
+// generated from it); the rules between keys (what a solver or another key's value
+// makes irrelevant) are here.
 #include <metariver/scene.h>
+#include <metariver/scene_keys.h>
 
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
 #include <sstream>
+#include <vector>
 
 namespace mr {
 
 namespace {
 
+/// Reads keys of the table (scene_keys()) from a parsed file; the first error wins.
 class Reader {
 public:
     explicit Reader(std::string origin) : origin_(std::move(origin)) {}
@@ -27,16 +34,13 @@ public:
     }
 
     /// Rejects keys of `t` not in `allowed`.
-    void allow(const toml::table& t, const std::string& prefix, std::initializer_list<std::string_view> allowed) {
+    void allow(const toml::table& t, const std::string& prefix, const std::vector<std::string_view>& allowed) {
         for (const auto& [k, v] : t) {
-            bool known = false;
-            for (auto a : allowed) known |= (k.str() == a);
-            if (!known) {
-                std::string list;
-                for (auto a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-                fail(prefix + std::string(k.str()), fmt::format("unknown key (allowed here: {})", list));
-                return;
-            }
+            if (std::find(allowed.begin(), allowed.end(), k.str()) != allowed.end()) continue;
+            std::string list;
+            for (auto a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+            fail(prefix + std::string(k.str()), fmt::format("unknown key (allowed here: {})", list));
+            return;
         }
     }
 
@@ -50,105 +54,97 @@ public:
         return n->as_table();
     }
 
-    void number(const toml::table& t, const std::string& prefix, std::string_view key, float& out) {
-        const toml::node* n = t.get(key);
-        if (!n) return;
-        if (auto f = n->value<double>()) {  // accepts integers too
-            out = static_cast<float>(*f);
-            if (!std::isfinite(out) && std::isfinite(*f)) fail(prefix + std::string(key), fmt::format("out of float range (got {})", *f));
-            return;
-        }
-        fail(prefix + std::string(key), "must be a number");
-    }
-
-    void integer(const toml::table& t, const std::string& prefix, std::string_view key, int& out,
-                 long long lo, long long hi) {
-        const toml::node* n = t.get(key);
-        if (!n) return;
-        if (!n->is_integer()) {
-            fail(prefix + std::string(key), fmt::format("must be an integer in [{}, {}]", lo, hi));
-            return;
-        }
-        const long long v = n->as_integer()->get();
-        if (v < lo || v > hi) {
-            fail(prefix + std::string(key), fmt::format("must be in [{}, {}] (got {})", lo, hi, v));
-            return;
-        }
-        out = static_cast<int>(v);
-    }
-
-    void seed(const toml::table& t, const std::string& prefix, std::string_view key, uint32_t& out) {
-        int v = 0;
-        const toml::node* n = t.get(key);
-        if (!n) return;
-        if (n->is_integer()) {
-            const long long x = n->as_integer()->get();
-            if (x < 0 || x > 4294967295LL) {
-                fail(prefix + std::string(key), fmt::format("must be in [0, 4294967295] (got {})", x));
-                return;
-            }
-            out = static_cast<uint32_t>(x);
-            return;
-        }
-        integer(t, prefix, key, v, 0, 0);  // reports the type error
-    }
-
-    void boolean(const toml::table& t, const std::string& prefix, std::string_view key, bool& out) {
-        const toml::node* n = t.get(key);
-        if (!n) return;
-        if (n->is_boolean()) {
-            out = n->as_boolean()->get();
-            return;
-        }
-        fail(prefix + std::string(key), "must be true or false");
-    }
-
-    bool string(const toml::table& t, const std::string& prefix, std::string_view key, std::string& out) {
-        const toml::node* n = t.get(key);
+    /// Reads `k` from `t` (its section's table) into `d` when the file has it: the type
+    /// is checked, an integer's range too (it must fit); the other numbers' ranges are
+    /// checked by check_range once the scene is complete. Returns whether it was given.
+    bool key(const toml::table& t, const SceneKey& k, SceneDef& d) {
+        const toml::node* n = t.get(k.leaf());
         if (!n) return false;
-        if (auto s = n->value<std::string>()) {
-            out = *s;
+        const std::string key(k.name);
+        if (k.words.apply && n->is_string()) {
+            const std::string s = *n->value<std::string>();
+            for (size_t i = 0; i < k.words.words.size(); ++i)
+                if (s == k.words.words[i]) {
+                    k.words.apply(d, static_cast<int>(i));
+                    return true;
+                }
+            fail(key, fmt::format("must be {} or {}", quoted(k.words.words, " or "), what(k)));
             return true;
         }
-        fail(prefix + std::string(key), "must be a string");
-        return false;
+        const FieldRef f = k.field(d);
+        switch (k.type) {
+            case KeyType::Bool:
+                if (!n->is_boolean()) return fail(key, "must be true or false"), true;
+                *std::get<bool*>(f) = n->as_boolean()->get();
+                break;
+            case KeyType::Int:
+            case KeyType::Seed: {
+                if (!n->is_integer()) return fail(key, fmt::format("must be an integer {}", k.range.phrase())), true;
+                const long long v = n->as_integer()->get();
+                if (!k.range.contains(static_cast<double>(v)))
+                    return fail(key, fmt::format("must be {} (got {})", k.range.phrase(), v)), true;
+                if (k.type == KeyType::Int) *std::get<int*>(f) = static_cast<int>(v);
+                else *std::get<uint32_t*>(f) = static_cast<uint32_t>(v);
+                break;
+            }
+            case KeyType::Float: {
+                const auto v = n->value<double>();  // accepts integers too
+                if (!v) return fail(key, "must be a number"), true;
+                const auto x = static_cast<float>(*v);
+                if (!std::isfinite(x) && std::isfinite(*v)) return fail(key, fmt::format("out of float range (got {})", *v)), true;
+                *std::get<float*>(f) = x;
+                break;
+            }
+            case KeyType::Vec3: {
+                const toml::array* a = n->as_array();
+                Vec3 out;
+                for (int c = 0; a && a->size() == 3 && c < 3; ++c) {
+                    auto v = (*a)[static_cast<size_t>(c)].value<double>();
+                    if (!v) a = nullptr;
+                    else out[c] = static_cast<float>(*v);
+                }
+                if (!a || a->size() != 3) return fail(key, "must be an array of 3 numbers [x, y, z]"), true;
+                *std::get<Vec3*>(f) = out;
+                break;
+            }
+            case KeyType::String: {
+                auto s = n->value<std::string>();
+                if (!s) return fail(key, "must be a string"), true;
+                *std::get<std::string*>(f) = *s;
+                break;
+            }
+            case KeyType::Choice: {
+                auto s = n->value<std::string>();
+                if (!s) return fail(key, "must be a string"), true;
+                const auto it = std::find(k.choices.begin(), k.choices.end(), *s);
+                if (it == k.choices.end())
+                    return fail(key, fmt::format("must be one of {} (got '{}')", quoted(k.choices, ", ", ""), *s)), true;
+                const EnumRef& e = std::get<EnumRef>(f);
+                e.set(e.field, static_cast<int>(it - k.choices.begin()));
+                break;
+            }
+        }
+        if (k.words.apply) k.words.apply(d, -1);  // a number, not a word
+        return true;
     }
 
-    void vec3(const toml::table& t, const std::string& prefix, std::string_view key, Vec3& out) {
-        const toml::node* n = t.get(key);
-        if (!n) return;
-        const toml::array* a = n->as_array();
-        if (!a || a->size() != 3) {
-            fail(prefix + std::string(key), "must be an array of 3 numbers [x, y, z]");
-            return;
-        }
-        for (size_t c = 0; c < 3; ++c) {
-            auto f = (*a)[c].value<double>();
-            if (!f) {
-                fail(prefix + std::string(key), "must be an array of 3 numbers [x, y, z]");
-                return;
-            }
-            out[static_cast<int>(c)] = static_cast<float>(*f);
-        }
-    }
-
-    template <class E>
-    void choice(const toml::table& t, const std::string& prefix, std::string_view key, E& out,
-                std::initializer_list<std::pair<std::string_view, E>> options) {
-        std::string s;
-        if (!string(t, prefix, key, s)) return;
-        std::string list;
-        for (const auto& [name, value] : options) {
-            if (s == name) {
-                out = value;
-                return;
-            }
-            list += (list.empty() ? "" : ", ") + std::string(name);
-        }
-        fail(prefix + std::string(key), fmt::format("must be one of {} (got '{}')", list, s));
+    /// The range of a number the file gave (the table's static range).
+    void check_range(const SceneKey& k, const SceneDef& d) {
+        if (const std::string e = key_range_error(k, d); !e.empty()) fail(std::string(k.name), e);
     }
 
 private:
+    static std::string quoted(std::span<const std::string_view> words, const char* sep, const char* quote = "\"") {
+        std::string s;
+        for (auto w : words) s += fmt::format("{}{}{}{}", s.empty() ? "" : sep, quote, w, quote);
+        return s;
+    }
+    /// What a number-typed key takes besides its words.
+    static std::string what(const SceneKey& k) {
+        if (k.type == KeyType::Vec3) return "an array of 3 numbers [x, y, z]";
+        return fmt::format("a {} {}", k.type == KeyType::Float ? "number" : "whole number", k.range.phrase());
+    }
+
     std::string origin_;
     std::string error_;
 };
@@ -451,222 +447,56 @@ Result<SceneDef> parse_scene_toml_lines(std::string_view text, const std::string
                                  e.source().begin.column, e.description())};
     }
 
+    // `preset = "NAME"`: the file starts from that preset instead of `base` (what
+    // `metariver scene --preset NAME` writes, so that the keys its scene does not read,
+    // which the file cannot hold, keep the preset's values).
     SceneDef d = base;
-    Reader r(origin);
-    r.allow(root, "", {"name", "seed", "solver", "surface", "terrain", "particles", "forces", "springs", "collision",
-                       "integrator", "field", "bullet", "pbf", "sink", "foam"});
-    r.string(root, "", "name", d.name);
-    r.seed(root, "", "seed", d.seed);
-    // `surface` is either the switch (surface = false) or the table of the smoothing
-    // ([surface], whose `enabled` is the same switch).
-    if (const toml::node* n = root.get("surface"); n && n->is_table()) {
-        const toml::table& t = *n->as_table();
-        const std::string p = "surface.";
-        r.allow(t, p, {"enabled", "method", "steps", "iterations", "lambda", "pass_band", "feature_count", "keep_volume",
-                       "normal_iterations"});
-        r.boolean(t, p, "enabled", d.surface);
-        r.choice(t, p, "method", d.smoothing.method,
-                 {{"none", SmoothingMethod::None}, {"laplacian", SmoothingMethod::Laplacian}, {"taubin", SmoothingMethod::Taubin}});
-        r.choice(t, p, "steps", d.smoothing.steps,
-                 {{"chebyshev", SmoothingSteps::Chebyshev}, {"uniform", SmoothingSteps::Uniform}});
-        r.integer(t, p, "iterations", d.smoothing.iterations, 0, 100);
-        r.number(t, p, "lambda", d.smoothing.lambda);
-        r.number(t, p, "pass_band", d.smoothing.pass_band);
-        r.number(t, p, "feature_count", d.smoothing.feature_count);
-        r.boolean(t, p, "keep_volume", d.smoothing.keep_volume);
-        r.integer(t, p, "normal_iterations", d.smoothing.normal_iterations, 0, 100);
-    } else if (n && !n->is_boolean()) {
-        r.fail("surface", "must be true or false, or a table ([surface])");
-    } else {
-        r.boolean(root, "", "surface", d.surface);
+    if (const toml::node* n = root.get("preset")) {
+        const auto name = n->value<std::string>();
+        auto p = name ? preset(*name) : Result<SceneDef>(Error{"must be a string, the name of a preset"});
+        if (!p) return Error{fmt::format("{}: preset: {}", origin, p.error().message)};
+        d = std::move(p.value());
     }
-    r.choice(root, "", "solver", d.solver, {{"springs", SolverKind::Springs}, {"bullet", SolverKind::Bullet}, {"pbf", SolverKind::Pbf}});
-
-    if (const toml::table* t = r.table(root, "terrain")) {
-        const std::string p = "terrain.";
-        r.allow(*t, p, {"source", "heightmap", "width", "height", "seed", "area_scale", "height_scale",
-                        "paper_row_orientation", "condition"});
-        r.choice(*t, p, "condition", d.terrain.condition,
-                 {{"none", TerrainCondition::None},
-                  {"fill", TerrainCondition::Fill},
-                  {"breach", TerrainCondition::Breach},
-                  {"carve", TerrainCondition::Carve},
-                  {"auto", TerrainCondition::Auto}});
-        r.choice(*t, p, "source", d.source.kind,
-                 {{"valley", TerrainSource::Valley},
-                  {"strict", TerrainSource::Strict},
-                  {"bowl", TerrainSource::Bowl},
-                  {"flat", TerrainSource::Flat},
-                  {"file", TerrainSource::File}});
-        if (r.string(*t, p, "heightmap", d.source.heightmap)) {
+    Reader r(origin);
+    std::vector<const SceneKey*> given;  // the numbers the file holds, range-checked at the end
+    for (const SceneSection& s : scene_sections()) {
+        std::vector<std::string_view> allowed;
+        for (const SceneKey& k : scene_keys())
+            if (k.section() == s.name) allowed.push_back(k.leaf());
+        const toml::table* t = &root;
+        if (s.name.empty()) {
+            allowed.push_back("preset");
+            for (const SceneSection& sub : scene_sections())
+                if (!sub.name.empty()) allowed.push_back(sub.name);
+        } else if (const toml::node* n = root.get(s.name); s.name == "surface" && n && !n->is_table()) {
+            // `surface` is either the switch (surface = false) or the table of the
+            // smoothing ([surface], whose `enabled` is the same switch).
+            if (!n->is_boolean()) r.fail("surface", "must be true or false, or a table ([surface])");
+            else d.surface = n->as_boolean()->get();
+            continue;
+        } else {
+            t = r.table(root, s.name);
+        }
+        if (!t) continue;
+        r.allow(*t, s.name.empty() ? "" : std::string(s.name) + ".", allowed);
+        for (const SceneKey& k : scene_keys())
+            if (k.section() == s.name && r.key(*t, k, d) && k.numeric()) given.push_back(&k);
+        if (s.name == "terrain" && t->get("heightmap") && !r.failed()) {
             if (!t->get("source")) d.source.kind = TerrainSource::File;
             std::filesystem::path hp(d.source.heightmap);
-            if (hp.is_relative() && !hp.empty()) {
-                const auto dir = std::filesystem::path(origin).parent_path();
-                d.source.heightmap = (dir / hp).lexically_normal().string();
-            }
+            if (hp.is_relative() && !hp.empty())
+                d.source.heightmap = (std::filesystem::path(origin).parent_path() / hp).lexically_normal().string();
         }
-        r.integer(*t, p, "width", d.source.width, 2, kMaxHeightmapSide);
-        r.integer(*t, p, "height", d.source.height, 2, kMaxHeightmapSide);
-        r.seed(*t, p, "seed", d.source.seed);
-        r.number(*t, p, "area_scale", d.terrain.area_scale);
-        r.number(*t, p, "height_scale", d.terrain.height_scale);
-        r.boolean(*t, p, "paper_row_orientation", d.terrain.paper_row_orientation);
-    }
-    if (const toml::table* t = r.table(root, "particles")) {
-        const std::string p = "particles.";
-        r.allow(*t, p, {"count", "spawn_center", "spawn_half_extent", "spawn_interval", "initial_velocity",
-                        "auto_height", "source_shape", "flow_rate", "litres_per_particle"});
-        if (const toml::node* n = t->get("count"); n && n->is_string()) {
-            if (n->value<std::string>() == "auto") d.spawn.count = kAutoCount;
-            else r.fail(p + "count", fmt::format("must be \"auto\" or a whole number in [1, {}]", kMaxParticles));
-        } else {
-            r.integer(*t, p, "count", d.spawn.count, 1, kMaxParticles);
-        }
-        if (const toml::node* n = t->get("spawn_center"); n && n->is_string()) {
-            if (n->value<std::string>() == "auto") {
-                d.spawn.auto_center = true;
-                d.spawn.auto_channel = false;
-            } else if (n->value<std::string>() == "channel") {
-                d.spawn.auto_center = true;
-                d.spawn.auto_channel = true;
-            } else {
-                r.fail(p + "spawn_center", "must be \"auto\", \"channel\" or an array of 3 numbers [x, y, z]");
-            }
-        } else if (n) {
-            r.vec3(*t, p, "spawn_center", d.spawn.center);
-            d.spawn.auto_center = false;
-        }
-        r.vec3(*t, p, "spawn_half_extent", d.spawn.half_extent);
-        r.integer(*t, p, "spawn_interval", d.spawn.interval, 0, 1000000);
-        r.vec3(*t, p, "initial_velocity", d.spawn.initial_velocity);
-        r.number(*t, p, "auto_height", d.spawn.auto_height);
-        r.choice(*t, p, "source_shape", d.spawn.shape,
-                 {{"box", SourceShape::Box}, {"disc", SourceShape::Disc}, {"point", SourceShape::Point}});
-        if (const toml::node* n = t->get("flow_rate"); n && n->is_string()) {
-            if (n->value<std::string>() == "auto") d.spawn.flow_rate = kAutoRate;
-            else r.fail(p + "flow_rate", "must be \"auto\" or a number of particles (or litres) per second in [0, 1e7]");
-        } else if (n) {
-            r.number(*t, p, "flow_rate", d.spawn.flow_rate);
-        }
-        r.number(*t, p, "litres_per_particle", d.spawn.litres_per_particle);
-    }
-    if (const toml::table* t = r.table(root, "pbf")) {
-        const std::string p = "pbf.";
-        r.allow(*t, p, {"spacing", "kernel_radius", "iterations", "relaxation", "scorr_k", "scorr_n", "scorr_dq", "xsph",
-                        "vorticity", "sleep_threshold"});
-        r.number(*t, p, "spacing", d.pbf.spacing);
-        r.number(*t, p, "kernel_radius", d.pbf.kernel_radius);
-        r.integer(*t, p, "iterations", d.pbf.iterations, 1, 100);
-        r.number(*t, p, "relaxation", d.pbf.relaxation);
-        r.number(*t, p, "scorr_k", d.pbf.scorr_k);
-        r.integer(*t, p, "scorr_n", d.pbf.scorr_n, 1, 8);
-        r.number(*t, p, "scorr_dq", d.pbf.scorr_dq);
-        r.number(*t, p, "xsph", d.pbf.xsph);
-        r.number(*t, p, "vorticity", d.pbf.vorticity);
-        r.number(*t, p, "sleep_threshold", d.pbf.sleep_threshold);
-    }
-    if (const toml::table* t = r.table(root, "foam")) {
-        const std::string p = "foam.";
-        r.allow(*t, p, {"enabled", "max_particles", "trapped_air_min", "trapped_air_max", "wave_crest_min",
-                        "wave_crest_max", "energy_min", "energy_max", "trapped_air_rate", "wave_crest_rate",
-                        "lifetime_min", "lifetime_max", "spray_neighbours", "bubble_neighbours", "buoyancy", "drag"});
-        FoamDef& f = d.foam;
-        r.boolean(*t, p, "enabled", f.enabled);
-        r.integer(*t, p, "max_particles", f.max_particles, 0, 1000000);
-        r.number(*t, p, "trapped_air_min", f.trapped_air_min);
-        r.number(*t, p, "trapped_air_max", f.trapped_air_max);
-        r.number(*t, p, "wave_crest_min", f.wave_crest_min);
-        r.number(*t, p, "wave_crest_max", f.wave_crest_max);
-        r.number(*t, p, "energy_min", f.energy_min);
-        r.number(*t, p, "energy_max", f.energy_max);
-        r.number(*t, p, "trapped_air_rate", f.trapped_air_rate);
-        r.number(*t, p, "wave_crest_rate", f.wave_crest_rate);
-        r.number(*t, p, "lifetime_min", f.lifetime_min);
-        r.number(*t, p, "lifetime_max", f.lifetime_max);
-        r.integer(*t, p, "spray_neighbours", f.spray_neighbours, 0, 1000);
-        r.integer(*t, p, "bubble_neighbours", f.bubble_neighbours, 0, 1000);
-        r.number(*t, p, "buoyancy", f.buoyancy);
-        r.number(*t, p, "drag", f.drag);
-    }
-    if (const toml::table* t = r.table(root, "sink")) {
-        const std::string p = "sink.";
-        r.allow(*t, p, {"kind", "min", "max"});
-        r.choice(*t, p, "kind", d.sink.kind, {{"none", SinkKind::None}, {"box", SinkKind::Box}, {"edges", SinkKind::Edges}});
-        r.vec3(*t, p, "min", d.sink.min);
-        r.vec3(*t, p, "max", d.sink.max);
-    }
-    if (const toml::table* t = r.table(root, "forces")) {
-        r.allow(*t, "forces.", {"gravity"});
-        r.number(*t, "forces.", "gravity", d.integrator.gravity);
-    }
-    if (const toml::table* t = r.table(root, "springs")) {
-        const std::string p = "springs.";
-        r.allow(*t, p, {"stiffness", "min_distance", "max_distance", "mode"});
-        r.number(*t, p, "stiffness", d.springs.stiffness);
-        r.number(*t, p, "min_distance", d.springs.min_distance);
-        r.number(*t, p, "max_distance", d.springs.max_distance);
-        r.choice(*t, p, "mode", d.springs.mode, {{"pairs", SpringMode::Pairs}, {"grid", SpringMode::Grid}});
-    }
-    if (const toml::table* t = r.table(root, "collision")) {
-        const std::string p = "collision.";
-        r.allow(*t, p, {"mode", "damping", "offset", "bvh_leaf_triangles", "radius", "query"});
-        r.choice(*t, p, "mode", d.collision.mode,
-                 {{"paper", CollisionMode::Paper}, {"robust", CollisionMode::Robust}, {"none", CollisionMode::None}});
-        r.number(*t, p, "damping", d.collision.damping);
-        r.number(*t, p, "offset", d.collision.offset);
-        r.integer(*t, p, "bvh_leaf_triangles", d.collision.leaf_triangles, 2, 4096);
-        r.number(*t, p, "radius", d.collision.radius);
-        r.choice(*t, p, "query", d.collision.query,
-                 {{"tree", CollisionQuery::Tree}, {"heightfield", CollisionQuery::Heightfield}});
-    }
-    if (const toml::table* t = r.table(root, "integrator")) {
-        const std::string p = "integrator.";
-        r.allow(*t, p, {"dt", "substeps"});
-        r.number(*t, p, "dt", d.integrator.fixed_dt);
-        r.integer(*t, p, "substeps", d.integrator.substeps, 1, 1000);
-    }
-    if (const toml::table* t = r.table(root, "field")) {
-        const std::string p = "field.";
-        r.allow(*t, p, {"kernel", "bounds", "radius", "resolution", "bounds_offset", "threshold"});
-        r.choice(*t, p, "kernel", d.field.kernel,
-                 {{"inverse_square", FieldKernel::InverseSquare},
-                  {"radius_over_r", FieldKernel::RadiusOverR},
-                  {"poly6", FieldKernel::Poly6}});
-        r.choice(*t, p, "bounds", d.field.bounds,
-                 {{"particles", FieldBounds::Particles}, {"terrain", FieldBounds::Terrain}});
-        r.number(*t, p, "radius", d.field.radius);
-        r.number(*t, p, "resolution", d.field.resolution);
-        r.number(*t, p, "bounds_offset", d.field.bounds_offset);
-        r.number(*t, p, "threshold", d.field.threshold);
-    }
-    if (const toml::table* t = r.table(root, "bullet")) {
-        const std::string p = "bullet.";
-        r.allow(*t, p, {"terrain", "sphere_radius", "mass", "friction", "restitution", "particle_collisions", "dt",
-                        "max_substeps", "solver_iterations", "ccd", "sleep", "springs"});
-        r.choice(*t, p, "terrain", d.bullet.terrain,
-                 {{"mesh", BulletTerrainShape::Mesh}, {"heightfield", BulletTerrainShape::Heightfield}});
-        r.number(*t, p, "sphere_radius", d.bullet.sphere_radius);
-        r.number(*t, p, "mass", d.bullet.mass);
-        r.number(*t, p, "friction", d.bullet.friction);
-        r.number(*t, p, "restitution", d.bullet.restitution);
-        r.boolean(*t, p, "particle_collisions", d.bullet.particle_collisions);
-        r.number(*t, p, "dt", d.bullet.fixed_dt);
-        r.integer(*t, p, "max_substeps", d.bullet.max_substeps, 0, 1000);
-        r.integer(*t, p, "solver_iterations", d.bullet.solver_iterations, 1, 1000);
-        r.boolean(*t, p, "ccd", d.bullet.ccd);
-        r.boolean(*t, p, "sleep", d.bullet.sleep);
-        r.boolean(*t, p, "springs", d.bullet.springs);
     }
     if (!r.failed()) apply_solver_scope(root, r, d);
     if (!r.failed()) refuse_irrelevant_keys(root, r, d);
+    for (const SceneKey* k : given) r.check_range(*k, d);
     if (r.failed()) return Error{r.error()};
     if (d.source.kind == TerrainSource::File && d.source.heightmap.empty())
         return Error{fmt::format("{}: terrain.heightmap: required when terrain.source = \"file\"", origin)};
     if (auto v = validate(d); !v) return Error{fmt::format("{}: {}", origin, v.error().message)};
     return d;
 }
-
 }  // namespace
 
 Result<SceneDef> load_scene_file(const std::string& path) {

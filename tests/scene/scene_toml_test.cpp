@@ -88,6 +88,7 @@ threshold = 0.4
     EXPECT_EQ(d.spawn.count, 77);
     EXPECT_EQ(d.spawn.center, Vec3(1, 2, 3));
     EXPECT_FALSE(d.spawn.auto_center);
+    EXPECT_FALSE(d.spawn.auto_channel);
     EXPECT_EQ(d.spawn.half_extent, Vec3(0.5f, 0.25f, 1));
     EXPECT_EQ(d.spawn.interval, 4);
     EXPECT_EQ(d.spawn.initial_velocity, Vec3(0, -1, 2));
@@ -106,6 +107,63 @@ threshold = 0.4
     EXPECT_FLOAT_EQ(d.field.resolution, 3.0f);
     EXPECT_FLOAT_EQ(d.field.bounds_offset, 2.5f);
     EXPECT_FLOAT_EQ(d.field.threshold, 0.4f);
+
+    // The PBF river's own keys, its source and its sink (a scene of the default's solver;
+    // SceneKeys.EveryKeyInTheTableIsReadIntoItsField covers every key of the table).
+    auto pbf = parse(R"(
+[particles]
+source_shape = "box"
+flow_rate = 50
+litres_per_particle = 2
+[pbf]
+spacing = 0.4
+kernel_radius = 1.2
+iterations = 5
+relaxation = 0.1
+scorr_k = 0.02
+scorr_n = 3
+scorr_dq = 0.25
+xsph = 0.1
+vorticity = 1.5
+sleep_threshold = 0.05
+[sink]
+kind = "box"
+min = [1, 2, 3]
+max = [4, 5, 6]
+[collision]
+query = "tree"
+radius = 0.2
+[field]
+bounds = "terrain"
+)");
+    ASSERT_TRUE(pbf.ok()) << pbf.error().message;
+    EXPECT_EQ(pbf->solver, SolverKind::Pbf);
+    EXPECT_EQ(pbf->spawn.shape, SourceShape::Box);
+    EXPECT_FLOAT_EQ(pbf->spawn.flow_rate, 50.0f);
+    EXPECT_FLOAT_EQ(pbf->spawn.litres_per_particle, 2.0f);
+    EXPECT_FLOAT_EQ(pbf->spawn.particles_per_second(), 25.0f);
+    EXPECT_FLOAT_EQ(pbf->pbf.spacing, 0.4f);
+    EXPECT_FLOAT_EQ(pbf->pbf.kernel_radius, 1.2f);
+    EXPECT_EQ(pbf->pbf.iterations, 5);
+    EXPECT_FLOAT_EQ(pbf->pbf.relaxation, 0.1f);
+    EXPECT_FLOAT_EQ(pbf->pbf.scorr_k, 0.02f);
+    EXPECT_EQ(pbf->pbf.scorr_n, 3);
+    EXPECT_FLOAT_EQ(pbf->pbf.scorr_dq, 0.25f);
+    EXPECT_FLOAT_EQ(pbf->pbf.xsph, 0.1f);
+    EXPECT_FLOAT_EQ(pbf->pbf.vorticity, 1.5f);
+    EXPECT_FLOAT_EQ(pbf->pbf.sleep_threshold, 0.05f);
+    EXPECT_EQ(pbf->sink.kind, SinkKind::Box);
+    EXPECT_EQ(pbf->sink.min, Vec3(1, 2, 3));
+    EXPECT_EQ(pbf->sink.max, Vec3(4, 5, 6));
+    EXPECT_EQ(pbf->collision.query, CollisionQuery::Tree);
+    EXPECT_FLOAT_EQ(pbf->collision.radius, 0.2f);
+    EXPECT_EQ(pbf->field.bounds, FieldBounds::Terrain);
+    auto channel = parse("[particles]\nspawn_center = \"auto\"\ncount = \"auto\"\nflow_rate = \"auto\"\n");
+    ASSERT_TRUE(channel.ok()) << channel.error().message;
+    EXPECT_TRUE(channel->spawn.auto_center);
+    EXPECT_FALSE(channel->spawn.auto_channel);
+    EXPECT_EQ(channel->spawn.count, kAutoCount);
+    EXPECT_TRUE(channel->spawn.auto_rate());
 
     auto file = parse("[terrain]\nheightmap = \"maps/h.png\"\n");
     ASSERT_TRUE(file.ok()) << file.error().message;
@@ -163,7 +221,7 @@ TEST(SceneToml, OutOfRangeValuesNameTheKeyAndTheRange) {
     expect_error("[field]\nresolution = 0\n", "field.resolution: must be in (0, 64]");
     expect_error("[field]\nresolution = nan\n", "field.resolution");
     expect_error("[field]\nthreshold = inf\n", "field.threshold");
-    expect_error("[integrator]\ndt = -0.01\n", "integrator.dt: must be in (0, 1]");
+    expect_error("[integrator]\ndt = -0.01\n", "integrator.dt: must be 0 or in (0, 1]");
     expect_error("[integrator]\ndt = nan\n", "integrator.dt");
     expect_error("[particles]\ncount = 0\n", "particles.count: must be in [1, 10000000]");
     expect_error("[particles]\ncount = 1000000000000\n", "particles.count: must be in [1, 10000000]");
@@ -580,14 +638,14 @@ normal_iterations = 2
     ASSERT_TRUE(weights_off.ok()) << weights_off.error().message;
 
     expect_error("[surface]\nmethod = \"gauss\"\n", "surface.method: must be one of none, laplacian, taubin");
-    expect_error("[surface]\nsteps = \"fast\"\n", "surface.steps: must be one of chebyshev, uniform");
+    expect_error("[surface]\nsteps = \"fast\"\n", "surface.steps: must be one of uniform, chebyshev");
     expect_error("[surface]\niterations = 101\n", "surface.iterations: must be in [0, 100]");
     expect_error("[surface]\niterations = 2.5\n", "surface.iterations: must be an integer");
     expect_error("[surface]\nsteps = \"uniform\"\nlambda = 0\n", "surface.lambda: must be in (0, 1]");
     expect_error("[surface]\nsteps = \"uniform\"\nlambda = 1.5\n", "surface.lambda: must be in (0, 1]");
     expect_error("[surface]\npass_band = 1\n", "surface.pass_band: must be in (0, 1)");
     expect_error("[surface]\npass_band = nan\n", "surface.pass_band");
-    expect_error("[surface]\nfeature_count = 1\n", "surface.feature_count: must be 0 (off) or in [2, 1000]");
+    expect_error("[surface]\nfeature_count = 1\n", "surface.feature_count: must be 0 or in [2, 1000]");
     expect_error("[surface]\nnormal_iterations = -1\n", "surface.normal_iterations: must be in [0, 100]");
     expect_error("[surface]\nkeep_volume = 1\n", "surface.keep_volume: must be true or false");
     expect_error("[surface]\nradius = 1\n", "surface.radius: unknown key");
@@ -658,7 +716,7 @@ drag = 0.25
     bad("[foam]\nlifetime_min = 0\n", "foam.lifetime_min: must be in [0.01, 1000]");
     bad("[foam]\nlifetime_min = 3\nlifetime_max = 2\n", "foam.lifetime_max: must be in [foam.lifetime_min = 3, 1000]");
     bad("[foam]\nspray_neighbours = 30\n", "foam.bubble_neighbours: must be in [foam.spray_neighbours = 30, 1000]");
-    bad("[foam]\nbubble_neighbours = 5000\n", "foam.bubble_neighbours: must be in [0, 1000]");
+    bad("[foam]\nbubble_neighbours = 5000\n", "foam.bubble_neighbours: must be in [foam.spray_neighbours, 1000]");
     bad("[foam]\nbuoyancy = 101\n", "foam.buoyancy: must be in [0, 100]");
     bad("[foam]\ndrag = 1.5\n", "foam.drag: must be in [0, 1]");
     bad("[foam]\nenabled = 1\n", "foam.enabled: must be true or false");

@@ -1,0 +1,515 @@
+// The table of scene keys (include/metariver/scene_keys.h): every key a scene file can
+// hold, with its type, unit, range, who reads it and its help. The TOML reader, validate(),
+// the viewer's panel, the reference in docs/scene-format.md and `metariver scene --preset`
+// all list keys from here. The cross-key rules (a key another key makes irrelevant, a key
+// a solver does not read) stay in scene_toml.cpp; `readers` says the same in words.
+#include <metariver/scene_keys.h>
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <type_traits>
+
+namespace mr {
+
+namespace {
+
+template <class T>
+    requires(!std::is_enum_v<T>)
+FieldRef field_ref(T* p) {
+    return p;
+}
+template <class E>
+    requires std::is_enum_v<E>
+FieldRef field_ref(E* p) {
+    return EnumRef{p, [](const void* f) { return static_cast<int>(*static_cast<const E*>(f)); },
+                   [](void* f, int i) { *static_cast<E*>(f) = static_cast<E>(i); },
+                   [](const void* f) { return to_string(*static_cast<const E*>(f)); }};
+}
+// Where a key lives: `d.<expr>`.
+#define MR_FIELD(expr) [](SceneDef& d) { return field_ref(&d.expr); }
+
+constexpr KeyRange closed(double lo, double hi) { return {.lo = lo, .hi = hi}; }
+constexpr KeyRange above(double lo, double hi) { return {.lo = lo, .hi = hi, .lo_open = true}; }  // (lo, hi]
+constexpr KeyRange big_vec(double lo) { return {.lo = lo, .hi = 1e6}; }
+
+// Who reads a key (include/metariver/scene_keys.h, KeyReaders).
+using S = const SceneDef&;
+bool smoothing_on(S d) { return d.surface && d.smoothing.method != SmoothingMethod::None && d.smoothing.iterations > 0; }
+bool with_rate(S d) { return d.spawn.auto_rate() ? d.solver == SolverKind::Pbf : d.spawn.particles_per_second() > 0.0f; }
+bool springs_on(S d) { return d.solver == SolverKind::Springs || (d.solver == SolverKind::Bullet && d.bullet.springs); }
+constexpr KeyReaders kAll{"every scene"};
+constexpr KeyReaders kNotPbf{"solver = springs, bullet", [](S d) { return d.solver != SolverKind::Pbf; }};
+constexpr KeyReaders kNotBullet{"solver = springs, pbf", [](S d) { return d.solver != SolverKind::Bullet; }};
+constexpr KeyReaders kPbf{"solver = pbf", [](S d) { return d.solver == SolverKind::Pbf; }};
+constexpr KeyReaders kBullet{"solver = bullet", [](S d) { return d.solver == SolverKind::Bullet; }};
+constexpr KeyReaders kFile{"terrain.source = file", [](S d) { return d.source.kind == TerrainSource::File; }};
+constexpr KeyReaders kProcedural{"a procedural terrain.source", [](S d) { return d.source.kind != TerrainSource::File; }};
+constexpr KeyReaders kValley{"terrain.source = valley", [](S d) { return d.source.kind == TerrainSource::Valley; }};
+constexpr KeyReaders kAutoCentre{"spawn_center auto, channel", [](S d) { return d.spawn.auto_center; }};
+constexpr KeyReaders kNotPoint{"source_shape box, disc", [](S d) { return d.spawn.shape != SourceShape::Point; }};
+constexpr KeyReaders kNoRate{"a scene without a particle rate", [](S d) { return !with_rate(d); }};
+constexpr KeyReaders kRate{"a scene with a particle rate", [](S d) { return with_rate(d); }};
+constexpr KeyReaders kPbfOrCarve{"solver = pbf; terrain.condition = carve",
+                                 [](S d) { return d.solver == SolverKind::Pbf || d.terrain.condition == TerrainCondition::Carve; }};
+constexpr KeyReaders kScorr{"solver = pbf, scorr_k > 0", [](S d) { return d.solver == SolverKind::Pbf && d.pbf.scorr_k > 0.0f; }};
+constexpr KeyReaders kSinkBox{"sink.kind = box", [](S d) { return d.solver != SolverKind::Bullet && d.sink.kind == SinkKind::Box; }};
+constexpr KeyReaders kSpringsK{"solver = springs; bullet with bullet.springs", [](S d) { return springs_on(d); }};
+constexpr KeyReaders kSpringsOn{"springs.stiffness's readers, with stiffness > 0",
+                                [](S d) { return springs_on(d) && d.springs.stiffness > 0.0f; }};
+constexpr KeyReaders kSpringMode{"solver = springs, stiffness > 0",
+                                 [](S d) { return d.solver == SolverKind::Springs && d.springs.stiffness > 0.0f; }};
+constexpr KeyReaders kContact{"solver = springs, pbf; collision.mode paper, robust",
+                              [](S d) { return d.solver != SolverKind::Bullet && d.collision.mode != CollisionMode::None; }};
+constexpr KeyReaders kRobust{"solver = springs, pbf; collision.mode = robust",
+                             [](S d) { return d.solver != SolverKind::Bullet && d.collision.mode == CollisionMode::Robust; }};
+constexpr KeyReaders kSurface{"a scene with the surface on", [](S d) { return d.surface; }};
+constexpr KeyReaders kRadius{"the surface with field.kernel radius_over_r, poly6",
+                             [](S d) { return d.surface && d.field.kernel != FieldKernel::InverseSquare; }};
+constexpr KeyReaders kSmoothing{"surface.method laplacian, taubin", [](S d) { return d.surface && d.smoothing.method != SmoothingMethod::None; }};
+constexpr KeyReaders kSmoothingOn{"smoothing (method not none, iterations > 0)", [](S d) { return smoothing_on(d); }};
+constexpr KeyReaders kLaplacian{"surface.method = laplacian",
+                                [](S d) { return smoothing_on(d) && d.smoothing.method == SmoothingMethod::Laplacian; }};
+constexpr KeyReaders kLambda{"surface.method taubin; laplacian with steps = uniform", [](S d) {
+                                 return smoothing_on(d) && (d.smoothing.method == SmoothingMethod::Taubin || d.smoothing.steps == SmoothingSteps::Uniform);
+                             }};
+constexpr KeyReaders kPassBand{"surface.method taubin; laplacian with steps = chebyshev", [](S d) {
+                                   return smoothing_on(d) && (d.smoothing.method == SmoothingMethod::Taubin || d.smoothing.steps == SmoothingSteps::Chebyshev);
+                               }};
+constexpr KeyReaders kFeatures{"smoothing with field.kernel = poly6",
+                               [](S d) { return smoothing_on(d) && d.field.kernel == FieldKernel::Poly6; }};
+constexpr KeyReaders kFoam{"solver = pbf, foam.enabled", [](S d) { return d.solver == SolverKind::Pbf && d.foam.enabled; }};
+constexpr KeyReaders kBulletSubsteps{"solver = bullet, max_substeps > 0",
+                                     [](S d) { return d.solver == SolverKind::Bullet && d.bullet.max_substeps > 0; }};
+constexpr KeyReaders kBulletSleep{"solver = bullet without bullet.springs",
+                                  [](S d) { return d.solver == SolverKind::Bullet && !d.bullet.springs; }};
+
+constexpr std::string_view kSolvers[] = {"springs", "bullet", "pbf"};
+constexpr std::string_view kSources[] = {"valley", "strict", "bowl", "flat", "file"};
+constexpr std::string_view kConditions[] = {"none", "fill", "breach", "carve", "auto"};
+constexpr std::string_view kShapes[] = {"box", "disc", "point"};
+constexpr std::string_view kSinks[] = {"none", "box", "edges"};
+constexpr std::string_view kSpringModes[] = {"pairs", "grid"};
+constexpr std::string_view kCollisionModes[] = {"paper", "robust", "none"};
+constexpr std::string_view kQueries[] = {"tree", "heightfield"};
+constexpr std::string_view kKernels[] = {"inverse_square", "radius_over_r", "poly6"};
+constexpr std::string_view kBounds[] = {"particles", "terrain"};
+constexpr std::string_view kMethods[] = {"none", "laplacian", "taubin"};
+constexpr std::string_view kSteps[] = {"uniform", "chebyshev"};
+constexpr std::string_view kBulletTerrains[] = {"mesh", "heightfield"};
+
+constexpr std::string_view kAuto[] = {"auto"};
+constexpr std::string_view kCentres[] = {"auto", "channel"};
+constexpr KeyWords kCountWords{kAuto, [](S d) { return d.spawn.count == kAutoCount ? 0 : -1; },
+                               [](SceneDef& d, int i) {
+                                   if (i == 0) d.spawn.count = kAutoCount;
+                               }};
+constexpr KeyWords kRateWords{kAuto, [](S d) { return d.spawn.auto_rate() ? 0 : -1; },
+                              [](SceneDef& d, int i) {
+                                  if (i == 0) d.spawn.flow_rate = kAutoRate;
+                              }};
+// A centre given as [x, y, z] turns both automatic placements off.
+constexpr KeyWords kCentreWords{kCentres, [](S d) { return d.spawn.auto_center ? (d.spawn.auto_channel ? 1 : 0) : -1; },
+                                [](SceneDef& d, int i) {
+                                    d.spawn.auto_center = i >= 0;
+                                    d.spawn.auto_channel = i == 1;
+                                }};
+
+using K = KeyType;
+const SceneKey kKeys[] = {
+    // root
+    {.name = "name", .type = K::String, .readers = kAll, .help = "Shown in reports.", .field = MR_FIELD(name)},
+    {.name = "solver", .type = K::Choice, .choices = kSolvers, .readers = kAll,
+     .help = "pbf: Position Based Fluids (the default river, docs/river.md); springs: the paper's own physics; bullet: its "
+             "engine physics (rigid spheres on Bullet, [bullet], docs/bullet.md).",
+     .field = MR_FIELD(solver)},
+    {.name = "seed", .type = K::Seed, .range = closed(0, 4294967295.0), .readers = kNotPbf,
+     .help = "Particle spawn RNG seed (refused with solver = \"pbf\", as --seed is: its lattice source places every "
+             "particle, nothing is random).",
+     .field = MR_FIELD(seed)},
+    // [terrain]
+    {.name = "terrain.source", .type = K::Choice, .choices = kSources, .readers = kAll,
+     .help = "valley: procedural valley with a winding river channel; strict, bowl: procedural equivalents of the paper's "
+             "strict17.png and bowl.png; flat; file: the PNG of terrain.heightmap.",
+     .field = MR_FIELD(source.kind)},
+    {.name = "terrain.heightmap", .type = K::String, .readers = kFile,
+     .help = "PNG (8/16-bit gray, gray+alpha, RGB, RGBA; red channel), relative to the scene file; setting it implies "
+             "source = \"file\" (--heightmap).",
+     .field = MR_FIELD(source.heightmap)},
+    {.name = "terrain.width", .type = K::Int, .unit = "samples", .range = closed(2, kMaxHeightmapSide), .readers = kProcedural,
+     .help = "Samples along x.", .field = MR_FIELD(source.width)},
+    {.name = "terrain.height", .type = K::Int, .unit = "samples", .range = closed(2, kMaxHeightmapSide), .readers = kProcedural,
+     .help = "Samples along z.", .field = MR_FIELD(source.height)},
+    {.name = "terrain.seed", .type = K::Seed, .range = closed(0, 4294967295.0), .readers = kValley,
+     .help = "Procedural seed (only the valley is random).", .field = MR_FIELD(source.seed)},
+    {.name = "terrain.area_scale", .type = K::Float, .unit = "m", .range = above(0, 1e4), .readers = kAll,
+     .help = "Metres between neighbouring samples (--area-scale; \"Heightmap scale\" below).", .field = MR_FIELD(terrain.area_scale)},
+    {.name = "terrain.height_scale", .type = K::Float, .unit = "m", .range = above(0, 1e5), .readers = kAll,
+     .help = "Metres for a normalised height of 1 (--height-scale).", .field = MR_FIELD(terrain.height_scale)},
+    {.name = "terrain.paper_row_orientation", .type = K::Bool, .readers = kAll,
+     .help = "Image row r -> z = (H-1-r) area_scale (the paper, Unity); false: z = r area_scale.",
+     .field = MR_FIELD(terrain.paper_row_orientation)},
+    {.name = "terrain.condition", .type = K::Choice, .choices = kConditions, .readers = kAll,
+     .help = "Drainage conditioning before the mesh is built. fill: priority-flood filling with a 0.1 % slope; breach: a "
+             "channel carved from each depression through its rim; carve: breach, then the river's main channel (source to "
+             "outlet) cut in: a flat bed max(3 samples, 4 pbf.spacing) wide and 2 pbf.spacing deep that never rises (least slope half the path's mean slope, 0.1-2 %), "
+             "parabolic walls, levees where the ground beside is lower, a basin under the source; auto: carve for a PBF "
+             "river (a flow rate and sink.kind = \"edges\"), none otherwise (a still pool keeps its basin). `run --stats` "
+             "reports what it changed (docs/river.md).",
+     .field = MR_FIELD(terrain.condition)},
+    // [particles]
+    {.name = "particles.count", .type = K::Int, .range = closed(1, kMaxParticles), .words = kCountWords, .readers = kAll,
+     .help = "Particle budget, or \"auto\": a PBF river sizes it to its main channel (docs/river.md, \"Sizing\"); other "
+             "solvers take 4000.",
+     .field = MR_FIELD(spawn.count)},
+    {.name = "particles.spawn_center", .type = K::Vec3, .unit = "m", .range = big_vec(-1e6), .words = kCentreWords, .readers = kAll,
+     .help = "Centre of the source; \"auto\": above the lowest point of the upstream band (the 10 % of rows with the "
+             "highest z); \"channel\": the head of the terrain's main channel.",
+     .field = MR_FIELD(spawn.center)},
+    {.name = "particles.spawn_half_extent", .type = K::Vec3, .unit = "m", .range = big_vec(0), .readers = kNotPoint,
+     .help = "Half size of the source (a disc: radius .x, half height .y).", .field = MR_FIELD(spawn.half_extent)},
+    {.name = "particles.spawn_interval", .type = K::Int, .unit = "frames", .range = closed(0, 1e6), .readers = kNoRate,
+     .help = "Frames between two activations without a particle rate; 0 = all at once.", .field = MR_FIELD(spawn.interval)},
+    {.name = "particles.initial_velocity", .type = K::Vec3, .unit = "m/s", .range = closed(-1e4, 1e4), .readers = kAll,
+     .help = "Velocity given at (re)spawn.", .field = MR_FIELD(spawn.initial_velocity)},
+    {.name = "particles.auto_height", .type = K::Float, .unit = "m", .range = closed(0, 1e4), .readers = kAutoCentre,
+     .help = "Height of an \"auto\" or \"channel\" centre above the ground; the source is moved inward until its "
+             "footprint is inside the terrain and raised until half of the ground under it is 0.5 m below its bottom.",
+     .field = MR_FIELD(spawn.auto_height)},
+    {.name = "particles.source_shape", .type = K::Choice, .choices = kShapes, .readers = kNotBullet,
+     .help = "box | disc (radius spawn_half_extent.x) | point.", .field = MR_FIELD(spawn.shape)},
+    {.name = "particles.flow_rate", .type = K::Float, .unit = "1/s", .range = closed(0, 1e7), .words = kRateWords, .readers = kNotBullet,
+     .help = "Particles (or litres, with litres_per_particle) per second; 0: one every spawn_interval frames; \"auto\": a "
+             "PBF river sizes it to its carved channel (`run` prints the values it chose; a number here keeps count "
+             "\"auto\" sized to it). Above particles.count per second: a warning; PBF: above what the lattice source can "
+             "deliver, a warning and capped (docs/river.md, \"Lattice sources\").",
+     .field = MR_FIELD(spawn.flow_rate)},
+    {.name = "particles.litres_per_particle", .type = K::Float, .unit = "l", .range = closed(0, 1e9), .readers = kRate,
+     .help = "> 0: flow_rate is in litres per second, each particle this many litres.", .field = MR_FIELD(spawn.litres_per_particle)},
+    // [pbf]
+    {.name = "pbf.spacing", .type = K::Float, .unit = "m", .range = closed(1e-3, 1e3), .readers = kPbfOrCarve,
+     .help = "Rest spacing (below 1 mm the kernel constants overflow); a carved channel's depth and width.", .field = MR_FIELD(pbf.spacing)},
+    {.name = "pbf.kernel_radius", .type = K::Float, .unit = "m", .range = {.lo = 0, .hi = 4e3, .lo_open = true, .text = "(pbf.spacing, 4 pbf.spacing]"},
+     .readers = kPbf, .help = "Smoothing length h.", .field = MR_FIELD(pbf.kernel_radius)},
+    {.name = "pbf.iterations", .type = K::Int, .range = closed(1, 100), .readers = kPbf,
+     .help = "Density-constraint iterations per step.", .field = MR_FIELD(pbf.iterations)},
+    {.name = "pbf.relaxation", .type = K::Float, .range = above(0, 1e3), .readers = kPbf,
+     .help = "Constraint force mixing, relative to a lattice particle's sum |grad C|^2.", .field = MR_FIELD(pbf.relaxation)},
+    {.name = "pbf.scorr_k", .type = K::Float, .range = closed(0, 1), .readers = kPbf,
+     .help = "Tensile-instability correction strength; 0 = off.", .field = MR_FIELD(pbf.scorr_k)},
+    {.name = "pbf.scorr_n", .type = K::Int, .range = closed(1, 8), .readers = kScorr, .help = "Its exponent.", .field = MR_FIELD(pbf.scorr_n)},
+    {.name = "pbf.scorr_dq", .type = K::Float, .unit = "h", .range = closed(1e-3, 0.999), .readers = kScorr,
+     .help = "Its reference distance, a fraction of h.", .field = MR_FIELD(pbf.scorr_dq)},
+    {.name = "pbf.xsph", .type = K::Float, .range = closed(0, 1), .readers = kPbf, .help = "XSPH viscosity.", .field = MR_FIELD(pbf.xsph)},
+    {.name = "pbf.vorticity", .type = K::Float, .range = closed(0, 100), .readers = kPbf,
+     .help = "Vorticity confinement; 0 = off.", .field = MR_FIELD(pbf.vorticity)},
+    {.name = "pbf.sleep_threshold", .type = K::Float, .unit = "m/s", .range = closed(0, 1), .readers = kPbf,
+     .help = "0 = off. A particle slower than this for 0.1 s sleeps (its slow steps are undone) until a step moves it "
+             "faster (docs/river.md, \"Sleeping\"); capped at 0.9 x gravity x the step so nothing sleeps in mid-air.",
+     .field = MR_FIELD(pbf.sleep_threshold)},
+    // [sink]
+    {.name = "sink.kind", .type = K::Choice, .choices = kSinks, .readers = kNotBullet,
+     .help = "none: particles respawn only when they leave the terrain's box | box: entering [min, max] | edges: leaving "
+             "the terrain's rectangle over an edge (its outlets). Sunk particles are recycled to the source.",
+     .field = MR_FIELD(sink.kind)},
+    {.name = "sink.min", .type = K::Vec3, .unit = "m", .range = big_vec(-1e6), .readers = kSinkBox, .help = "Box corner.", .field = MR_FIELD(sink.min)},
+    {.name = "sink.max", .type = K::Vec3, .unit = "m", .range = {.lo = -1e6, .hi = 1e6, .text = "[sink.min, 1000000]"},
+     .readers = kSinkBox, .help = "The opposite corner.", .field = MR_FIELD(sink.max)},
+    // [forces]
+    {.name = "forces.gravity", .type = K::Float, .unit = "m/s^2", .range = closed(-1000, 1000), .readers = kAll,
+     .help = "Downwards.", .field = MR_FIELD(integrator.gravity)},
+    // [springs]
+    {.name = "springs.stiffness", .type = K::Float, .unit = "1/s^2", .range = closed(0, 1e6), .readers = kSpringsK,
+     .help = "k; 0 = off.", .field = MR_FIELD(springs.stiffness)},
+    {.name = "springs.min_distance", .type = K::Float, .unit = "m", .range = closed(0, 1e4), .readers = kSpringsOn,
+     .help = "r, the rest length.", .field = MR_FIELD(springs.min_distance)},
+    {.name = "springs.max_distance", .type = K::Float, .unit = "m", .range = closed(0, 1e4), .readers = kSpringsOn,
+     .help = "Pairs with |v| - r >= max_distance are skipped.", .field = MR_FIELD(springs.max_distance)},
+    {.name = "springs.mode", .type = K::Choice, .choices = kSpringModes, .readers = kSpringMode,
+     .help = "pairs: the paper's all-pairs loop (the serial reference; refused above 20,000 particles); grid: the "
+             "neighbour grid, parallel, the same forces (tested).",
+     .field = MR_FIELD(springs.mode)},
+    // [collision]
+    {.name = "collision.mode", .type = K::Choice, .choices = kCollisionModes, .readers = kNotBullet,
+     .help = "paper: the leaf of the new position, eq. 4 | robust: the swept segment through the whole tree, watertight, "
+             "a guard (0 tunneling) | none. solver = \"pbf\": robust or none (it slides, never reflects).",
+     .field = MR_FIELD(collision.mode)},
+    {.name = "collision.damping", .type = K::Float, .range = closed(0, 1), .readers = kContact,
+     .help = "Fraction of speed lost at a bounce; solver = \"pbf\": the bed friction, the share of a particle's motion "
+             "along the ground it loses in each step the terrain holds it (still water 0.02: docs/river.md, \"Bed friction\").",
+     .field = MR_FIELD(collision.damping)},
+    {.name = "collision.offset", .type = K::Float, .unit = "m", .range = closed(0, 10), .readers = kContact,
+     .help = "Placed above the hit point.", .field = MR_FIELD(collision.offset)},
+    {.name = "collision.bvh_leaf_triangles", .type = K::Int, .range = closed(2, 4096), .readers = kAll,
+     .help = "AABB tree leaf size (every scene builds the tree; the viewer draws it).", .field = MR_FIELD(collision.leaf_triangles)},
+    {.name = "collision.radius", .type = K::Float, .unit = "m", .range = closed(0, 100), .readers = kNotBullet,
+     .help = "Particle radius: the centre stays this far above the ground (the terrain lifted vertically; exact on flat "
+             "ground); the tunneled counter reads it.",
+     .field = MR_FIELD(collision.radius)},
+    {.name = "collision.query", .type = K::Choice, .choices = kQueries, .readers = kRobust,
+     .help = "Robust mode's segment query: tree (the AABB tree) | heightfield (walk the cells under the segment: the same "
+             "hits, faster).",
+     .field = MR_FIELD(collision.query)},
+    // [integrator]
+    {.name = "integrator.dt", .type = K::Float, .unit = "s", .range = {.lo = 0, .hi = 1, .lo_open = true, .zero_too = true},
+     .readers = kAll, .help = "Fixed step; 0: the frame time (the paper).", .field = MR_FIELD(integrator.fixed_dt)},
+    {.name = "integrator.substeps", .type = K::Int, .range = closed(1, 1000), .readers = kNotBullet,
+     .help = "Solver steps per frame (Bullet: bullet.dt, max_substeps).", .field = MR_FIELD(integrator.substeps)},
+    // [field]
+    {.name = "field.kernel", .type = K::Choice, .choices = kKernels, .readers = kSurface,
+     .help = "inverse_square: eq. 2, 1/r^2 | radius_over_r: the paper's code (both reach every grid sample: refused "
+             "above 5,000 balls) | poly6: compact, sparse blocks, parallel.",
+     .field = MR_FIELD(field.kernel)},
+    {.name = "field.bounds", .type = K::Choice, .choices = kBounds, .readers = kSurface,
+     .help = "particles: the particles' box grown by bounds_offset (the paper) | terrain: the terrain's box, fixed "
+             "(poly6 only).",
+     .field = MR_FIELD(field.bounds)},
+    {.name = "field.radius", .type = K::Float, .unit = "m", .range = above(0, 1e4), .readers = kRadius,
+     .help = "Metaball radius (radius_over_r); poly6: the support radius.", .field = MR_FIELD(field.radius)},
+    {.name = "field.resolution", .type = K::Float, .unit = "1/m", .range = above(0, 64), .readers = kAll,
+     .help = "Grid cells per metre; also the default voxel size of --export --format vdb.", .field = MR_FIELD(field.resolution)},
+    {.name = "field.bounds_offset", .type = K::Float, .unit = "m", .range = closed(0, 1e4), .readers = kSurface,
+     .help = "The particles' box grows by this on every side.", .field = MR_FIELD(field.bounds_offset)},
+    {.name = "field.threshold", .type = K::Float, .range = above(0, 1e9), .readers = kSurface,
+     .help = "Iso value: inside where the field is above it.", .field = MR_FIELD(field.threshold)},
+    // [surface]
+    {.name = "surface.enabled", .type = K::Bool, .readers = kAll,
+     .help = "Build the field and the marching-cubes surface every frame; the root key `surface = true/false` is the same "
+             "switch (a file has one or the other: TOML allows a name once).",
+     .field = MR_FIELD(surface)},
+    {.name = "surface.method", .type = K::Choice, .choices = kMethods, .readers = kSurface,
+     .help = "none: the mesh as extracted | laplacian: feature-weighted Laplacian steps as splashsurf does (Loeschner et "
+             "al. 2023), then the volume given back | taubin: lambda|mu steps (Taubin 1995), keep the volume, flatten less.",
+     .field = MR_FIELD(smoothing.method)},
+    {.name = "surface.steps", .type = K::Choice, .choices = kSteps, .readers = kLaplacian,
+     .help = "chebyshev: step sizes that damp the band [pass_band, 2] of mesh frequencies evenly (Taubin, Zhang, Golub "
+             "1996: 8 steps damp it to 0.05, 16 uniform steps of 1 leave 0.19) | uniform: every step lambda.",
+     .field = MR_FIELD(smoothing.steps)},
+    {.name = "surface.iterations", .type = K::Int, .range = closed(0, 100), .readers = kSmoothing,
+     .help = "Steps (each a pass over the moving vertices).", .field = MR_FIELD(smoothing.iterations)},
+    {.name = "surface.lambda", .type = K::Float, .range = above(0, 1), .readers = kLambda,
+     .help = "Share of the way to the neighbours' mean per step.", .field = MR_FIELD(smoothing.lambda)},
+    {.name = "surface.pass_band", .type = K::Float, .range = {.lo = 0, .hi = 1, .lo_open = true, .hi_open = true}, .readers = kPassBand,
+     .help = "Mesh frequency (0 to 2) below which shapes are kept: taubin's k_PB (mu = 1 / (k_PB - 1 / lambda)), "
+             "chebyshev's band [pass_band, 2].",
+     .field = MR_FIELD(smoothing.pass_band)},
+    {.name = "surface.feature_count", .type = K::Float, .range = {.lo = 2, .hi = 1000, .zero_too = true}, .readers = kFeatures,
+     .help = "0: off (every vertex moves fully). The poly6 field one lone particle's iso distance inside the surface is "
+             "about the number of particles behind a vertex (a lone drop 1, a touching pair 1.4, still water 2 to 4): at "
+             "or below feature_count / 2 a vertex does not move, from feature_count on it moves fully (smoothstep between).",
+     .field = MR_FIELD(smoothing.feature_count)},
+    {.name = "surface.keep_volume", .type = K::Bool, .readers = kLaplacian,
+     .help = "Move the smoothed vertices along their normals by what the steps took from the enclosed volume.",
+     .field = MR_FIELD(smoothing.keep_volume)},
+    {.name = "surface.normal_iterations", .type = K::Int, .range = closed(0, 100), .readers = kSmoothingOn,
+     .help = "Passes that average each recomputed normal with its neighbours'.", .field = MR_FIELD(smoothing.normal_iterations)},
+    // [foam]
+    {.name = "foam.enabled", .type = K::Bool, .readers = kPbf,
+     .help = "Make diffuse particles (on in the default scene, off in the other presets; enabled = false is accepted in "
+             "any scene).",
+     .field = MR_FIELD(foam.enabled)},
+    {.name = "foam.max_particles", .type = K::Int, .range = closed(0, 1e6), .readers = kFoam,
+     .help = "Live diffuse particles at most (emission beyond is dropped, counted).", .field = MR_FIELD(foam.max_particles)},
+    {.name = "foam.trapped_air_min", .type = K::Float, .unit = "m/s", .range = closed(0, 1e3), .readers = kFoam,
+     .help = "I_ta below this traps no air.", .field = MR_FIELD(foam.trapped_air_min)},
+    {.name = "foam.trapped_air_max", .type = K::Float, .unit = "m/s", .range = {.lo = 0, .hi = 1e3, .lo_open = true, .text = "(foam.trapped_air_min, 1000]"},
+     .readers = kFoam, .help = "I_ta from here on counts fully.", .field = MR_FIELD(foam.trapped_air_max)},
+    {.name = "foam.wave_crest_min", .type = K::Float, .range = closed(0, 1e3), .readers = kFoam,
+     .help = "I_wc below this makes no crest foam.", .field = MR_FIELD(foam.wave_crest_min)},
+    {.name = "foam.wave_crest_max", .type = K::Float, .range = {.lo = 0, .hi = 1e3, .lo_open = true, .text = "(foam.wave_crest_min, 1000]"},
+     .readers = kFoam, .help = "I_wc from here on counts fully.", .field = MR_FIELD(foam.wave_crest_max)},
+    {.name = "foam.energy_min", .type = K::Float, .unit = "J/kg", .range = closed(0, 1e6), .readers = kFoam,
+     .help = "I_k below this emits nothing (0.5: slower than 1 m/s, a pool at rest makes none).", .field = MR_FIELD(foam.energy_min)},
+    {.name = "foam.energy_max", .type = K::Float, .unit = "J/kg", .range = {.lo = 0, .hi = 1e6, .lo_open = true, .text = "(foam.energy_min, 1000000]"},
+     .readers = kFoam, .help = "I_k from here on counts fully (8: 4 m/s).", .field = MR_FIELD(foam.energy_max)},
+    {.name = "foam.trapped_air_rate", .type = K::Float, .unit = "1/s", .range = closed(0, 1e4), .readers = kFoam,
+     .help = "Diffuse particles per fluid particle per second at Phi_ta = Phi_k = 1.", .field = MR_FIELD(foam.trapped_air_rate)},
+    {.name = "foam.wave_crest_rate", .type = K::Float, .unit = "1/s", .range = closed(0, 1e4), .readers = kFoam,
+     .help = "The same for the wave crest.", .field = MR_FIELD(foam.wave_crest_rate)},
+    {.name = "foam.lifetime_min", .type = K::Float, .unit = "s", .range = closed(0.01, 1e3), .readers = kFoam,
+     .help = "Each particle draws its life from [lifetime_min, lifetime_max].", .field = MR_FIELD(foam.lifetime_min)},
+    {.name = "foam.lifetime_max", .type = K::Float, .unit = "s", .range = {.lo = 0.01, .hi = 1e3, .text = "[foam.lifetime_min, 1000]"},
+     .readers = kFoam, .help = "See lifetime_min.", .field = MR_FIELD(foam.lifetime_max)},
+    {.name = "foam.spray_neighbours", .type = K::Int, .range = closed(0, 1000), .readers = kFoam,
+     .help = "Fewer fluid neighbours within h: spray (ballistic under gravity).", .field = MR_FIELD(foam.spray_neighbours)},
+    {.name = "foam.bubble_neighbours", .type = K::Int, .range = {.lo = 0, .hi = 1000, .text = "[foam.spray_neighbours, 1000]"},
+     .readers = kFoam,
+     .help = "More: a bubble (buoyant, dragged to the fluid's velocity); between: foam (moves with the W~-averaged fluid "
+             "velocity).",
+     .field = MR_FIELD(foam.bubble_neighbours)},
+    {.name = "foam.buoyancy", .type = K::Float, .unit = "g", .range = closed(0, 100), .readers = kFoam,
+     .help = "Bubbles' upward acceleration in units of gravity.", .field = MR_FIELD(foam.buoyancy)},
+    {.name = "foam.drag", .type = K::Float, .range = closed(0, 1), .readers = kFoam,
+     .help = "Share of a bubble's velocity difference to the fluid removed per frame.", .field = MR_FIELD(foam.drag)},
+    // [bullet]
+    {.name = "bullet.terrain", .type = K::Choice, .choices = kBulletTerrains, .readers = kBullet,
+     .help = "mesh: btBvhTriangleMeshShape of the terrain's triangles (the paper's mesh collider) | heightfield: "
+             "btHeightfieldTerrainShape (the same samples, the same diagonal split).",
+     .field = MR_FIELD(bullet.terrain)},
+    {.name = "bullet.sphere_radius", .type = K::Float, .unit = "m", .range = above(0, 1e3), .readers = kBullet,
+     .help = "Collider radius of every particle.", .field = MR_FIELD(bullet.sphere_radius)},
+    {.name = "bullet.mass", .type = K::Float, .unit = "kg", .range = above(0, 1e6), .readers = kBullet,
+     .help = "Per sphere.", .field = MR_FIELD(bullet.mass)},
+    {.name = "bullet.friction", .type = K::Float, .range = closed(0, 100), .readers = kBullet,
+     .help = "Contact friction (Bullet's default 0.5).", .field = MR_FIELD(bullet.friction)},
+    {.name = "bullet.restitution", .type = K::Float, .range = closed(0, 1), .readers = kBullet, .help = "Bounciness.",
+     .field = MR_FIELD(bullet.restitution)},
+    {.name = "bullet.particle_collisions", .type = K::Bool, .readers = kBullet,
+     .help = "Spheres collide with each other (the paper: no).", .field = MR_FIELD(bullet.particle_collisions)},
+    {.name = "bullet.dt", .type = K::Float, .unit = "s", .range = above(0, 1), .readers = kBulletSubsteps,
+     .help = "Bullet's fixed internal step.", .field = MR_FIELD(bullet.fixed_dt)},
+    {.name = "bullet.max_substeps", .type = K::Int, .range = closed(0, 1000), .readers = kBullet,
+     .help = "Internal steps per frame at most; 0 = one step of the frame time.", .field = MR_FIELD(bullet.max_substeps)},
+    {.name = "bullet.solver_iterations", .type = K::Int, .range = closed(1, 1000), .readers = kBullet,
+     .help = "Sequential-impulse iterations.", .field = MR_FIELD(bullet.solver_iterations)},
+    {.name = "bullet.ccd", .type = K::Bool, .readers = kBullet,
+     .help = "Continuous collision detection (a sphere moving more than half its radius in a step is swept).",
+     .field = MR_FIELD(bullet.ccd)},
+    {.name = "bullet.sleep", .type = K::Bool, .readers = kBulletSleep,
+     .help = "Bullet's deactivation of resting spheres (spheres with springs never sleep).", .field = MR_FIELD(bullet.sleep)},
+    {.name = "bullet.springs", .type = K::Bool, .readers = kBullet,
+     .help = "The paper's eq. 3 ([springs]) as external forces: its future work.", .field = MR_FIELD(bullet.springs)},
+};
+#undef MR_FIELD
+
+const SceneSection kSections[] = {
+    {"", "Keys at the top of the file."},
+    {"terrain", "The heightmap and how its samples become metres (\"Heightmap scale\" below)."},
+    {"particles", "The source: where, how many and how fast particles enter."},
+    {"pbf", "Position Based Fluids (Macklin and Mueller 2013; docs/river.md): solver = \"pbf\" only; the other solvers "
+            "read pbf.spacing only with terrain.condition = \"carve\" (the carved channel's size)."},
+    {"sink", "Where water leaves: sunk particles are recycled to the source. Not with solver = \"bullet\"."},
+    {"forces", "Forces on every particle."},
+    {"springs", "The paper's eq. 3: a = 0.5 k (r v/|v| - v) to each particle of a pair. Read by solver = \"springs\", "
+                "and by Bullet with bullet.springs = true (not mode); an error in a PBF scene."},
+    {"collision", "Terrain contact of solver = \"springs\" and \"pbf\"; an error in a Bullet scene (it has [bullet])."},
+    {"integrator", "The time step."},
+    {"field", "The metaball scalar field the surface is extracted from."},
+    {"surface", "The marching-cubes surface and its smoothing (docs/rendering.md, \"Surface smoothing\"); the paper "
+                "presets and springs-valley have method = \"none\"."},
+    {"foam", "Diffuse spray, foam and bubbles (Ihmsen et al. 2012; docs/rendering.md, \"Foam and spray\"); solver = "
+             "\"pbf\" only. Per fluid particle i and frame, over its neighbours j within h (W~ = 1 - r/h): trapped air "
+             "I_ta = sum |v_ij| (1 - v^_ij . x^_ij) W~ (m/s), wave crest I_wc = sum (1 - n^_i . n^_j) W~ over convex j "
+             "where v^_i . n^_i >= 0.6, kinetic energy I_k = 0.5 |v_i|^2 (J/kg); each mapped to [0, 1] by "
+             "(min(I, max) - min(I, min)) / (max - min); i emits Phi_k (trapped_air_rate Phi_ta + wave_crest_rate "
+             "Phi_wc) dt particles."},
+    {"bullet", "The paper's engine physics on Bullet (docs/bullet.md): solver = \"bullet\" only, at most 200,000 "
+               "bodies; gravity from [forces], the frame time from [integrator]. A Bullet scene refuses what it does "
+               "not do: a flow rate, litres_per_particle, a source_shape other than box, a sink, springs.mode, springs.* "
+               "without bullet.springs (stiffness 0 is fine), integrator.substeps, [collision], [pbf]; left out, the "
+               "flow rate and sink are off and spawn_interval is the paper-engine preset's."},
+};
+
+std::string number(double v) { return fmt::format("{}", v); }
+
+}  // namespace
+
+std::string_view to_string(KeyType t) {
+    switch (t) {
+        case KeyType::Bool: return "bool";
+        case KeyType::Int: return "integer";
+        case KeyType::Seed: return "integer";
+        case KeyType::Float: return "number";
+        case KeyType::Vec3: return "[x, y, z]";
+        case KeyType::String: return "string";
+        case KeyType::Choice: return "choice";
+    }
+    return "?";
+}
+
+bool KeyRange::contains(double v) const {
+    if (!std::isfinite(v)) return false;
+    if (zero_too && v == 0.0) return true;
+    return (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi);
+}
+
+std::string KeyRange::describe() const {
+    if (!text.empty()) return std::string(text);
+    return fmt::format("{}{}{}, {}{}", zero_too ? "0 or " : "", lo_open ? "(" : "[", number(lo), number(hi), hi_open ? ")" : "]");
+}
+
+std::string KeyRange::phrase() const {
+    if (!text.empty() || !zero_too) return "in " + describe();
+    return "0 or in " + KeyRange{lo, hi, lo_open, hi_open}.describe();
+}
+
+std::string_view SceneKey::section() const {
+    const size_t dot = name.find('.');
+    return dot == std::string_view::npos ? std::string_view{} : name.substr(0, dot);
+}
+
+std::string_view SceneKey::leaf() const {
+    const size_t dot = name.find('.');
+    return dot == std::string_view::npos ? name : name.substr(dot + 1);
+}
+
+std::span<const SceneKey> scene_keys() { return kKeys; }
+std::span<const SceneSection> scene_sections() { return kSections; }
+
+const SceneKey* find_scene_key(std::string_view name) {
+    for (const SceneKey& k : kKeys)
+        if (k.name == name) return &k;
+    return nullptr;
+}
+
+namespace {
+
+/// A float as TOML writes it: the shortest text that reads back to the same float,
+/// always with a fraction or an exponent (TOML's 1 is an integer).
+std::string toml_float(float v) {
+    std::string s = fmt::format("{}", v);
+    if (s.find_first_of(".en") == std::string::npos) s += ".0";
+    return s;
+}
+
+std::string toml_string(std::string_view s) {
+    std::string out = "\"";
+    for (const char ch : s) {
+        const auto c = static_cast<unsigned char>(ch);
+        if (ch == '"' || ch == '\\') out += {'\\', ch};
+        else if (c < 0x20 || c == 0x7f) out += fmt::format("\\u{:04x}", c);
+        else out += ch;
+    }
+    return out + "\"";
+}
+
+/// Reading a key's field from a const scene: the accessor takes a mutable one but only
+/// its address is used here.
+FieldRef read_field(const SceneKey& k, const SceneDef& d) { return k.field(const_cast<SceneDef&>(d)); }
+
+}  // namespace
+
+std::string key_value_toml(const SceneKey& k, const SceneDef& d) {
+    if (k.words.current) {
+        if (const int w = k.words.current(d); w >= 0) return toml_string(k.words.words[static_cast<size_t>(w)]);
+    }
+    const FieldRef f = read_field(k, d);
+    if (auto* p = std::get_if<bool*>(&f)) return **p ? "true" : "false";
+    if (auto* p = std::get_if<int*>(&f)) return fmt::format("{}", **p);
+    if (auto* p = std::get_if<uint32_t*>(&f)) return fmt::format("{}", **p);
+    if (auto* p = std::get_if<float*>(&f)) return toml_float(**p);
+    if (auto* p = std::get_if<Vec3*>(&f)) return fmt::format("[{}, {}, {}]", toml_float((*p)->x), toml_float((*p)->y), toml_float((*p)->z));
+    if (auto* p = std::get_if<std::string*>(&f)) return toml_string(**p);
+    const EnumRef& e = std::get<EnumRef>(f);
+    const int i = e.get(e.field);
+    return i >= 0 && static_cast<size_t>(i) < k.choices.size() ? toml_string(k.choices[static_cast<size_t>(i)]) : "\"?\"";
+}
+
+std::string key_range_error(const SceneKey& k, const SceneDef& d) {
+    if (!k.numeric() || (k.words.current && k.words.current(d) >= 0)) return {};
+    const FieldRef f = read_field(k, d);
+    if (auto* p = std::get_if<Vec3*>(&f)) {
+        const Vec3& v = **p;
+        if (k.range.contains(v.x) && k.range.contains(v.y) && k.range.contains(v.z)) return {};
+        return fmt::format("every component must be {} (got [{}, {}, {}])", k.range.phrase(), v.x, v.y, v.z);
+    }
+    double v = 0.0;
+    std::string got;
+    if (auto* p = std::get_if<int*>(&f)) v = **p, got = fmt::format("{}", **p);
+    else if (auto* p = std::get_if<uint32_t*>(&f)) v = **p, got = fmt::format("{}", **p);
+    else if (auto* p = std::get_if<float*>(&f)) v = **p, got = fmt::format("{}", **p);
+    if (k.range.contains(v)) return {};
+    return fmt::format("must be {} (got {})", k.range.phrase(), got);
+}
+
+}  // namespace mr
