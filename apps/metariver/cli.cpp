@@ -2,19 +2,29 @@
 // into the action to run. main() runs it; fuzz/cli_fuzz.cpp fuzzes the parsing.
 #include "commands.h"
 
+#include <build_info.h>
+
 #include <fmt/format.h>
 
 #include <cstdio>
 
 namespace mr::app {
 
+std::string version_text() {
+    return fmt::format("metariver {}\nbuild: commit {} (at configure time), {}, {}", METARIVER_VERSION,
+                       METARIVER_GIT_COMMIT, METARIVER_BUILD_TYPE[0] ? METARIVER_BUILD_TYPE : "no build type",
+                       METARIVER_COMPILER);
+}
+
 CommandLine parse_command_line(int argc, const char* const* argv) {
     CLI::App app{"metariver: real-time river simulation with metaballs"};
     app.require_subcommand(1);
+    app.set_version_flag("--version", version_text(), "print the version and the build, then exit");
     CommandLine result;
     register_run(app, result.action);
     register_view(app, result.action);
     register_render(app, result.action);
+    register_scene(app, result.action);
     register_bench(app, result.action);
     if (argc > 1 && argv[1][0] != '-') {
         std::string known;
@@ -30,6 +40,8 @@ CommandLine parse_command_line(int argc, const char* const* argv) {
     }
     try {
         app.parse(argc, argv);
+    } catch (const CLI::CallForVersion& e) {
+        return {{}, app.exit(e)};
     } catch (const CLI::CallForHelp& e) {
         return {{}, app.exit(e)};
     } catch (const CLI::CallForAllHelp& e) {

@@ -30,7 +30,9 @@ struct SceneOptions {
 
     void add_to(CLI::App& cmd);
     /// The scene the options describe; errors are one line, naming the option or file.
-    Result<SceneDef> resolve() const;
+    /// need_heightmap = false: a preset whose paper scene used a PNG may stay without one
+    /// (`metariver scene` prints it with an empty terrain.heightmap to fill in).
+    Result<SceneDef> resolve(bool need_heightmap = true) const;
 };
 
 /// Registers `run`; `action` is set to the function to call after parsing.
@@ -39,6 +41,8 @@ void register_run(CLI::App& app, std::function<int()>& action);
 void register_view(CLI::App& app, std::function<int()>& action);
 /// Registers `render` (headless PNG/MP4 rendering; apps/metariver/cmd_render.cpp).
 void register_render(CLI::App& app, std::function<int()>& action);
+/// Registers `scene` (a scene as a commented TOML file; the key reference; cmd_scene.cpp).
+void register_scene(CLI::App& app, std::function<int()>& action);
 /// Registers `bench`.
 void register_bench(CLI::App& app, std::function<int()>& action);
 
@@ -49,6 +53,9 @@ struct CommandLine {
     std::function<int()> action;
     int exit_code = kExitOk;
 };
+/// What `metariver --version` prints: the version, the git commit at configure time, the
+/// build type and the compiler.
+std::string version_text();
 /// Parses `argv` (argv[0] is the program) for every command; runs nothing.
 CommandLine parse_command_line(int argc, const char* const* argv);
 

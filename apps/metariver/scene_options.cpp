@@ -53,7 +53,7 @@ void SceneOptions::add_to(CLI::App& cmd) {
                  "metres_max, lat, lon, width, height or sample_spacing_m; docs/scene-format.md)");
 }
 
-Result<SceneDef> SceneOptions::resolve() const {
+Result<SceneDef> SceneOptions::resolve(bool need_heightmap) const {
     SceneDef def;
     if (!scene_file.empty()) {
         auto loaded = load_scene_file(scene_file);
@@ -80,7 +80,7 @@ Result<SceneDef> SceneOptions::resolve() const {
         if (const std::string why = collision_mode_unused(def.solver, def.collision.mode); !why.empty())
             return Error{"--collision: " + why};
     }
-    if (def.source.kind == TerrainSource::File && def.source.heightmap.empty())
+    if (need_heightmap && def.source.kind == TerrainSource::File && def.source.heightmap.empty())
         return Error{fmt::format("scene '{}' uses the paper's heightmap file: give it with --heightmap FILE", def.name)};
     if (auto c = check_scale("--area-scale", area_scale, kMaxAreaScale); !c) return c.error();
     if (auto c = check_scale("--height-scale", height_scale, kMaxHeightScale); !c) return c.error();
