@@ -1,12 +1,13 @@
 // `metariver view`: the interactive viewer. A GLFW window (OpenGL 4.5 core) with Dear
-// ImGui: orbit / pan / zoom, pause / step / reset, every scene parameter editable live
-// (the Simulation is rebuilt from the edited SceneDef; the heightmap is reloaded only
-// when the terrain changed), click on the terrain to pour water, drop a heightmap file
-// on the window to load it, a screenshot key, a Record button that exports the frames
+// ImGui: orbit / pan / zoom, pause / step / reset, every scene key the scene reads
+// editable (scene_panel.cpp, listed from the table of scene keys; the Simulation is
+// rebuilt from the edited SceneDef; the heightmap is reloaded only when the terrain
+// changed), click on the terrain to pour water, drop a heightmap file on the window to load it, a screenshot key, a Record button that exports the frames
 // (docs/export.md), and a stats overlay. The simulation runs at a fixed time step,
 // decoupled from the display rate.
 #include "commands.h"
 #include "export_options.h"
+#include "scene_panel.h"
 
 #include <metariver/export.h>
 #include <metariver/io.h>
@@ -114,148 +115,6 @@ std::string terrain_key(const SceneDef& d) {
     return fmt::format("{}|{}|{}|{}|{}|{}|{}|{}|{}", to_string(d.source.kind), d.source.heightmap, d.source.width,
                        d.source.height, d.source.seed, d.terrain.area_scale, d.terrain.height_scale,
                        d.terrain.paper_row_orientation, d.collision.leaf_triangles);
-}
-
-template <class E, size_t N>
-bool enum_combo(const char* label, E& value, const std::array<E, N>& values) {
-    bool changed = false;
-    const std::string current(to_string(value));
-    if (ImGui::BeginCombo(label, current.c_str())) {
-        for (E v : values) {
-            const std::string name(to_string(v));
-            if (ImGui::Selectable(name.c_str(), v == value) && v != value) {
-                value = v;
-                changed = true;
-            }
-        }
-        ImGui::EndCombo();
-    }
-    return changed;
-}
-
-/// Widgets that report an edit once it is finished (slider released, text entered), so
-/// dragging a value does not rebuild the Simulation every frame.
-bool drag_float(const char* label, float& v, float speed, float lo, float hi, const char* format = "%.3f") {
-    ImGui::DragFloat(label, &v, speed, lo, hi, format, ImGuiSliderFlags_AlwaysClamp);
-    return ImGui::IsItemDeactivatedAfterEdit();
-}
-bool drag_int(const char* label, int& v, float speed, int lo, int hi) {
-    ImGui::DragInt(label, &v, speed, lo, hi, "%d", ImGuiSliderFlags_AlwaysClamp);
-    return ImGui::IsItemDeactivatedAfterEdit();
-}
-bool drag_vec3(const char* label, Vec3& v, float speed, float lo, float hi) {
-    ImGui::DragFloat3(label, &v.x, speed, lo, hi, "%.2f", ImGuiSliderFlags_AlwaysClamp);
-    return ImGui::IsItemDeactivatedAfterEdit();
-}
-bool drag_u32(const char* label, uint32_t& v) {
-    int i = static_cast<int>(std::min<uint32_t>(v, 1'000'000'000u));
-    ImGui::DragInt(label, &i, 1.0f, 0, 1'000'000'000, "%d", ImGuiSliderFlags_AlwaysClamp);
-    v = static_cast<uint32_t>(i);
-    return ImGui::IsItemDeactivatedAfterEdit();
-}
-
-/// The scene editor: every SceneDef field. Returns true when an edit was committed.
-bool scene_editor(SceneDef& d) {
-    bool commit = false;
-    if (ImGui::CollapsingHeader("Scene", ImGuiTreeNodeFlags_DefaultOpen)) {
-        commit |= enum_combo("solver", d.solver, std::array{SolverKind::Springs, SolverKind::Bullet, SolverKind::Pbf});
-        commit |= drag_u32("spawn seed", d.seed);
-        commit |= ImGui::Checkbox("build surface", &d.surface);
-    }
-    if (ImGui::CollapsingHeader("Terrain")) {
-        commit |= enum_combo("source", d.source.kind,
-                             std::array{TerrainSource::Valley, TerrainSource::Strict, TerrainSource::Bowl,
-                                        TerrainSource::Flat, TerrainSource::File});
-        if (d.source.kind == TerrainSource::File) {
-            ImGui::TextWrapped("heightmap: %s", d.source.heightmap.empty() ? "(drop a PNG on the window)"
-                                                                            : d.source.heightmap.c_str());
-        } else {
-            commit |= drag_int("width", d.source.width, 1.0f, 2, 1025);
-            commit |= drag_int("height", d.source.height, 1.0f, 2, 1025);
-            commit |= drag_u32("terrain seed", d.source.seed);
-        }
-        commit |= drag_float("area scale (m)", d.terrain.area_scale, 0.01f, 0.01f, 100.0f);
-        commit |= drag_float("height scale (m)", d.terrain.height_scale, 0.1f, 0.01f, 1000.0f);
-        commit |= ImGui::Checkbox("paper row orientation", &d.terrain.paper_row_orientation);
-    }
-    if (ImGui::CollapsingHeader("Particles / spawn", ImGuiTreeNodeFlags_DefaultOpen)) {
-        bool auto_count = d.spawn.count == kAutoCount;
-        if (ImGui::Checkbox("budget sized to the channel", &auto_count)) {
-            d.spawn.count = auto_count ? kAutoCount : kFixedDefaultCount;
-            commit = true;
-        }
-        if (!auto_count) commit |= drag_int("count", d.spawn.count, 5.0f, 1, 200000);
-        commit |= ImGui::Checkbox("auto spawn centre", &d.spawn.auto_center);
-        if (d.spawn.auto_center) commit |= drag_float("auto height (m)", d.spawn.auto_height, 0.05f, 0.0f, 100.0f);
-        else commit |= drag_vec3("spawn centre (m)", d.spawn.center, 0.1f, -1e4f, 1e4f);
-        commit |= drag_vec3("half extent (m)", d.spawn.half_extent, 0.05f, 0.0f, 1e3f);
-        commit |= drag_int("interval (frames)", d.spawn.interval, 0.2f, 0, 10000);
-        commit |= drag_vec3("initial velocity", d.spawn.initial_velocity, 0.05f, -100.0f, 100.0f);
-    }
-    if (ImGui::CollapsingHeader("Forces and springs", ImGuiTreeNodeFlags_DefaultOpen)) {
-        commit |= drag_float("gravity (m/s^2)", d.integrator.gravity, 0.05f, -100.0f, 100.0f);
-        commit |= drag_float("stiffness k", d.springs.stiffness, 0.05f, 0.0f, 1000.0f);
-        commit |= drag_float("rest length r (m)", d.springs.min_distance, 0.01f, 0.0f, 100.0f);
-        commit |= drag_float("max distance (m)", d.springs.max_distance, 0.01f, 0.0f, 100.0f);
-        commit |= enum_combo("spring mode", d.springs.mode, std::array{SpringMode::Pairs, SpringMode::Grid});
-    }
-    if (ImGui::CollapsingHeader("Collision and integrator")) {
-        commit |= enum_combo("collision", d.collision.mode,
-                             std::array{CollisionMode::Paper, CollisionMode::Robust, CollisionMode::None});
-        commit |= enum_combo("query", d.collision.query, std::array{CollisionQuery::Tree, CollisionQuery::Heightfield});
-        commit |= drag_float("damping", d.collision.damping, 0.005f, 0.0f, 1.0f);
-        commit |= drag_float("offset (m)", d.collision.offset, 0.005f, 0.0f, 10.0f);
-        commit |= drag_float("particle radius (m)", d.collision.radius, 0.01f, 0.0f, 100.0f);
-        commit |= drag_int("tree leaf triangles", d.collision.leaf_triangles, 0.2f, 2, 4096);
-        commit |= drag_float("fixed dt (s, 0: frame)", d.integrator.fixed_dt, 0.001f, 0.0f, 1.0f, "%.4f");
-        commit |= drag_int("substeps", d.integrator.substeps, 0.2f, 1, 1000);
-    }
-    if (d.solver == SolverKind::Bullet && ImGui::CollapsingHeader("Bullet")) {
-        commit |= drag_float("sphere radius (m)", d.bullet.sphere_radius, 0.01f, 0.01f, 100.0f);
-        commit |= drag_float("friction", d.bullet.friction, 0.01f, 0.0f, 100.0f);
-        commit |= drag_float("restitution", d.bullet.restitution, 0.01f, 0.0f, 1.0f);
-        commit |= ImGui::Checkbox("sphere-sphere collisions", &d.bullet.particle_collisions);
-        commit |= ImGui::Checkbox("continuous collision (CCD)", &d.bullet.ccd);
-        commit |= ImGui::Checkbox("springs on spheres", &d.bullet.springs);
-    }
-    if (ImGui::CollapsingHeader("Field and surface", ImGuiTreeNodeFlags_DefaultOpen)) {
-        commit |= enum_combo("kernel", d.field.kernel,
-                             std::array{FieldKernel::InverseSquare, FieldKernel::RadiusOverR, FieldKernel::Poly6});
-        commit |= enum_combo("bounds", d.field.bounds, std::array{FieldBounds::Particles, FieldBounds::Terrain});
-        commit |= drag_float("radius (m)", d.field.radius, 0.01f, 0.01f, 100.0f);
-        commit |= drag_float("resolution (cells/m)", d.field.resolution, 0.01f, 0.05f, 64.0f);
-        commit |= drag_float("bounds offset (m)", d.field.bounds_offset, 0.05f, 0.0f, 100.0f);
-        commit |= drag_float("threshold", d.field.threshold, 0.001f, 1e-6f, 1e3f, "%.4f");
-        // [surface]: the smoothing of the marching-cubes mesh (docs/rendering.md).
-        SmoothingDef& sm = d.smoothing;
-        commit |= enum_combo("smoothing", sm.method,
-                             std::array{SmoothingMethod::None, SmoothingMethod::Laplacian, SmoothingMethod::Taubin});
-        if (sm.method != SmoothingMethod::None) {
-            if (sm.method == SmoothingMethod::Laplacian)
-                commit |= enum_combo("steps", sm.steps, std::array{SmoothingSteps::Chebyshev, SmoothingSteps::Uniform});
-            commit |= drag_int("iterations", sm.iterations, 0.2f, 0, 100);
-            if (sm.method == SmoothingMethod::Taubin || sm.steps == SmoothingSteps::Uniform)
-                commit |= drag_float("lambda", sm.lambda, 0.01f, 0.01f, 1.0f);
-            if (sm.method == SmoothingMethod::Taubin || sm.steps == SmoothingSteps::Chebyshev)
-                commit |= drag_float("pass band", sm.pass_band, 0.005f, 0.005f, 0.995f);
-            commit |= drag_float("feature count (0 off)", sm.feature_count, 0.05f, 0.0f, 1000.0f);
-            if (sm.method == SmoothingMethod::Laplacian) commit |= ImGui::Checkbox("keep volume", &sm.keep_volume);
-            commit |= drag_int("normal passes", sm.normal_iterations, 0.2f, 0, 100);
-        }
-    }
-    if (d.solver == SolverKind::Pbf && ImGui::CollapsingHeader("Foam")) {
-        // [foam]: diffuse spray, foam and bubbles (Ihmsen et al. 2012; docs/scene-format.md).
-        FoamDef& f = d.foam;
-        commit |= ImGui::Checkbox("make foam", &f.enabled);
-        if (f.enabled) {
-            commit |= drag_int("max particles", f.max_particles, 50.0f, 0, 1000000);
-            commit |= drag_float("trapped air rate", f.trapped_air_rate, 0.5f, 0.0f, 1e4f);
-            commit |= drag_float("wave crest rate", f.wave_crest_rate, 0.5f, 0.0f, 1e4f);
-            commit |= drag_float("lifetime min (s)", f.lifetime_min, 0.05f, 0.01f, 1e3f);
-            commit |= drag_float("lifetime max (s)", f.lifetime_max, 0.05f, 0.01f, 1e3f);
-        }
-    }
-    return commit;
 }
 
 std::string next_screenshot_path(const std::string& dir) {
