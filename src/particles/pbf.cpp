@@ -76,10 +76,10 @@ struct Kernels {
 template <class F>
 void for_each_binned(const NeighborGrid& grid, const NeighborLists* lists, F&& f) {
     if (lists) {
-        tbb::parallel_for(tbb::blocked_range<uint32_t>(0, uint32_t(lists->size()), 256),
-                          [&](const tbb::blocked_range<uint32_t>& r) {
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, lists->size(), 256),
+                          [&](const tbb::blocked_range<size_t>& r) {
                               const uint32_t* const index = lists->index();
-                              for (uint32_t i = r.begin(); i != r.end(); ++i) {
+                              for (uint32_t i = uint32_t(r.begin()); i != uint32_t(r.end()); ++i) {
                                   const uint32_t b = lists->first(i), e = lists->first(i + 1);
                                   f(i, [&](auto&& g) {
                                       for (uint32_t q = b; q < e; ++q) g(index[q], q);

@@ -3,10 +3,10 @@
 // Debian's libtbb is not built with ThreadSanitizer, so the happens-before edges its
 // scheduler makes (a task's spawn before its execution, every task before the end of
 // the wait) are invisible to TSan, and every parallel_for would be reported as racing
-// with the code around it. This overload of tbb::parallel_for for blocked_range<size_t>
-// (the only form metariver calls) states exactly the guarantees TBB gives, as TSan
-// annotations: everything before the call happens before every chunk of the loop, and
-// every chunk happens before the call returns. Chunks are NOT ordered with each other,
+// with the code around it. This overload of tbb::parallel_for for a blocked_range of
+// any index type (the only form metariver calls) states exactly the guarantees TBB
+// gives, as TSan annotations: everything before the call happens before every chunk of
+// the loop, and every chunk happens before the call returns. Chunks are NOT ordered with each other,
 // so a race between two chunks (the bugs TSan is here for) is still reported.
 // What is left are TBB's own task objects, written by one thread and read by another
 // through the uninstrumented scheduler: tests/sanitizers/tsan.supp suppresses races
@@ -23,11 +23,11 @@ extern "C" void __tsan_release(void* addr);
 
 namespace tbb {
 
-template <typename Body>
-void parallel_for(const blocked_range<std::size_t>& range, const Body& body) {
+template <typename Value, typename Body>
+void parallel_for(const blocked_range<Value>& range, const Body& body) {
     char before = 0, after = 0;
     __tsan_release(&before);
-    detail::d1::parallel_for(range, [&](const blocked_range<std::size_t>& r) {
+    detail::d1::parallel_for(range, [&](const blocked_range<Value>& r) {
         __tsan_acquire(&before);
         body(r);
         __tsan_release(&after);
