@@ -48,6 +48,7 @@ struct RenderOptions {
     std::string water = "realistic";
     bool particles = false;
     bool foam = true;  ///< draw the diffuse particles ([foam])
+    bool flow = true;  ///< realistic water: the flow detail, when the scene's [render] asks for it
     std::optional<int> bvh_level;
     std::string texture;
     std::string stats;
@@ -267,6 +268,7 @@ int render(const RenderOptions& o) {
     settings.shading = shading;
     settings.particles = o.particles;
     settings.foam = o.foam;
+    settings.flow_detail = o.flow && sim->def().render.flow_detail;
     if (o.bvh_level) {
         settings.bvh = true;
         settings.bvh_level = *o.bvh_level;
@@ -292,6 +294,7 @@ int render(const RenderOptions& o) {
         camera.yaw_deg = yaw0 + static_cast<float>(o.orbit_deg * static_cast<double>(f) / static_cast<double>(o.frames));
         render::fit_clip_planes(camera, sim->terrain());
         renderer.update(*sim);
+        settings.time_s = static_cast<float>(double(o.warmup + (f + 1) * o.steps) * o.dt);
         renderer.draw(camera, width, height, settings);
         renderer.read_rgb(rgb);  // waits for the GPU: the time covers the whole frame
         const double render_t = ms_since(t0);
@@ -377,9 +380,9 @@ int render(const RenderOptions& o) {
         }
     }
     fmt::print("{}: {} frames {}x{} in {:.1f} s; per frame median: render {:.2f} ms (draw + read back), "
-               "simulate {:.2f} ms, write {:.2f} ms; water {} triangles; {}\n",
+               "simulate {:.2f} ms, write {:.2f} ms; water {} triangles (surface velocities {:.2f} ms, last frame); {}\n",
                sim->def().name, o.frames, width, height, total_s, pr.median, ps.median, pw.median,
-               renderer.stats().water_triangles, renderer.gl_description());
+               renderer.stats().water_triangles, renderer.stats().flow_ms, renderer.gl_description());
     if (mp4) fmt::print("wrote {}\n", o.out);
     else fmt::print("wrote {} PNG frames to {} (frame_{:0{}}.png .. frame_{:0{}}.png)\n", written.size(), o.out, 0, digits,
                     o.frames - 1, digits);
@@ -408,6 +411,7 @@ void register_render(CLI::App& app, std::function<int()>& action) {
     cmd->add_option("--water", opts->water, "water shading: realistic or gouraud (the paper's look) (default realistic)");
     cmd->add_flag("--particles", opts->particles, "debug: draw the particles as spheres");
     cmd->add_flag("!--no-foam", opts->foam, "do not draw foam and spray (the scene's [foam] still makes them)");
+    cmd->add_flag("!--no-flow", opts->flow, "realistic water without the flow detail ([render] flow_detail)");
     cmd->add_option("--bvh", opts->bvh_level, "debug: draw the AABB tree's boxes at this depth (-1: the leaves)");
     cmd->add_option("--texture", opts->texture, "image draped over the terrain (PNG/JPEG)");
     cmd->add_option("--stats", opts->stats, "write render timings as JSON to this file");

@@ -255,6 +255,7 @@ int view(const ViewOptions& o) {
             render::RenderSettings settings;
             settings.particles = o.particles;
             settings.foam = o.foam;
+            settings.flow_detail = sim->def().render.flow_detail;
             if (o.bvh_level) {
                 settings.bvh = true;
                 settings.bvh_level = *o.bvh_level;
@@ -430,6 +431,7 @@ int view(const ViewOptions& o) {
                             case GLFW_KEY_B: settings.bvh = !settings.bvh; break;
                             case GLFW_KEY_V: settings.particles = !settings.particles; break;
                             case GLFW_KEY_O: settings.foam = !settings.foam; break;
+                            case GLFW_KEY_L: settings.flow_detail = !settings.flow_detail; break;
                             case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(window, GLFW_TRUE); break;
                             default: break;
                         }
@@ -497,6 +499,8 @@ int view(const ViewOptions& o) {
                     ImGui::SameLine();
                     ImGui::DragFloat("##radius", &settings.particle_radius, 0.01f, 0.02f, 5.0f, "r %.2f m");
                     ImGui::Checkbox("foam and spray (O)", &settings.foam);
+                    ImGui::SameLine();
+                    ImGui::Checkbox("flow detail (L)", &settings.flow_detail);
                     ImGui::Checkbox("AABB tree (B)", &settings.bvh);
                     ImGui::SameLine();
                     ImGui::SliderInt("depth##bvh", &settings.bvh_level, -1, 16, settings.bvh_level < 0 ? "leaves" : "%d");
@@ -548,6 +552,7 @@ int view(const ViewOptions& o) {
                 render::fit_clip_planes(camera, sim->terrain());
                 renderer.update(*sim);
                 if (fb_w > 0 && fb_h > 0) {
+                    settings.time_s = static_cast<float>(static_cast<double>(sim->frame()) * sim_dt);
                     renderer.draw(camera, fb_w, fb_h, settings);
                     renderer.present_to_default_framebuffer();
                 }

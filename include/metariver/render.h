@@ -9,7 +9,10 @@
 // analytic sky with the refracted terrain colour behind the water, absorbed with
 // Beer-Lambert over the water depth read from the terrain's depth buffer; Blinn-Phong
 // specular for the sun. The paper's look (per-vertex "Gouraud" lighting, translucent
-// blue) is kept as WaterShading::Gouraud.
+// blue) is kept as WaterShading::Gouraud. Flow detail (RenderSettings::flow_detail):
+// the particles' velocity interpolated onto the surface's vertices advects a tiling,
+// flow-aligned normal and foam-streak texture, two phases cross-faded (Vlachos, "Water
+// Flow in Portal 2", SIGGRAPH 2010); still water (speed 0) is left untouched.
 #pragma once
 
 #include <metariver/core.h>
@@ -93,7 +96,18 @@ struct RenderSettings {
     Vec3 sun_direction{-0.55f, 0.65f, -0.25f};  ///< towards the sun (normalised when used)
     bool terrain_texture = true;      ///< use the texture given by set_terrain_texture, if any
     bool fog = true;                  ///< aerial perspective towards the horizon colour
+    /// Realistic water only: streaks and ripples advected along the flow, stronger where
+    /// it is faster; none below kFlowDetailMinSpeed (still water stays a mirror).
+    bool flow_detail = true;
+    /// Seconds on the flow detail's clock (the simulated time of the frame drawn): the
+    /// texture moves with it, so two times give two images of the same particles.
+    float time_s = 0.0f;
 };
+
+/// Surface speed (m/s) below which the flow detail adds nothing, and from which it
+/// grows to full strength at kFlowDetailFullSpeed (the shader's smoothstep).
+inline constexpr float kFlowDetailMinSpeed = 0.05f;
+inline constexpr float kFlowDetailFullSpeed = 1.5f;
 
 /// Counters tests and the viewer's overlay read.
 struct RenderStats {
@@ -107,7 +121,26 @@ struct RenderStats {
     size_t particles = 0;
     size_t foam_particles = 0;        ///< diffuse particles uploaded (spray, foam and bubbles)
     size_t bvh_boxes = 0;             ///< boxes drawn in the latest frame
+    double flow_ms = 0.0;             ///< latest update(): surface_velocities, milliseconds
 };
+
+/// Scratch of surface_velocities, reused across frames (no allocation once warm).
+struct SurfaceVelocityWorkspace {
+    NeighborGrid grid;
+};
+/// Neighbourhood radius, metres, for the surface velocities of a scene: the compact
+/// field's support (every surface vertex has a particle within it), 2 x the metaball
+/// radius for the paper's kernels.
+float flow_radius(const SceneDef& def);
+/// The fluid's velocity at each vertex, m/s: the poly6-weighted (Shepard-normalised)
+/// average of the velocities of the active particles within `radius` metres, zero where
+/// there is none. `out` is resized to vertices.size(). Parallel over vertices, the same
+/// result for any thread count.
+void surface_velocities(std::span<const Vec3> vertices, const Particles& particles, float radius,
+                        SurfaceVelocityWorkspace& ws, std::vector<Vec3>& out);
+/// The obviously right twin: every particle for every vertex, serial (tests).
+void surface_velocities_brute(std::span<const Vec3> vertices, const Particles& particles, float radius,
+                              std::vector<Vec3>& out);
 
 /// The OpenGL renderer. Needs a current OpenGL 4.5 core context (a window's, or the
 /// HeadlessContext's) for its whole life; all GL objects are created by create() and

@@ -47,6 +47,13 @@ enum class SolverKind {
 };
 std::string_view to_string(SolverKind s);
 
+/// [render]: how the scene asks to be drawn. Only the renderer reads it (render, view);
+/// the simulation does not.
+struct RenderLookDef {
+    /// Realistic water: detail advected along the flow (docs/rendering.md, "Flow detail").
+    bool flow_detail = true;
+};
+
 struct SceneDef {
     std::string name = "default";
     uint32_t seed = 1;  ///< particle spawn seed
@@ -64,6 +71,7 @@ struct SceneDef {
     bool surface = true;  ///< build the field and the surface every frame
     SmoothingDef smoothing;  ///< [surface]: how the extracted mesh is smoothed (none in the paper's presets)
     FoamDef foam;            ///< [foam]: diffuse spray, foam and bubbles (solver = pbf only; on in the default river)
+    RenderLookDef render;    ///< [render]: drawing choices the renderer reads
     /// Metres, > 0 or 0: the PBF spacing the carved channel and the source's basin are
     /// sized for (carve_def); 0 = pbf.spacing. Not a scene-file key: pbf_river_scene()
     /// sets it to keep the default river's terrain while it refines the spacing.

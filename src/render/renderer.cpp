@@ -7,10 +7,13 @@
 //      is drawn depth-tested against the terrain, sampling the scene's colour (what
 //      lies behind, refracted) and depth (how much water the view ray crosses);
 //   3. the final colour goes to a window (blit) or to memory (glReadPixels).
+// The water's vertices carry the fluid's velocity (surface_velocities, each update)
+// for the flow detail; its texture is made once (flow_texture.h).
 // GL objects are made once (create, set_scene, first use of a size); frames only refill
 // buffers (orphaned with glBufferData, grown by 1.5x) and re-specify textures on resize.
 #include <metariver/render.h>
 
+#include "flow_texture.h"
 #include "shaders.h"
 
 #include <epoxy/gl.h>
@@ -19,6 +22,8 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
+#include <cmath>
 #include <cstring>
 #include <string>
 
@@ -40,6 +45,9 @@ struct FrameUniforms {
     glm::vec4 mode;
 };
 static_assert(sizeof(FrameUniforms) == 2 * 64 + 8 * 16, "std140 layout of Frame");
+static_assert(kFlowDetailMinSpeed == static_cast<float>(MR_FLOW_MIN_SPEED) &&
+                  kFlowDetailFullSpeed == static_cast<float>(MR_FLOW_FULL_SPEED),
+              "the water shader's flow speeds (shaders.h) are render.h's");
 
 /// Terrain vertex: position, normal, and 1 on the skirt (the cut at the edge).
 struct TerrainVertex {
@@ -146,8 +154,8 @@ struct Renderer::Impl {
     GLuint ubo = 0;
     GLuint vao_empty = 0, vao_terrain = 0, vao_water = 0, vao_particles = 0, vao_boxes = 0, vao_foam = 0;
     GLuint terrain_vbo = 0, terrain_ibo = 0, cube_vbo = 0, box_vbo = 0;
-    GLuint terrain_tex = 0;
-    DynamicBuffer water_pos, water_normal, water_idx, particle_pos, foam_buf;
+    GLuint terrain_tex = 0, flow_tex = 0;
+    DynamicBuffer water_pos, water_normal, water_vel, water_idx, particle_pos, foam_buf;
     Target scene, final;
 
     size_t terrain_index_count = 0;
@@ -162,6 +170,8 @@ struct Renderer::Impl {
     uint64_t last_frame = ~uint64_t{0};
     std::vector<Vec3> scratch_positions;  // reused for the active particles
     std::vector<glm::vec4> scratch_foam;  // reused: diffuse position, kind
+    std::vector<Vec3> scratch_velocity;   // reused: the fluid's velocity per water vertex
+    SurfaceVelocityWorkspace flow_ws;
 
     GLuint create_buffer() {
         GLuint b = 0;
@@ -234,12 +244,14 @@ struct Renderer::Impl {
 
         water_pos.id = create_buffer();
         water_normal.id = create_buffer();
+        water_vel.id = create_buffer();
         water_idx.id = create_buffer();
         vao_water = create_vao();
         glVertexArrayVertexBuffer(vao_water, 0, water_pos.id, 0, sizeof(Vec3));
         glVertexArrayVertexBuffer(vao_water, 1, water_normal.id, 0, sizeof(Vec3));
+        glVertexArrayVertexBuffer(vao_water, 2, water_vel.id, 0, sizeof(Vec3));
         glVertexArrayElementBuffer(vao_water, water_idx.id);
-        for (GLuint a = 0; a < 2; ++a) {
+        for (GLuint a = 0; a < 3; ++a) {
             glEnableVertexArrayAttrib(vao_water, a);
             glVertexArrayAttribFormat(vao_water, a, 3, GL_FLOAT, GL_FALSE, 0);
             glVertexArrayAttribBinding(vao_water, a, a);
@@ -294,6 +306,17 @@ struct Renderer::Impl {
 
         terrain_tex = create_texture();
         glTextureParameteri(terrain_tex, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+
+        // The flow detail's tiling texture (flow_texture.h), made once, mipmapped.
+        flow_tex = create_texture();
+        glTextureParameteri(flow_tex, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+        glTextureParameteri(flow_tex, GL_TEXTURE_WRAP_S, GL_REPEAT);
+        glTextureParameteri(flow_tex, GL_TEXTURE_WRAP_T, GL_REPEAT);
+        const std::vector<uint8_t> flow = make_flow_texture();
+        glTextureStorage2D(flow_tex, 9, GL_RGBA8, kFlowTextureSide, kFlowTextureSide);
+        glTextureSubImage2D(flow_tex, 0, 0, 0, kFlowTextureSide, kFlowTextureSide, GL_RGBA, GL_UNSIGNED_BYTE, flow.data());
+        glGenerateTextureMipmap(flow_tex);
+        stats.bytes_uploaded += flow.size();
         create_target(scene);
         create_target(final);
         if (glGetError() != GL_NO_ERROR) return Error{"renderer: OpenGL error while creating objects"};
@@ -401,6 +424,10 @@ struct Renderer::Impl {
         water_normal.upload(m.normals.data(), m.normals.size() * sizeof(Vec3), stats);
         water_idx.upload(m.indices.data(), m.indices.size() * sizeof(uint32_t), stats);
         stats.water_triangles = m.triangle_count();
+        const auto t0 = std::chrono::steady_clock::now();
+        surface_velocities(m.positions, sim.particles(), flow_radius(sim.def()), flow_ws, scratch_velocity);
+        stats.flow_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        water_vel.upload(scratch_velocity.data(), scratch_velocity.size() * sizeof(Vec3), stats);
         sim.particles().gather_active_positions(scratch_positions);
         particle_pos.upload(scratch_positions.data(), scratch_positions.size() * sizeof(Vec3), stats);
         stats.particles = scratch_positions.size();
@@ -423,11 +450,11 @@ Renderer::~Renderer() {
     const GLuint programs[] = {r.prog_sky, r.prog_terrain, r.prog_water, r.prog_particles, r.prog_boxes, r.prog_foam};
     for (GLuint p : programs) glDeleteProgram(p);
     const GLuint buffers[] = {r.ubo, r.terrain_vbo, r.terrain_ibo, r.cube_vbo, r.box_vbo, r.water_pos.id,
-                              r.water_normal.id, r.water_idx.id, r.particle_pos.id, r.foam_buf.id};
+                              r.water_normal.id, r.water_vel.id, r.water_idx.id, r.particle_pos.id, r.foam_buf.id};
     glDeleteBuffers(static_cast<GLsizei>(std::size(buffers)), buffers);
     const GLuint vaos[] = {r.vao_empty, r.vao_terrain, r.vao_water, r.vao_particles, r.vao_boxes, r.vao_foam};
     glDeleteVertexArrays(static_cast<GLsizei>(std::size(vaos)), vaos);
-    const GLuint textures[] = {r.terrain_tex, r.scene.color, r.scene.depth, r.final.color, r.final.depth};
+    const GLuint textures[] = {r.terrain_tex, r.flow_tex, r.scene.color, r.scene.depth, r.final.color, r.final.depth};
     glDeleteTextures(static_cast<GLsizei>(std::size(textures)), textures);
     const GLuint fbos[] = {r.scene.fbo, r.final.fbo};
     glDeleteFramebuffers(2, fbos);
@@ -504,7 +531,10 @@ void Renderer::draw(const Camera& camera, int width, int height, const RenderSet
                           r.terrain_bounds.empty() ? 1.0f : r.terrain_bounds.max.y,
                           (s.terrain_texture && r.has_texture) ? 1.0f : 0.0f, fog_distance);
     u.rect = r.terrain_rect;
-    u.mode = glm::vec4(s.shading == WaterShading::Gouraud ? 1.0f : 0.0f, static_cast<float>(r.tree_depth), 0.0f, 0.0f);
+    // The flow clock wraps every 1000 s (a multiple of the shader's phase period), so
+    // float precision holds in long runs.
+    u.mode = glm::vec4(s.shading == WaterShading::Gouraud ? 1.0f : 0.0f, static_cast<float>(r.tree_depth),
+                       std::fmod(s.time_s, 1000.0f), s.flow_detail ? 1.0f : 0.0f);
     glNamedBufferSubData(r.ubo, 0, sizeof(u), &u);
     glBindBufferBase(GL_UNIFORM_BUFFER, 0, r.ubo);
 
@@ -565,6 +595,7 @@ void Renderer::draw(const Camera& camera, int width, int height, const RenderSet
         glUseProgram(r.prog_water);
         glBindTextureUnit(0, r.scene.color);
         glBindTextureUnit(1, r.scene.depth);
+        glBindTextureUnit(2, r.flow_tex);
         glBindVertexArray(r.vao_water);
         glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(r.water_idx.size / sizeof(uint32_t)), GL_UNSIGNED_INT, nullptr);
         glDisable(GL_CULL_FACE);

@@ -2,6 +2,13 @@
 // `Frame` (binding 0), filled once per frame from FrameUniforms (renderer.cpp).
 #pragma once
 
+// The flow detail's speeds, m/s, as GLSL literals; renderer.cpp checks that they are
+// render.h's kFlowDetailMinSpeed and kFlowDetailFullSpeed.
+#define MR_FLOW_MIN_SPEED 0.05
+#define MR_FLOW_FULL_SPEED 1.5
+#define MR_GLSL_STR2(x) #x
+#define MR_GLSL_STR(x) MR_GLSL_STR2(x)
+
 namespace mr::render::glsl {
 
 inline constexpr const char* kCommon = R"(#version 450 core
@@ -15,7 +22,8 @@ layout(std140, binding = 0) uniform Frame {
     vec4 u_params;     // x: refraction, y: fog on, z: particle radius, w: projection[1][1]
     vec4 u_terrain;    // x: min height, y: max height, z: texture on, w: fog distance
     vec4 u_rect;       // terrain rectangle x0, z0, x1, z1 (texture mapping)
-    vec4 u_mode;       // x: water shading (0 realistic, 1 gouraud), y: max tree depth
+    vec4 u_mode;       // x: water shading (0 realistic, 1 gouraud), y: max tree depth,
+                       // z: flow clock (seconds), w: flow detail on
 };
 
 const vec3 kSunColor = vec3(1.0, 0.94, 0.84) * 1.15;
@@ -139,12 +147,15 @@ void main() {
 inline constexpr const char* kWaterVert = R"(
 layout(location = 0) in vec3 a_pos;
 layout(location = 1) in vec3 a_normal;
+layout(location = 2) in vec3 a_velocity;   // the fluid's velocity at the vertex, m/s
 out vec3 v_pos;
 out vec3 v_normal;
+out vec3 v_velocity;
 out vec3 v_gouraud;   // per-vertex lighting (the paper's look)
 void main() {
     v_pos = a_pos;
     v_normal = a_normal;
+    v_velocity = a_velocity;
     vec3 n = normalize(a_normal);
     vec3 v = normalize(u_eye.xyz - a_pos);
     vec3 h = normalize(v + u_sun.xyz);
@@ -158,10 +169,72 @@ void main() {
 inline constexpr const char* kWaterFrag = R"(
 in vec3 v_pos;
 in vec3 v_normal;
+in vec3 v_velocity;
 in vec3 v_gouraud;
 layout(binding = 0) uniform sampler2D u_scene_color;
 layout(binding = 1) uniform sampler2D u_scene_depth;
+layout(binding = 2) uniform sampler2D u_flow;   // R, G: ripple slopes; B: foam streaks (flow_texture.h)
 out vec4 o_color;
+
+// ---- Flow detail (Vlachos, "Water Flow in Portal 2", 2010) ----
+// The detail texture is laid in a frame turned to the local flow direction and
+// stretched along it (streaks follow the flow), and slides downstream at the flow's
+// speed. A layer slid for a whole period would stretch and jump, so two layers half a
+// period apart are cross-faded, each weighted 0 when it restarts. The frame is turned
+// about the corners of a kFlowCell grid (bilinear blend of the four around the point)
+// rather than about the origin, so that a small turn of the flow moves the texture
+// by centimetres, not by metres far from the origin.
+const float kFlowPeriod = 1.0;                 // seconds per layer cycle (divides 1000)
+const vec2 kFlowScale = vec2(1.0 / 7.0, 1.0 / 1.8);  // texture tiles per metre: along, across
+const float kFlowCell = 6.0;                   // metres between the frame's pivots
+const float kFlowSlope = 0.9;                  // ripple slope at full strength
+const float kFlowMinSpeed = )" MR_GLSL_STR(MR_FLOW_MIN_SPEED) R"(;
+const float kFlowFullSpeed = )" MR_GLSL_STR(MR_FLOW_FULL_SPEED) R"(;
+
+vec2 pivot_jitter(vec2 c) { return fract(sin(vec2(dot(c, vec2(12.9898, 78.233)), dot(c, vec2(39.346, 11.135)))) * 43758.5453); }
+
+// One layer: the texture in the flow frame, slid `slide` metres downstream.
+vec4 flow_layer(vec2 p, vec2 dir, float slide, vec2 offset) {
+    vec2 perp = vec2(-dir.y, dir.x);
+    vec2 g = p / kFlowCell - 0.5;
+    vec2 i = floor(g);
+    vec2 f = g - i;
+    f = f * f * (3.0 - 2.0 * f);
+    vec4 acc = vec4(0.0);
+    for (int k = 0; k < 4; ++k) {
+        vec2 o = vec2(k & 1, k >> 1);
+        vec2 c = (i + o + 0.5) * kFlowCell;
+        vec2 d = p - c;
+        vec2 q = vec2(dot(d, dir) - slide, dot(d, perp)) * kFlowScale + pivot_jitter(i + o) + offset;
+        float w = (o.x > 0.5 ? f.x : 1.0 - f.x) * (o.y > 0.5 ? f.y : 1.0 - f.y);
+        acc += w * texture(u_flow, q);
+    }
+    return acc;
+}
+
+// Returns the normal bent by the ripples and, in `foam`, the streaks' share (0 .. 1).
+vec3 flow_detail(vec3 n, out float foam) {
+    foam = 0.0;
+    vec2 v = v_velocity.xz;
+    float speed = length(v);
+    float strength = smoothstep(kFlowMinSpeed, kFlowFullSpeed, speed);
+    if (u_mode.w < 0.5 || strength <= 0.0) return n;
+    vec2 dir = v / speed;
+    float ph0 = fract(u_mode.z / kFlowPeriod);
+    float ph1 = fract(u_mode.z / kFlowPeriod + 0.5);
+    vec4 t0 = flow_layer(v_pos.xz, dir, speed * ph0 * kFlowPeriod, vec2(0.0));
+    vec4 t1 = flow_layer(v_pos.xz, dir, speed * ph1 * kFlowPeriod, vec2(0.37, 0.61));
+    float w1 = abs(1.0 - 2.0 * ph0);   // 1 when layer 0 restarts (ph0 = 0), 0 when layer 1 does
+    vec4 t = mix(t0, t1, w1);
+    // Slopes in the flow frame (along, across) back to world x/z; the blends above
+    // flatten them a little, so they are scaled up again.
+    vec2 sl = (t.rg * 2.0 - 1.0) * kFlowSlope * strength * 1.6;
+    vec2 slope = sl.x * dir + sl.y * vec2(-dir.y, dir.x);
+    foam = strength * smoothstep(0.05, 0.5, t.b) * smoothstep(0.5, 2.0, speed);
+    // Only the upward-facing water gets the ripples (not the fronts of drops).
+    float up = smoothstep(0.3, 0.7, n.y);
+    return normalize(n + up * vec3(-slope.x, 0.0, -slope.y));
+}
 
 float linear_depth(float d) {
     float n = u_viewport.z, f = u_viewport.w;
@@ -181,6 +254,8 @@ void main() {
     }
     vec3 n = normalize(v_normal);
     if (!gl_FrontFacing) n = -n;
+    float streaks = 0.0;
+    n = flow_detail(n, streaks);
     vec3 v = normalize(u_eye.xyz - v_pos);
     float wz = linear_depth(gl_FragCoord.z);
     float thick0 = max(linear_depth(texture(u_scene_depth, uv).r) - wz, 0.0);
@@ -206,6 +281,9 @@ void main() {
 
     vec3 h = normalize(v + u_sun.xyz);
     c += kSunColor * (pow(max(dot(n, h), 0.0), 900.0) * 2.5 + pow(max(dot(n, h), 0.0), 90.0) * 0.06);
+
+    // Foam streaks of the flow detail, lit by the sun and the sky.
+    c = mix(c, vec3(0.86, 0.90, 0.92) * (0.7 + 0.3 * max(u_sun.y, 0.0)), streaks * 0.75);
 
     // A soft edge where the water meets the ground, and a little foam at the rim.
     float rim = 1.0 - smoothstep(0.0, 0.25, thick0);

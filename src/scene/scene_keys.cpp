@@ -341,6 +341,11 @@ const SceneKey kKeys[] = {
      .help = "Bubbles' upward acceleration in units of gravity.", .field = MR_FIELD(foam.buoyancy)},
     {.name = "foam.drag", .type = K::Float, .range = closed(0, 1), .readers = kFoam,
      .help = "Share of a bubble's velocity difference to the fluid removed per frame.", .field = MR_FIELD(foam.drag)},
+    // [render]
+    {.name = "render.flow_detail", .type = K::Bool, .readers = kAll,
+     .help = "Realistic water: ripples and foam streaks advected along the flow, stronger where it is fast, none on "
+             "still water (docs/rendering.md, \"Flow detail\"); render --no-flow and the viewer's key L turn it off.",
+     .field = MR_FIELD(render.flow_detail)},
     // [bullet]
     {.name = "bullet.terrain", .type = K::Choice, .choices = kBulletTerrains, .readers = kBullet,
      .help = "mesh: btBvhTriangleMeshShape of the terrain's triangles (the paper's mesh collider) | heightfield: "
@@ -393,6 +398,7 @@ const SceneSection kSections[] = {
              "where v^_i . n^_i >= 0.6, kinetic energy I_k = 0.5 |v_i|^2 (J/kg); each mapped to [0, 1] by "
              "(min(I, max) - min(I, min)) / (max - min); i emits Phi_k (trapped_air_rate Phi_ta + wave_crest_rate "
              "Phi_wc) dt particles."},
+    {"render", "How the renderer draws the scene (render, view); the simulation ignores it."},
     {"bullet", "The paper's engine physics on Bullet (docs/bullet.md): solver = \"bullet\" only, at most 200,000 "
                "bodies; gravity from [forces], the frame time from [integrator]. A Bullet scene refuses what it does "
                "not do: a flow rate, litres_per_particle, a source_shape other than box, a sink, springs.mode, springs.* "

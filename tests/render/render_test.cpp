@@ -396,3 +396,76 @@ TEST(Renderer, FoamAppearsWhiteOnTheWaterAndCanBeTurnedOff) {
                 fs.bubbles, foam_pixels, w * h);
     EXPECT_GT(foam_pixels, 40u) << "foam must show as white on the water";
 }
+
+/// Pixels where two images differ by more than `by` in some channel.
+size_t pixels_differing(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b, int by) {
+    size_t n = 0;
+    for (size_t p = 0; p + 2 < a.size() && p + 2 < b.size(); p += 3) {
+        bool d = false;
+        for (int c = 0; c < 3; ++c) d |= std::abs(int(a[p + c]) - int(b[p + c])) > by;
+        n += d;
+    }
+    return n;
+}
+
+/// Draws `sim` at two flow-clock times, flow detail on and off, close up.
+struct TwoTimes {
+    std::vector<uint8_t> on0, on1, off0, off1;
+};
+TwoTimes draw_at_two_times(const Simulation& s, float t0, float t1) {
+    auto r = render::Renderer::create();
+    EXPECT_TRUE(r.ok());
+    TwoTimes out;
+    if (!r.ok()) return out;
+    render::Renderer& renderer = *r.value();
+    renderer.set_scene(s);
+    render::Camera cam = render::frame_terrain(s.terrain());
+    cam.distance *= 0.6f;
+    render::fit_clip_planes(cam, s.terrain());
+    render::RenderSettings on, off;
+    on.foam = off.foam = false;
+    off.flow_detail = false;
+    auto draw = [&](render::RenderSettings st, float t, std::vector<uint8_t>& rgb) {
+        st.time_s = t;
+        renderer.draw(cam, 320, 200, st);
+        renderer.read_rgb(rgb);
+    };
+    draw(on, t0, out.on0);
+    draw(on, t1, out.on1);
+    draw(off, t0, out.off0);
+    draw(off, t1, out.off1);
+    return out;
+}
+
+TEST(Renderer, FlowDetailMovesOnFlowingWaterAndLeavesStillWaterAlone) {
+    REQUIRE_GL();
+    // Flowing: the splash thrown sideways across the bowl, 30 frames in (metres per second).
+    SceneDef flowing = splash_scene();
+    flowing.foam.enabled = false;
+    auto f = Simulation::create(flowing);
+    ASSERT_TRUE(f.ok()) << f.error().message;
+    for (int i = 0; i < 30; ++i) f.value()->step(1.0f / 60.0f);
+    ASSERT_GT(f.value()->counters().max_speed, 2.0f * render::kFlowDetailFullSpeed) << "the splash must be fast";
+    const TwoTimes fl = draw_at_two_times(*f.value(), 2.0f, 2.35f);  // the same particles, 0.35 s apart
+    const size_t moved = pixels_differing(fl.on0, fl.on1, 6);
+    std::printf("flowing: %zu of %d pixels change between the two times with flow detail\n", moved, 320 * 200);
+    EXPECT_GT(moved, 500u) << "the texture must move along the flow";
+    EXPECT_EQ(fl.off0, fl.off1) << "without flow detail the time changes nothing";
+    EXPECT_GT(pixels_differing(fl.on0, fl.off0, 6), 500u) << "flow detail must show on fast water";
+
+    // Still: a small pool settled until every particle sleeps (velocity exactly 0).
+    SceneDef still = test::bowl_drop(700, Vec3(16, 1.5f, 16), Vec3(2.5f, 0.5f, 2.5f));
+    still.foam.enabled = false;
+    auto p = Simulation::create(still);
+    ASSERT_TRUE(p.ok()) << p.error().message;
+    int frames = 0;
+    for (; frames < 1200; ++frames) {
+        p.value()->step(1.0f / 60.0f);
+        if (frames > 60 && p.value()->counters().max_speed < render::kFlowDetailMinSpeed) break;
+    }
+    std::printf("still pool: max speed %.4f m/s after %d frames\n", p.value()->counters().max_speed, frames + 1);
+    ASSERT_LT(p.value()->counters().max_speed, render::kFlowDetailMinSpeed) << "the pool must come to rest";
+    const TwoTimes st = draw_at_two_times(*p.value(), 2.0f, 2.35f);
+    EXPECT_EQ(st.on0, st.on1) << "still water: the flow detail adds nothing, at any time";
+    EXPECT_EQ(st.on0, st.off0) << "still water with flow detail is the water without it (a mirror stays a mirror)";
+}

@@ -187,6 +187,16 @@ TEST(SceneToml, SpawnCenterAuto) {
 
 TEST(SceneToml, SyntaxErrorNamesFileAndLine) { expect_error("[field]\nresolution = = 2\n", "dir/s.toml:2:"); }
 
+TEST(SceneToml, RenderFlowDetailIsReadAndTyped) {
+    // [render] is the renderer's: on by default, read as written, only known keys.
+    EXPECT_TRUE(default_scene().render.flow_detail);
+    auto r = parse("[render]\nflow_detail = false\n");
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    EXPECT_FALSE(r->render.flow_detail);
+    expect_error("[render]\nflow_detail = 1\n", "render.flow_detail: must be true or false");
+    expect_error("[render]\nflow = true\n", "render.flow: unknown key");
+}
+
 TEST(SceneToml, UnknownKeysAreErrors) {
     expect_error("particle_count = 3\n", "particle_count: unknown key");
     expect_error("[particles]\ncont = 3\n", "particles.cont: unknown key");
