@@ -317,7 +317,8 @@ int render(const RenderOptions& o) {
         }
         if (exporter && exporter->due(f)) {
             const double time_s = double(o.warmup + (f + 1) * o.steps) * o.dt;
-            if (auto s = exporter->write_frame(f, time_s, sim->surface(), sim->particles(), sim->frame()); !s) {
+            if (auto s = exporter->write_frame(f, time_s, sim->surface(), sim->particles(), sim->frame(),
+                                                 sim->foam() ? &sim->foam()->particles() : nullptr); !s) {
                 cleanup();
                 if (show_progress) end_progress();
                 return fail(kExitFailure, s.error().message);

@@ -219,7 +219,8 @@ int run(const RunOptions& o) {
             written.push_back(path);
         }
         if (exporter && exporter->due(f)) {
-            if (auto s = exporter->write_frame(f, double(f + 1) * o.dt, sim.surface(), sim.particles(), sim.frame()); !s) {
+            if (auto s = exporter->write_frame(f, double(f + 1) * o.dt, sim.surface(), sim.particles(), sim.frame(),
+                                                 sim.foam() ? &sim.foam()->particles() : nullptr); !s) {
                 if (show_progress) end_progress();
                 cleanup();
                 return fail(kExitFailure, s.error().message);

@@ -78,7 +78,8 @@ struct Recording {
     std::string step(const Simulation& sim, double dt) {
         const long long f = next_frame++;
         if (!exporter->due(f)) return {};
-        if (auto s = exporter->write_frame(f, double(f + 1) * dt, sim.surface(), sim.particles(), sim.frame()); !s) {
+        if (auto s = exporter->write_frame(f, double(f + 1) * dt, sim.surface(), sim.particles(), sim.frame(),
+                                             sim.foam() ? &sim.foam()->particles() : nullptr); !s) {
             exporter.reset();
             return s.error().message;
         }

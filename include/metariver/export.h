@@ -7,7 +7,9 @@
 // particles as a points grid). Files: terrain.EXT once (mesh formats), then for every
 // exported frame water_NNNNN.EXT and particles_NNNNN.EXT. Particles carry position,
 // velocity, id and age wherever the format can hold them (PLY properties, glTF
-// attributes, VDB point attributes; OBJ holds positions only). Units: metres, seconds,
+// attributes, VDB point attributes; OBJ holds positions only). With [foam], the diffuse
+// particles go to foam_NNNNN.ply beside them, whatever the formats (PLY carries their
+// kind and remaining life with the positions). Units: metres, seconds,
 // y up, right-handed (the simulation's own frame; glTF's too).
 //
 // Every file is written completely or not at all (write_file_atomic); an Exporter that
@@ -15,6 +17,7 @@
 #pragma once
 
 #include <metariver/core.h>
+#include <metariver/foam.h>
 #include <metariver/particles.h>
 #include <metariver/surface.h>
 #include <metariver/terrain.h>
@@ -85,6 +88,10 @@ std::string encode_obj_points(const ParticleFrame& p, std::string_view comment);
 std::string encode_ply_mesh(const MeshView& m, std::string_view comment);
 /// Binary little-endian PLY vertices: float x y z, float vx vy vz, uint id, float age.
 std::string encode_ply_points(const ParticleFrame& p, std::string_view comment);
+/// The diffuse particles ([foam]) as binary little-endian PLY vertices: float x y z,
+/// float vx vy vz, uchar kind (DiffuseKind: 0 spray, 1 foam, 2 bubble), float life
+/// (seconds left).
+std::string encode_ply_foam(const DiffuseParticles& d, std::string_view comment);
 /// glTF 2.0 binary: one node and mesh named `name`, POSITION (with min/max), NORMAL
 /// (unit length), TEXCOORD_0, UNSIGNED_INT indices, a material (`water` = true: blue,
 /// alpha-blended; else the terrain's matte green-grey). An empty mesh gives a file with
@@ -143,6 +150,7 @@ struct ExportedFrame {
     size_t vertices = 0;              ///< water mesh
     size_t triangles = 0;             ///< water mesh
     size_t particles = 0;             ///< active particles written
+    size_t foam = 0;                  ///< diffuse particles written (foam_NNNNN.ply; 0 without [foam])
     uint64_t active_voxels = 0;       ///< VDB level set (0 without vdb)
     std::vector<std::string> files;   ///< file names in the folder, water then particles per format
 };
@@ -163,10 +171,12 @@ public:
     /// True when `frame` is in [first, last] on the stride.
     bool due(long long frame) const;
     /// Writes frame `frame`'s files for every format. `time_s`: simulated time of the
-    /// frame; `solver_frame`: the solver's frame counter (for particle ages). On an
-    /// error this export's files are all removed, and the error names the file.
+    /// frame; `solver_frame`: the solver's frame counter (for particle ages); `foam`:
+    /// the diffuse particles (Simulation::foam()), written to foam_NNNNN.ply with the
+    /// particles, or null. On an error this export's files are all removed, and the
+    /// error names the file.
     Status write_frame(long long frame, double time_s, const SurfaceMesh& water, const Particles& particles,
-                       uint64_t solver_frame);
+                       uint64_t solver_frame, const DiffuseParticles* foam = nullptr);
     /// Writes the manifest (export.json) last; after it the files stay.
     Status finish();
     /// Removes every file this export wrote (and the folder if it created it).

@@ -167,4 +167,22 @@ std::string encode_ply_points(const ParticleFrame& p, std::string_view comment) 
     return out;
 }
 
+std::string encode_ply_foam(const DiffuseParticles& d, std::string_view comment) {
+    std::string out = fmt::format("ply\nformat binary_little_endian 1.0\ncomment {}\n"
+                                  "comment units: metres, metres per second, seconds; y up\n"
+                                  "comment kind: 0 spray, 1 foam, 2 bubble; life: seconds left\nelement vertex {}\n"
+                                  "property float x\nproperty float y\nproperty float z\n"
+                                  "property float vx\nproperty float vy\nproperty float vz\n"
+                                  "property uchar kind\nproperty float life\nend_header\n",
+                                  ply_comment(comment), d.size());
+    out.reserve(out.size() + d.size() * 29);
+    for (size_t k = 0; k < d.size(); ++k) {
+        put(out, d.position[k]);
+        put(out, d.velocity[k]);
+        put(out, d.kind[k]);
+        put(out, d.life[k]);
+    }
+    return out;
+}
+
 }  // namespace mr

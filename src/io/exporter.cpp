@@ -72,6 +72,7 @@ json import_notes(const ExportDef& d) {
         houdini["water_" + ext] = fmt::format("File SOP, File: DIR/water_$F{}.{}", d.digits, ext);
         if (d.particles) houdini["particles_" + ext] = fmt::format("File SOP, File: DIR/particles_$F{}.{}", d.digits, ext);
     }
+    if (d.particles) houdini["foam_ply"] = fmt::format("File SOP, File: DIR/foam_$F{}.ply (with [foam])", d.digits);
     houdini["note"] = fmt::format("DIR is this folder; file numbers are frame numbers ({} per second); with --every N "
                                   "use `padzero({}, $F*N)` for $F{}. PLY particle properties vx vy vz id age and VDB "
                                   "point attributes v id age come in as point attributes",
@@ -157,7 +158,7 @@ Status Exporter::write(const std::string& name, const std::string& bytes) {
 }
 
 Status Exporter::write_frame(long long frame, double time_s, const SurfaceMesh& water, const Particles& particles,
-                             uint64_t solver_frame) {
+                             uint64_t solver_frame, const DiffuseParticles* foam) {
     ExportedFrame rec{.frame = frame,
                       .time_s = time_s,
                       .vertices = water.vertex_count(),
@@ -182,6 +183,18 @@ Status Exporter::write_frame(long long frame, double time_s, const SurfaceMesh& 
         };
         Status s = emit("water", encode_water(st.format, view, def_, frame, vdb));
         if (s && def_.particles) s = emit("particles", encode_particles(st.format, scratch_, def_, frame, vdb));
+        // The diffuse particles once per frame (PLY whatever the formats), with the first.
+        if (s && def_.particles && foam && &st == &stats_.front()) {
+            const std::string comment = fmt::format("metariver foam, spray and bubbles, scene {}, frame {}", def_.scene, frame);
+            const std::string name = fmt::format("foam_{:0{}}.ply", frame, def_.digits);
+            const std::string bytes = encode_ply_foam(*foam, comment);
+            s = write(name, bytes);
+            if (s) {
+                rec.files.push_back(name);
+                rec.foam = foam->size();
+                bytes_written += bytes.size();
+            }
+        }
         if (!s) {
             abort();
             return s;
@@ -215,7 +228,9 @@ Status Exporter::finish() {
     j["patterns"] = {{"water", fmt::format("water_{}.EXT", std::string(static_cast<size_t>(def_.digits), '#'))},
                      {"particles", def_.particles ? json(fmt::format("particles_{}.EXT",
                                                                      std::string(static_cast<size_t>(def_.digits), '#')))
-                                                  : json(nullptr)}};
+                                                  : json(nullptr)},
+                     {"foam", def_.particles ? json(fmt::format("foam_{}.ply", std::string(static_cast<size_t>(def_.digits), '#')))
+                                             : json(nullptr)}};
     j["terrain"] = terrain_files_;
     j["contents"] = {
         {"obj", "water: v, vn, f a//a; particles: v + p (positions only); terrain: v, vt, vn"},
@@ -226,7 +241,9 @@ Status Exporter::finish() {
         {"vdb", {{"water", {{"grid", "surface"}, {"class", "level set"}, {"half_width_voxels", kVdbHalfWidth}}},
                  {"particles", {{"grid", "points"}, {"attributes", {"P", "v", "id", "age"}}}},
                  {"voxel_size", std::stod(fmt::format("{}", def_.voxel_size))}}},  // 0.33333334, not the double of the float
-        {"age", "seconds since the particle's latest emission by the source"}};
+        {"age", "seconds since the particle's latest emission by the source"},
+        {"foam", "with [foam]: foam_#.ply per frame whatever the formats, binary_little_endian 1.0: float x y z vx vy vz, "
+                 "uchar kind (0 spray, 1 foam, 2 bubble), float life (seconds left)"}};
     json per_format = json::object();
     for (const ExportFormatStats& st : stats_) {
         const Percentiles p = percentiles(st.ms);
@@ -241,7 +258,7 @@ Status Exporter::finish() {
     json files = json::array();
     for (const ExportedFrame& f : frames_) {
         json e = {{"frame", f.frame},      {"time_s", f.time_s},       {"files", f.files},
-                  {"vertices", f.vertices}, {"triangles", f.triangles}, {"particles", f.particles}};
+                  {"vertices", f.vertices}, {"triangles", f.triangles}, {"particles", f.particles}, {"foam", f.foam}};
         if (has_vdb) e["active_voxels"] = f.active_voxels;
         files.push_back(std::move(e));
     }

@@ -68,6 +68,43 @@ TEST(ExportPly, HeaderAndBinaryLayoutAreWhatTheHeaderSays) {
     EXPECT_EQ(ply.size() - end - 11, s.mesh.vertex_count() * 24 + s.mesh.triangle_count() * 13);
 }
 
+TEST(ExportPly, FoamRecordsAreWhatTheHeaderSaysAndReadBackExactly) {
+    DiffuseParticles d;
+    const Vec3 pos[3] = {Vec3(1.5f, 2.25f, -3.0f), Vec3(0.0f, 7.0f, 9.5f), Vec3(-4.0f, 0.125f, 2.0f)};
+    const Vec3 vel[3] = {Vec3(2.0f, -1.0f, 0.5f), Vec3(0.25f, 0.0f, -0.75f), Vec3(0.0f, 3.0f, 0.0f)};
+    const DiffuseKind kind[3] = {DiffuseKind::Spray, DiffuseKind::Foam, DiffuseKind::Bubble};
+    const float life[3] = {0.5f, 1.75f, 2.25f};
+    for (int i = 0; i < 3; ++i) {
+        d.position.push_back(pos[i]);
+        d.velocity.push_back(vel[i]);
+        d.kind.push_back(static_cast<uint8_t>(kind[i]));
+        d.life.push_back(life[i]);
+        d.neighbours.push_back(0);
+        d.fluid_velocity.push_back(Vec3(0.0f));
+    }
+    const std::string ply = encode_ply_foam(d, "foam test");
+    const size_t end = ply.find("end_header\n");
+    ASSERT_NE(end, std::string::npos);
+    const std::string header = ply.substr(0, end);
+    EXPECT_EQ(header.rfind("ply\nformat binary_little_endian 1.0\n", 0), 0u);
+    EXPECT_NE(header.find("element vertex 3\n"), std::string::npos);
+    EXPECT_NE(header.find("property float vz\nproperty uchar kind\nproperty float life\n"), std::string::npos);
+    // 6 floats, 1 byte, 1 float per particle: 29 bytes, nothing more.
+    ASSERT_EQ(ply.size() - end - 11, 3u * 29u);
+    const char* rec = ply.data() + end + 11;
+    for (int i = 0; i < 3; ++i, rec += 29) {
+        float f[6];
+        std::memcpy(f, rec, sizeof f);
+        EXPECT_EQ(Vec3(f[0], f[1], f[2]), pos[i]);
+        EXPECT_EQ(Vec3(f[3], f[4], f[5]), vel[i]);
+        EXPECT_EQ(static_cast<uint8_t>(rec[24]), static_cast<uint8_t>(kind[i]));
+        float l = 0.0f;
+        std::memcpy(&l, rec + 25, sizeof l);
+        EXPECT_EQ(l, life[i]);
+    }
+    EXPECT_EQ(encode_ply_foam(DiffuseParticles{}, "none").find("element vertex 0\n") != std::string::npos, true);
+}
+
 /// The three things every export writes: a closed water surface, the terrain, particles.
 struct Samples {
     test::Sphere water = test::sphere_mesh(2.0f, 0.25f);

@@ -114,6 +114,51 @@ TEST_F(Exporting, WritesTheDueFramesInEveryFormatAndAManifestListingThem) {
     EXPECT_EQ(ply.size() - header, 32 * counts[11].first);
 }
 
+TEST_F(Exporting, FoamGoesToOnePlyPerFrameBesideTheParticlesAndIntoTheManifest) {
+    auto sim = small_river();
+    ASSERT_TRUE(sim);
+    ASSERT_NE(sim->foam(), nullptr) << "the default river makes foam";
+    for (int f = 0; f < 3; ++f) sim->step(1.0f / 60.0f);
+    DiffuseParticles made;  // a known set, so the count is not 0 by chance
+    for (int i = 0; i < 5; ++i) {
+        made.position.push_back(Vec3(float(i), 1.0f, 2.0f));
+        made.velocity.push_back(Vec3(0.0f, 0.0f, float(i)));
+        made.kind.push_back(uint8_t(i % 3));
+        made.life.push_back(0.5f * float(i + 1));
+        made.neighbours.push_back(0);
+        made.fluid_velocity.push_back(Vec3(0.0f));
+    }
+    const fs::path out = dir_ / "export";
+    auto e = Exporter::begin(ExportDef{.dir = out.string(), .formats = {ExportFormat::Obj, ExportFormat::Ply}});
+    ASSERT_TRUE(e.ok());
+    const DiffuseParticles& live = sim->foam()->particles();
+    ASSERT_TRUE(e.value()->write_frame(0, 0.0, sim->surface(), sim->particles(), sim->frame(), &live).ok());
+    ASSERT_TRUE(e.value()->write_frame(1, 0.0, sim->surface(), sim->particles(), sim->frame(), &made).ok());
+    ASSERT_TRUE(e.value()->write_frame(2, 0.0, sim->surface(), sim->particles(), sim->frame()).ok());  // no foam
+    ASSERT_TRUE(e.value()->finish().ok());
+    const auto files = names(out);
+    EXPECT_TRUE(files.count("foam_00000.ply") && files.count("foam_00001.ply")) << "one per frame, once for two formats";
+    EXPECT_FALSE(files.count("foam_00002.ply")) << "nothing without foam";
+    EXPECT_FALSE(files.count("foam_00000.obj")) << "PLY only";
+    for (auto [name, n] : {std::pair{"foam_00000.ply", live.size()}, std::pair{"foam_00001.ply", made.size()}}) {
+        const std::string ply = test::slurp(out / name);
+        const size_t header = ply.find("end_header\n") + 11;
+        EXPECT_EQ(ply.size() - header, 29 * n) << name;
+    }
+    const auto j = nlohmann::json::parse(test::slurp(out / "export.json"));
+    EXPECT_EQ(j["frame_files"][0]["foam"], live.size());
+    EXPECT_EQ(j["frame_files"][1]["foam"], 5u);
+    EXPECT_EQ(j["frame_files"][2]["foam"], 0u);
+    EXPECT_EQ(j["patterns"]["foam"], "foam_#####.ply");
+
+    // --no-particles: no foam either.
+    const fs::path bare = dir_ / "bare";
+    auto b = Exporter::begin(ExportDef{.dir = bare.string(), .formats = {ExportFormat::Ply}, .particles = false});
+    ASSERT_TRUE(b.ok());
+    ASSERT_TRUE(b.value()->write_frame(0, 0.0, sim->surface(), sim->particles(), sim->frame(), &made).ok());
+    EXPECT_FALSE(names(bare).count("foam_00000.ply"));
+}
+
 TEST_F(Exporting, DroppedBeforeFinishItRemovesWhatItWroteAndTheFolderItMade) {
     auto sim = small_river();
     ASSERT_TRUE(sim);
