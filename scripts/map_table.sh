@@ -90,24 +90,7 @@ for f in "$SHARED"/metawater/*.png "$SHARED"/real/*.png; do
   [ -f "$f" ] && run_map "$(basename "$(dirname "$f")")/$(basename "$f")" --heightmap "$f"
 done
 if [ "$MODE" = sound ]; then
-  cat > "$OUT/pool.toml" <<'TOML'
-name = "still pool"
-solver = "pbf"
-[terrain]
-source = "bowl"
-width = 33
-height = 33
-height_scale = 7.0
-[particles]
-count = 2500
-spawn_center = [16.0, 6.0, 16.0]
-spawn_half_extent = [5.0, 2.0, 5.0]
-spawn_interval = 0
-flow_rate = 0.0
-source_shape = "box"
-[sink]
-kind = "none"
-TOML
+  cp scripts/still_pool.toml "$OUT/pool.toml"
   FRAMES=900 run_map "still pool (defaults, 900 frames)" --scene "$OUT/pool.toml"
   printf '[collision]\ndamping = 0.02\n' | cat "$OUT/pool.toml" - > "$OUT/pool_still.toml"
   FRAMES=900 run_map "still pool, collision.damping 0.02 (900 frames)" --scene "$OUT/pool_still.toml"
