@@ -161,6 +161,12 @@ struct CollisionDef {
     /// r(1 - cos(slope)) on slopes). 0 = points, as the paper.
     float radius = 0.0f;
     CollisionQuery query = CollisionQuery::Tree;
+    /// PBF bed friction law, m/s, [0, 1000]. 0: a particle the terrain holds loses the
+    /// share `damping` of its motion along the ground each step (drag linear in speed).
+    /// > 0: it loses min(0.5, damping x speed / friction_speed): drag quadratic in speed,
+    /// as a river bed's (Manning), the same as the linear law at this speed, weaker
+    /// below it (a slow sheet on a flat runs on), stronger above (a chute is held).
+    float friction_speed = 0.0f;
 };
 
 struct IntegratorDef {

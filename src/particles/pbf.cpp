@@ -353,6 +353,10 @@ void ParticleSolver::step_pbf(float dt) {
     // bed). It takes the energy out of a pool's slosh; too much of it holds a shallow
     // river on its bed (docs/river.md has the measured trade-off).
     if (terrain && collision_.damping > 0.0f) {
+        // The law (CollisionDef::friction_speed): the share is damping, or damping x
+        // |dx_t| / (dt friction_speed), the step's speed along the ground over the law's.
+        const bool quadratic = collision_.friction_speed > 0.0f;
+        const float per_speed = quadratic ? 1.0f / (dt * collision_.friction_speed) : 0.0f;
         tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
             for (size_t i = r.begin(); i != r.end(); ++i) {
                 if (!contact_[i]) continue;
@@ -360,7 +364,10 @@ void ParticleSolver::step_pbf(float dt) {
                 if (!terrain_.contains_xz(x.x, x.z)) continue;
                 const Vec3 nrm = terrain_.normal_mesh(x.x, x.z);
                 const Vec3 dx = x - p.last_position[i];
-                p.position[i] = x - collision_.damping * (dx - glm::dot(dx, nrm) * nrm);
+                const Vec3 along = dx - glm::dot(dx, nrm) * nrm;
+                const float share = quadratic ? std::min(0.5f, collision_.damping * glm::length(along) * per_speed)
+                                              : collision_.damping;
+                p.position[i] = x - share * along;
             }
         });
     }

@@ -61,6 +61,8 @@ constexpr KeyReaders kSpringMode{"solver = springs, stiffness > 0",
                                  [](S d) { return d.solver == SolverKind::Springs && d.springs.stiffness > 0.0f; }};
 constexpr KeyReaders kContact{"solver = springs, pbf; collision.mode paper, robust",
                               [](S d) { return d.solver != SolverKind::Bullet && d.collision.mode != CollisionMode::None; }};
+constexpr KeyReaders kPbfContact{"solver = pbf, collision.mode = robust",
+                                 [](S d) { return d.solver == SolverKind::Pbf && d.collision.mode != CollisionMode::None; }};
 constexpr KeyReaders kRobust{"solver = springs, pbf; collision.mode = robust",
                              [](S d) { return d.solver != SolverKind::Bullet && d.collision.mode == CollisionMode::Robust; }};
 constexpr KeyReaders kSurface{"a scene with the surface on", [](S d) { return d.surface; }};
@@ -238,6 +240,11 @@ const SceneKey kKeys[] = {
      .help = "Fraction of speed lost at a bounce; solver = \"pbf\": the bed friction, the share of a particle's motion "
              "along the ground it loses in each step the terrain holds it (still water 0.02: docs/river.md, \"Bed friction\").",
      .field = MR_FIELD(collision.damping)},
+    {.name = "collision.friction_speed", .type = K::Float, .unit = "m/s", .range = closed(0, 1e3), .readers = kPbfContact,
+     .help = "The bed friction's law: 0 = the share damping at every speed (linear drag); > 0 = the share damping x "
+             "speed / friction_speed, at most 0.5 (quadratic drag, as a river bed's: slow sheets spread, fast chutes "
+             "are held; docs/river.md, \"Bed friction\").",
+     .field = MR_FIELD(collision.friction_speed)},
     {.name = "collision.offset", .type = K::Float, .unit = "m", .range = closed(0, 10), .readers = kContact,
      .help = "Placed above the hit point.", .field = MR_FIELD(collision.offset)},
     {.name = "collision.bvh_leaf_triangles", .type = K::Int, .range = closed(2, 4096), .readers = kAll,

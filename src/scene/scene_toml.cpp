@@ -372,12 +372,15 @@ void refuse_irrelevant_keys(const toml::table& root, Reader& r, const SceneDef& 
 
     if (d.solver != SolverKind::Bullet) {
         if (d.collision.mode == CollisionMode::None)
-            each("collision", {"damping", "offset", "query"},
+            each("collision", {"damping", "offset", "query", "friction_speed"},
                  "collision.mode = \"none\" (particles pass through the terrain)", "remove it or set mode = \"robust\"");
         else if (d.collision.mode == CollisionMode::Paper)
             each("collision", {"query"}, "collision.mode = \"paper\" (the paper's response walks the AABB tree; query "
                                          "picks robust mode's)",
                  "remove it or set mode = \"robust\"");
+        if (d.solver == SolverKind::Springs)
+            each("collision", {"friction_speed"}, "solver = \"springs\" (a bounce's damping has no law; only PBF's bed friction)",
+                 "remove it or use solver = \"pbf\"");
     }
 
     const std::string source = fmt::format("terrain.source = \"{}\"", to_string(d.source.kind));

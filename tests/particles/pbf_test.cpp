@@ -58,9 +58,11 @@ ParticleSolver column_solver(const World& w, const std::vector<Vec3>& pts) {
 
 /// A PBF solver on `w` at 120 steps/s with robust collision (radius 0.1 m) and the
 /// given bed friction; only place() (or the spawn's own interval) activates particles.
-ParticleSolver robust_solver(const World& w, const SpawnDef& spawn, const PbfDef& def, float damping) {
+ParticleSolver robust_solver(const World& w, const SpawnDef& spawn, const PbfDef& def, float damping,
+                             float friction_speed = 0.0f) {
     return ParticleSolver(w.terrain, w.bvh, spawn, SpringDef{},
-                          CollisionDef{.mode = CollisionMode::Robust, .damping = damping, .offset = 0.005f, .radius = 0.1f},
+                          CollisionDef{.mode = CollisionMode::Robust, .damping = damping, .offset = 0.005f, .radius = 0.1f,
+                                       .friction_speed = friction_speed},
                           IntegratorDef{.gravity = 9.82f, .fixed_dt = 1.0f / 120.0f, .substeps = 1}, 3, def, SinkDef{});
 }
 
@@ -163,6 +165,46 @@ TEST(Pbf, AParticleSlidesDownASteepFaceInsteadOfStickingToIt) {
     EXPECT_GT(y0 - x.y, 0.8f * 0.5f * 9.82f * 0.985f * 0.04f) << "the particle sticks to the steep face";
     EXPECT_GE(x.y, w.terrain.height_mesh(x.x, x.z) + 0.1f) << "below the face";
     EXPECT_EQ(s.counters().tunneled, 0u);
+}
+
+TEST(Pbf, BedFrictionLawsGiveTheirTerminalSpeedsOnASlope) {
+    // A particle sliding down a plane of slope 0.1 for 8 s. Each step the bed friction
+    // removes the share f of its motion along the ground, gravity adds g sin(a) dt, so
+    // the terminal speed solves f v = (1 - f) g sin(a) dt: linear law (f = damping)
+    // v = (1 - f) g sin(a) dt / damping; quadratic (f = damping v / friction_speed)
+    // v ~ sqrt(g sin(a) dt friction_speed / damping). Speeds from the last second's path.
+    Heightmap ramp = flat_heightmap(65, 9);
+    for (int r = 0; r < 9; ++r)
+        for (int c = 0; c < 65; ++c) ramp.samples[size_t(r) * 65 + c] = 1.0f - float(c) / 64.0f;
+    World w = make_world(ramp, TerrainDef{.area_scale = 1.0f, .height_scale = 6.4f});
+    const float dt = 1.0f / 120.0f, damping = 0.02f, sin_a = 0.1f / std::sqrt(1.01f), g_along = 9.82f * sin_a * dt;
+    auto terminal = [&](float friction_speed) {
+        SpawnDef spawn{.count = 1, .center = Vec3(4, 5, 4), .half_extent = Vec3(0), .interval = 1'000'000};
+        spawn.flow_rate = 0.0f;
+        PbfDef def = pbf_def();
+        def.sleep_threshold = 0.0f;
+        ParticleSolver s = robust_solver(w, spawn, def, damping, friction_speed);
+        const std::vector<Vec3> one{Vec3(2.0f, w.terrain.height_mesh(2.0f, 4.0f) + 0.11f, 4.0f)};
+        s.place(one);
+        for (int f = 0; f < 7 * 120; ++f) s.step_frame(dt);
+        const Vec3 a = s.particles().position[0];
+        for (int f = 0; f < 120; ++f) s.step_frame(dt);
+        const Vec3 b = s.particles().position[0];
+        EXPECT_EQ(s.counters().tunneled, 0u);
+        EXPECT_GE(b.y, w.terrain.height_mesh(b.x, b.z) + 0.1f) << "below the ramp";
+        return glm::length(b - a);  // over 1 s: m/s
+    };
+    const float linear = terminal(0.0f), slow = terminal(1.0f), fast = terminal(4.0f);
+    const float want_linear = (1.0f - damping) * g_along / damping;
+    auto want_quadratic = [&](float vr) {  // f v = (1 - f) g_along with f = damping v / vr
+        const float a = damping / vr;       // a v^2 + a g_along v - g_along = 0
+        return (-a * g_along + std::sqrt(a * a * g_along * g_along + 4.0f * a * g_along)) / (2.0f * a);
+    };
+    std::printf("terminal speeds: linear %.3f (want %.3f), quadratic 1 m/s %.3f (want %.3f), 4 m/s %.3f (want %.3f)\n",
+                linear, want_linear, slow, want_quadratic(1.0f), fast, want_quadratic(4.0f));
+    EXPECT_NEAR(linear, want_linear, 0.1f * want_linear);
+    EXPECT_NEAR(slow, want_quadratic(1.0f), 0.1f * want_quadratic(1.0f));
+    EXPECT_NEAR(fast, want_quadratic(4.0f), 0.1f * want_quadratic(4.0f));
 }
 
 // Sleeping (PbfDef::sleep_threshold): what it must never do is freeze a particle in the

@@ -402,6 +402,10 @@ TEST(SceneToml, KeysAnotherKeysValueMakesIrrelevantAreErrorsNamingBoth) {
     // Collision: no terrain contact with mode "none"; the paper's response has one query.
     expect_error(springs + "[collision]\nmode = \"none\"\ndamping = 0.5\n", "collision.damping: ignored when collision.mode = \"none\"");
     expect_error("[collision]\nmode = \"none\"\noffset = 0.1\n", "collision.offset: ignored when collision.mode = \"none\"");
+    // The bed friction's law is PBF's: the springs' bounce has none.
+    expect_error("[collision]\nmode = \"none\"\nfriction_speed = 3\n",
+                 "collision.friction_speed: ignored when collision.mode = \"none\"");
+    expect_error(springs + "[collision]\nfriction_speed = 3\n", "collision.friction_speed: ignored when solver = \"springs\"");
     expect_error(springs + "[collision]\nmode = \"paper\"\nquery = \"heightfield\"\n",
                  "collision.query: ignored when collision.mode = \"paper\"");
     // The terrain: a PNG has its own size and no procedure; only the valley is random.
