@@ -91,6 +91,10 @@ struct SpawnDef {
     /// derived from the terrain's main channel when a PBF simulation is created
     /// (size_river in scene.h); any other value is used as given.
     bool auto_rate() const { return flow_rate == kAutoRate; }
+    /// The scene (Simulation, solver = pbf on a carved channel) fills the main channel
+    /// with water at the start, so the river runs from the first frame; the solver
+    /// itself ignores it. (particles.prefill; docs/river.md, "Prefill".)
+    bool prefill = false;
     /// Particles per second the source emits.
     float particles_per_second() const {
         if (auto_rate()) return 0.0f;  // not known before the terrain is
@@ -266,6 +270,8 @@ public:
     /// Activates particles at the given positions (with the initial velocity), in
     /// order, starting at the first inactive one; extra positions are ignored.
     void place(std::span<const Vec3> positions);
+    /// The same with each particle's velocity (`velocities` as long as `positions`).
+    void place(std::span<const Vec3> positions, std::span<const Vec3> velocities);
 
     /// Places particle i at a random point of the spawn volume with the initial velocity.
     void spawn(size_t i);

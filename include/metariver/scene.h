@@ -152,6 +152,25 @@ struct RiverSize {
     bool capped = false;        ///< the budget hit kRiverMaxCount (the rate was lowered)
 };
 RiverSize size_river(const SceneDef& def, float area_scale, float channel_length_m);
+
+/// How fill_channel fills a carved channel (particles.prefill).
+struct ChannelFillDef {
+    float spacing = 0.5f;      ///< particle spacing, metres, > 0
+    float floor_m = 3.0f;      ///< the bed's width (CarveDef::floor_m): floor / spacing - 1 particles across
+    float depth_m = 0.75f;     ///< water depth: round(depth / spacing) layers (at least one)
+    float clearance_m = 0.0f;  ///< gap between the ground and the lowest layer's bottom (collision radius + offset)
+    float speed = 0.0f;        ///< m/s along the channel's horizontal tangent
+    Vec3 skip_center{0.0f};    ///< stations within skip_radius_m of it (x, z) stay empty: the source's basin
+    float skip_radius_m = 0.0f;
+    size_t most = 0;           ///< particles at most
+};
+/// Positions (and velocities) filling the channel along `path` (cells: row, column)
+/// from its first cell to its last: a station every spacing along the path, particles
+/// across the bed and layers above the mesh, none nearer than 0.9 spacing to another.
+struct ChannelFill {
+    std::vector<Vec3> position, velocity;
+};
+ChannelFill fill_channel(const Terrain& t, std::span<const std::pair<int, int>> path, const ChannelFillDef& def);
 /// Non-fatal advice about a valid scene (e.g. a flow rate the particle budget cannot
 /// sustain for long), one line each, naming the field.
 std::vector<std::string> scene_warnings(const SceneDef& def);
@@ -313,6 +332,8 @@ public:
     /// How the river sized itself (particles.count / flow_rate = "auto"); empty when
     /// neither was automatic.
     const std::optional<RiverSize>& sizing() const { return sizing_; }
+    /// Particles particles.prefill placed in the carved channel at the start (0: none).
+    size_t prefilled() const { return prefilled_; }
 
 private:
     Simulation(const SceneDef& def, Terrain terrain, Bvh bvh);
@@ -335,6 +356,9 @@ private:
     ChannelCoverage coverage_;
     std::optional<RiverSize> sizing_;
     std::optional<FoamSystem> foam_;
+    size_t prefilled_ = 0;
+
+    void prefill_channel();
 };
 
 }  // namespace mr

@@ -104,13 +104,16 @@ size_t ParticleSolver::slot_of_id(uint32_t id) const {
     return static_cast<size_t>(std::find(ids.begin(), ids.end(), id) - ids.begin());
 }
 
-void ParticleSolver::place(std::span<const Vec3> positions) {
-    for (const Vec3& q : positions) {
+void ParticleSolver::place(std::span<const Vec3> positions) { place(positions, {}); }
+
+void ParticleSolver::place(std::span<const Vec3> positions, std::span<const Vec3> velocities) {
+    for (size_t k = 0; k < positions.size(); ++k) {
         if (next_to_activate_ >= particles_.size()) break;
+        const Vec3& q = positions[k];
         const size_t i = next_to_activate_++;
         particles_.position[i] = q;
         particles_.last_position[i] = q;
-        particles_.velocity[i] = spawn_.initial_velocity;
+        particles_.velocity[i] = k < velocities.size() ? velocities[k] : spawn_.initial_velocity;
         particles_.active[i] = 1;
         particles_.birth_frame[i] = static_cast<uint32_t>(frame_);
         slow_steps_[i] = 0;

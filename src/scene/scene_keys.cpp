@@ -63,6 +63,9 @@ constexpr KeyReaders kContact{"solver = springs, pbf; collision.mode paper, robu
                               [](S d) { return d.solver != SolverKind::Bullet && d.collision.mode != CollisionMode::None; }};
 constexpr KeyReaders kPbfContact{"solver = pbf, collision.mode = robust",
                                  [](S d) { return d.solver == SolverKind::Pbf && d.collision.mode != CollisionMode::None; }};
+constexpr KeyReaders kPbfCarved{"solver = pbf with terrain.condition carve (auto: carve for a river)", [](S d) {
+                                    return d.solver == SolverKind::Pbf && resolved_condition(d) == TerrainCondition::Carve;
+                                }};
 constexpr KeyReaders kRobust{"solver = springs, pbf; collision.mode = robust",
                              [](S d) { return d.solver != SolverKind::Bullet && d.collision.mode == CollisionMode::Robust; }};
 constexpr KeyReaders kSurface{"a scene with the surface on", [](S d) { return d.surface; }};
@@ -188,6 +191,11 @@ const SceneKey kKeys[] = {
      .field = MR_FIELD(spawn.flow_rate)},
     {.name = "particles.litres_per_particle", .type = K::Float, .unit = "l", .range = closed(0, 1e9), .readers = kRate,
      .help = "> 0: flow_rate is in litres per second, each particle this many litres.", .field = MR_FIELD(spawn.litres_per_particle)},
+    {.name = "particles.prefill", .type = K::Bool, .readers = kPbfCarved,
+     .help = "Fill the carved main channel with water at the start (three quarters of its depth, moving down it at "
+             "0.75 m/s, at most half the budget), so the river runs from the first frame instead of after its front "
+             "crossed the channel (docs/river.md, \"Prefill\").",
+     .field = MR_FIELD(spawn.prefill)},
     // [pbf]
     {.name = "pbf.spacing", .type = K::Float, .unit = "m", .range = closed(1e-3, 1e3), .readers = kPbfOrCarve,
      .help = "Rest spacing (below 1 mm the kernel constants overflow); a carved channel's depth and width.", .field = MR_FIELD(pbf.spacing)},

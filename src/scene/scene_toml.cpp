@@ -365,6 +365,15 @@ void refuse_irrelevant_keys(const toml::table& root, Reader& r, const SceneDef& 
                                                  d.sink.kind == SinkKind::None ? "none" : "edges"),
              "remove it or set kind = \"box\"");
 
+    // The channel's prefill needs PBF water and a carved channel to fill.
+    if (d.solver != SolverKind::Pbf)
+        each("particles", {"prefill"}, fmt::format("solver = \"{}\" (only PBF water fills the carved channel)", to_string(d.solver)),
+             "remove it or use solver = \"pbf\"");
+    else if (resolved_condition(d) != TerrainCondition::Carve)
+        each("particles", {"prefill"},
+             fmt::format("terrain.condition resolves to \"{}\" (no carved channel to fill)", to_string(resolved_condition(d))),
+             "remove it or set terrain.condition = \"carve\"");
+
     // Springs, where the solver reads [springs] at all (solver scope refused the rest).
     if (d.springs.stiffness == 0.0f && (d.solver == SolverKind::Springs || (d.solver == SolverKind::Bullet && d.bullet.springs)))
         each("springs", {"min_distance", "max_distance", "mode"}, "springs.stiffness = 0 (no spring force)",

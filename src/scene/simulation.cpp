@@ -159,12 +159,33 @@ Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh)
             solver_ = std::make_unique<ParticleSolver>(terrain_, bvh_, spawn, def_.springs, def_.collision,
                                                        def_.integrator, def_.seed, def_.pbf, def_.sink);
             if (def_.foam.enabled) foam_.emplace(def_.foam, def_.pbf.kernel_radius, def_.integrator.gravity);
+            if (def_.spawn.prefill && terrain_.condition_report().mode == TerrainCondition::Carve) prefill_channel();
             break;
         case SolverKind::Bullet:
             solver_ = std::make_unique<BulletSolver>(terrain_, spawn, def_.springs, def_.integrator, def_.bullet,
                                                      def_.seed);
             break;
     }
+}
+
+void Simulation::prefill_channel() {
+    // kRiverFill of the carved section, moving down the channel at kRiverTransitSpeed,
+    // clear of the source's basin (the source fills that), at most half the budget
+    // (the rest is the source's until the sink recycles).
+    const CarveDef carve = carve_def(def_, terrain_.area_scale());
+    const SpawnDef& sp = def_.spawn;
+    const ChannelFillDef fd{.spacing = def_.pbf.spacing,
+                            .floor_m = carve.floor_m,
+                            .depth_m = kRiverFill * carve.depth_m,
+                            .clearance_m = def_.collision.radius + def_.collision.offset,
+                            .speed = kRiverTransitSpeed,
+                            .skip_center = sp.center,
+                            .skip_radius_m = std::max(sp.half_extent.x, sp.shape == SourceShape::Disc ? 0.0f : sp.half_extent.z) +
+                                             2.0f * def_.pbf.spacing,
+                            .most = size_t(std::max(sp.count, 0)) / 2};
+    const ChannelFill fill = fill_channel(terrain_, main_path_, fd);
+    static_cast<ParticleSolver&>(*solver_).place(fill.position, fill.velocity);
+    prefilled_ = fill.position.size();
 }
 
 std::vector<std::string> Simulation::warnings() const {

@@ -348,6 +348,7 @@ TEST(OutletMeter, WaterThrownOverTheUpstreamEdgeIsNotTheMainOutlet) {
 TEST(ChannelCoverage, SimulationMainChannelStartsAtTheSource) {
     SceneDef d = default_scene();
     d.surface = false;
+    d.spawn.prefill = false;  // the channel starts empty: no coverage before the source emits
     auto sim = Simulation::create(d);
     ASSERT_TRUE(sim.ok()) << sim.error().message;
     const ChannelMap& m = sim.value()->channel();

@@ -190,5 +190,78 @@ TEST(Carve, TheRiverRunsDownTheChannelItsCarveWasCutFor) {
     }
 }
 
+TEST(Prefill, TheCarvedChannelStartsFullSoTheRiverRunsFromTheFirstFrame) {
+    // particles.prefill (docs/river.md, "Prefill"): the default river on the valley, the
+    // same scene with and without. The front from the source needs about 25 s to reach
+    // the outlet; the filled channel's water leaves within seconds.
+    SceneDef d = default_scene();
+    d.surface = false;
+    d.spawn.prefill = true;
+    auto sim = make(d);
+    ASSERT_TRUE(sim);
+    const size_t n = sim->prefilled();
+    ASSERT_GT(n, 200u);
+    EXPECT_LE(n, size_t(sim->def().spawn.count) / 2);
+    const Particles& p = sim->particles();
+    std::vector<Vec3> placed;
+    for (size_t i = 0; i < p.size(); ++i)
+        if (p.active[i]) placed.push_back(p.position[i]);
+    ASSERT_EQ(placed.size(), n);
+    // Each in the carved channel: above the mesh by the collision clearance, within the
+    // carve's half width (and a spacing) of a path cell; none nearer than 0.9 spacing.
+    const Terrain& t = sim->terrain();
+    const float a = t.area_scale(), sp = sim->def().pbf.spacing;
+    const CarveDef carve = carve_def(sim->def(), a);
+    for (const Vec3& q : placed) {
+        EXPECT_GE(q.y, t.height_mesh(q.x, q.z) + sim->def().collision.radius);
+        float nearest = 1e30f;
+        for (const auto& [i, j] : sim->main_channel())
+            nearest = std::min(nearest, std::hypot(q.x - float(j) * a, q.z - float(i) * a));
+        EXPECT_LE(nearest, 0.5f * carve.floor_m + sp) << "outside the channel's bed";
+    }
+    for (size_t i = 0; i < placed.size(); ++i)
+        for (size_t j = i + 1; j < placed.size(); ++j)
+            ASSERT_GE(glm::length(placed[i] - placed[j]), 0.9f * sp - 1e-4f) << "overlapping particles " << i << ", " << j;
+    EXPECT_GE(sim->channel_coverage(), 0.8f) << "the channel is not filled";
+
+    SceneDef off = d;
+    off.spawn.prefill = false;
+    auto empty = make(off);
+    ASSERT_TRUE(empty);
+    EXPECT_EQ(empty->prefilled(), 0u);
+    for (int f = 0; f < 600; ++f) {  // 10 s
+        sim->step(1.0f / 60.0f);
+        empty->step(1.0f / 60.0f);
+    }
+    std::printf("prefill: %zu particles; after 10 s: %llu sunk (without: %llu)\n", n,
+                (unsigned long long)sim->counters().sunk, (unsigned long long)empty->counters().sunk);
+    EXPECT_GT(sim->counters().sunk, 100u) << "the filled channel's water did not reach the outlet";
+    EXPECT_EQ(empty->counters().sunk, 0u) << "the front reached the outlet in 10 s: the test no longer tells them apart";
+    EXPECT_EQ(sim->counters().tunneled, 0u);
+    EXPECT_EQ(sim->counters().guarded, 0u);
+}
+
+TEST(Prefill, FillChannelStaysInsideTheBudgetAndTheTerrain) {
+    // The raw fill on a straight path: particles across the bed, layers, the cap.
+    auto sim = make(default_scene());
+    ASSERT_TRUE(sim);
+    const Terrain& t = sim->terrain();
+    std::vector<std::pair<int, int>> path;
+    for (int i = 2; i < t.rows() - 2; ++i) path.emplace_back(i, t.columns() / 2);
+    ChannelFillDef fd{.spacing = 0.5f, .floor_m = 3.0f, .depth_m = 0.75f, .clearance_m = 0.1f, .speed = 1.0f,
+                      .most = 100000};
+    const ChannelFill all = fill_channel(t, path, fd);
+    const float length = t.area_scale() * float(path.size() - 1);
+    // 5 across, 2 layers, a station every 0.5 m.
+    EXPECT_NEAR(double(all.position.size()), 5.0 * 2.0 * double(length) / 0.5, 10.0);
+    ASSERT_EQ(all.velocity.size(), all.position.size());
+    for (const Vec3& v : all.velocity) EXPECT_NEAR(glm::length(v), 1.0f, 1e-4f);
+    fd.most = 37;
+    EXPECT_EQ(fill_channel(t, path, fd).position.size(), 37u);
+    fd.most = 0;
+    EXPECT_TRUE(fill_channel(t, path, fd).position.empty());
+    EXPECT_TRUE(fill_channel(t, std::span(path).first(1), ChannelFillDef{.most = 10}).position.empty());
+}
+
 }  // namespace
 }  // namespace mr
