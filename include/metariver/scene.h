@@ -163,6 +163,9 @@ struct ChannelFillDef {
     Vec3 skip_center{0.0f};    ///< stations within skip_radius_m of it (x, z) stay empty: the source's basin
     float skip_radius_m = 0.0f;
     size_t most = 0;           ///< particles at most
+    /// Share of the positions kept, (0, 1]: evenly spread (every 1/share-th), for a
+    /// river thinner than its channel's section (a capped budget's lowered rate).
+    float share = 1.0f;
 };
 /// Positions (and velocities) filling the channel along `path` (cells: row, column)
 /// from its first cell to its last: a station every spacing along the path, particles
@@ -359,6 +362,7 @@ private:
     size_t prefilled_ = 0;
 
     void prefill_channel();
+    float prefill_share() const;
 };
 
 }  // namespace mr

@@ -13,7 +13,7 @@ namespace mr {
 ChannelFill fill_channel(const Terrain& t, std::span<const std::pair<int, int>> path, const ChannelFillDef& def) {
     ChannelFill out;
     const float s = def.spacing;
-    if (path.size() < 2 || !(s > 0.0f) || def.most == 0) return out;
+    if (path.size() < 2 || !(s > 0.0f) || def.most == 0 || !(def.share > 0.0f)) return out;
     const float a = t.area_scale();
     // The path's cell centres in metres (x = column, z = row), and its arc length.
     std::vector<Vec3> pts;
@@ -44,6 +44,7 @@ ChannelFill fill_channel(const Terrain& t, std::span<const std::pair<int, int>> 
                 }
         return true;
     };
+    uint64_t candidates = 0;
     size_t seg = 0;
     for (float u = 0.5f * s; u < length && out.position.size() < def.most; u += s) {
         while (seg + 2 < arc.size() && arc[seg + 1] < u) ++seg;
@@ -68,6 +69,10 @@ ChannelFill fill_channel(const Terrain& t, std::span<const std::pair<int, int>> 
             for (int l = 0; l < layers && out.position.size() < def.most; ++l) {
                 const Vec3 p(q.x, ground + def.clearance_m + (0.5f + float(l)) * s, q.z);
                 if (!free_at(p)) continue;
+                // Keep candidate k when floor((k + 1) share) passes an integer: evenly
+                // spread, exactly round(candidates x share) of them.
+                const double k = double(candidates++);
+                if (std::floor((k + 1.0) * double(def.share)) == std::floor(k * double(def.share))) continue;
                 cells[key(p)].push_back(p);
                 out.position.push_back(p);
                 out.velocity.push_back(def.speed * tangent);

@@ -168,6 +168,16 @@ Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh)
     }
 }
 
+float Simulation::prefill_share() const {
+    // The section's rate (size_river before a ceiling lowered it) against the source's:
+    // a thinner river than the section starts as thin.
+    const CarveDef carve = carve_def(def_, terrain_.area_scale());
+    const float s = def_.pbf.spacing;
+    const float section = kRiverFill * carve.floor_m * carve.depth_m * kRiverSpeed / (s * s * s);
+    const float rate = float(def_.spawn.particles_per_second());
+    return section > 0.0f && rate > 0.0f ? std::min(1.0f, rate / section) : 1.0f;
+}
+
 void Simulation::prefill_channel() {
     // kRiverFill of the carved section, moving down the channel at kRiverTransitSpeed,
     // clear of the source's basin (the source fills that), at most half the budget
@@ -182,7 +192,8 @@ void Simulation::prefill_channel() {
                             .skip_center = sp.center,
                             .skip_radius_m = std::max(sp.half_extent.x, sp.shape == SourceShape::Disc ? 0.0f : sp.half_extent.z) +
                                              2.0f * def_.pbf.spacing,
-                            .most = size_t(std::max(sp.count, 0)) / 2};
+                            .most = size_t(std::max(sp.count, 0)) / 2,
+                            .share = prefill_share()};
     const ChannelFill fill = fill_channel(terrain_, main_path_, fd);
     static_cast<ParticleSolver&>(*solver_).place(fill.position, fill.velocity);
     prefilled_ = fill.position.size();

@@ -224,6 +224,14 @@ TEST(Prefill, TheCarvedChannelStartsFullSoTheRiverRunsFromTheFirstFrame) {
             ASSERT_GE(glm::length(placed[i] - placed[j]), 0.9f * sp - 1e-4f) << "overlapping particles " << i << ", " << j;
     EXPECT_GE(sim->channel_coverage(), 0.8f) << "the channel is not filled";
 
+    // A river a third of its section's rate starts a third as full.
+    SceneDef thin = d;
+    thin.spawn.flow_rate = sim->def().spawn.flow_rate / 3.0f;
+    auto third = make(thin);
+    ASSERT_TRUE(third);
+    // (Within 10 %: a thinned station no longer blocks its neighbour at a bend.)
+    EXPECT_NEAR(double(third->prefilled()), double(n) / 3.0, 0.1 * double(n) / 3.0);
+
     SceneDef off = d;
     off.spawn.prefill = false;
     auto empty = make(off);
@@ -256,6 +264,12 @@ TEST(Prefill, FillChannelStaysInsideTheBudgetAndTheTerrain) {
     EXPECT_NEAR(double(all.position.size()), 5.0 * 2.0 * double(length) / 0.5, 10.0);
     ASSERT_EQ(all.velocity.size(), all.position.size());
     for (const Vec3& v : all.velocity) EXPECT_NEAR(glm::length(v), 1.0f, 1e-4f);
+    // A quarter of them, evenly spread (a capped budget's thinner river).
+    fd.share = 0.25f;
+    const ChannelFill quarter = fill_channel(t, path, fd);
+    EXPECT_NEAR(double(quarter.position.size()), 0.25 * double(all.position.size()), 1.0);
+    EXPECT_GT(quarter.position.back().z - quarter.position.front().z, 0.9f * length) << "not spread along the path";
+    fd.share = 1.0f;
     fd.most = 37;
     EXPECT_EQ(fill_channel(t, path, fd).position.size(), 37u);
     fd.most = 0;
