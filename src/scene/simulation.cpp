@@ -237,6 +237,34 @@ CarveDef carve_def(const SceneDef& def, float area_scale) {
     return CarveDef{.width_m = floor + 2.0f * std::max(1.5f * area_scale, 2.0f * d), .floor_m = floor, .depth_m = 2.0f * d};
 }
 
+std::vector<std::pair<int, int>> keep_off_edges(std::span<const std::pair<int, int>> path, int rows, int columns,
+                                                int margin) {
+    std::vector<std::pair<int, int>> out;
+    if (path.empty()) return out;
+    const int mi = std::clamp(margin, 0, rows / 4), mj = std::clamp(margin, 0, columns / 4);
+    auto step_to = [&](std::pair<int, int> c) {  // straight 8-connected steps from out.back()
+        if (out.empty()) {
+            out.push_back(c);
+            return;
+        }
+        auto [i, j] = out.back();
+        while (i != c.first || j != c.second) {
+            i += (c.first > i) - (c.first < i);
+            j += (c.second > j) - (c.second < j);
+            out.emplace_back(i, j);
+        }
+    };
+    for (size_t k = 0; k < path.size(); ++k) {
+        auto [i, j] = path[k];
+        if (k > 0 && k + 1 < path.size()) {
+            i = std::clamp(i, mi, std::max(mi, rows - 1 - mi));
+            j = std::clamp(j, mj, std::max(mj, columns - 1 - mj));
+        }
+        step_to({i, j});
+    }
+    return out;
+}
+
 RiverSize size_river(const SceneDef& def, float area_scale, float channel_length_m) {
     const CarveDef c = carve_def(def, area_scale);
     const float s = def.pbf.spacing;
@@ -296,7 +324,10 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, cons
                     ? 0.0f
                     : std::max(spawn.half_extent.x, spawn.shape == SourceShape::Disc ? 0.0f : spawn.half_extent.z) +
                           carve_spacing_of(def);
-            terrain->carve_channel(path, carve);
+            // Off the map's edges by the section's half width and the levee (1.5 samples).
+            const float as = terrain->area_scale();
+            const int margin = int(std::ceil((0.5f * carve.width_m) / as + 1.5f));
+            terrain->carve_channel(keep_off_edges(path, terrain->rows(), terrain->columns(), margin), carve);
             // The source stays where the carve was cut for it. Placed again on the carved
             // ground, the main head moved elsewhere on some terrains (the carve changes
             // the flow accumulation), and the river ran down an uncarved path while the

@@ -277,5 +277,68 @@ TEST(Prefill, FillChannelStaysInsideTheBudgetAndTheTerrain) {
     EXPECT_TRUE(fill_channel(t, std::span(path).first(1), ChannelFillDef{.most = 10}).position.empty());
 }
 
+TEST(Carve, APathAlongTheEdgeIsMovedInAndTurnsToItsOutlet) {
+    // A path along row 1 of a 40 x 30 grid, from (1, 30) west to its outlet (0, 2).
+    std::vector<std::pair<int, int>> path;
+    for (int j = 30; j >= 3; --j) path.emplace_back(1, j);
+    path.emplace_back(0, 2);
+    const auto moved = keep_off_edges(path, 30, 40, 5);
+    ASSERT_GE(moved.size(), path.size());
+    EXPECT_EQ(moved.front(), path.front());
+    EXPECT_EQ(moved.back(), path.back());
+    for (size_t k = 1; k < moved.size(); ++k) {
+        EXPECT_LE(std::abs(moved[k].first - moved[k - 1].first), 1) << k;
+        EXPECT_LE(std::abs(moved[k].second - moved[k - 1].second), 1) << k;
+        EXPECT_NE(moved[k], moved[k - 1]) << k;
+    }
+    // Every cell but the ends' approaches at least 5 in: the run along the edge is row 5.
+    int on_row5 = 0;
+    for (const auto& [i, j] : moved) {
+        EXPECT_GE(j, 2);
+        if (i == 5) ++on_row5;
+    }
+    EXPECT_GE(on_row5, 20);
+    // The margin is at most a quarter of a side: a 9 x 9 grid keeps 2 cells.
+    const auto small = keep_off_edges(std::vector<std::pair<int, int>>{{4, 8}, {0, 4}, {0, 3}, {0, 0}}, 9, 9, 5);
+    for (size_t k = 1; k + 1 < small.size(); ++k)
+        if (small[k] != small.back() && small[k] != small.front()) {
+            EXPECT_GE(small[k].first, 0);
+        }
+    EXPECT_EQ(small.back(), std::make_pair(0, 0));
+    EXPECT_TRUE(keep_off_edges({}, 9, 9, 5).empty());
+}
+
+TEST(Carve, TheRiversChannelKeepsOffTheMapsEdges) {
+    // The main channel of the carved ground, away from its outlet, keeps the section's
+    // half width and its levee from every edge: its banks lie inside the map. andes_peru's ran along
+    // the east edge (3.7 particles/s lost over it) before keep_off_edges.
+    const std::filesystem::path shared = std::filesystem::path(METARIVER_SHARED_DIR) / "heightmaps";
+    int maps = 0;
+    for (const char* name : {"real/andes_peru.png", "metawater/nile.png"}) {
+        if (!std::filesystem::exists(shared / name)) continue;
+        SceneDef d = default_scene();
+        d.source.kind = TerrainSource::File;
+        d.source.heightmap = (shared / name).string();
+        d.surface = false;
+        auto sim = make(d);
+        ASSERT_TRUE(sim) << name;
+        ++maps;
+        const Terrain& t = sim->terrain();
+        const auto path = sim->main_channel();
+        ASSERT_GE(path.size(), 10u) << name;
+        const CarveDef carve = carve_def(sim->def(), t.area_scale());
+        // The section's half width and its levee (1.5 samples), as the carve keeps.
+        const int margin = int(std::ceil(0.5f * carve.width_m / t.area_scale() + 1.5f));
+        int near_edge = 0;
+        for (size_t k = 1; k + size_t(margin) + 1 < path.size(); ++k) {
+            const auto [i, j] = path[k];
+            if (std::min({i, j, t.rows() - 1 - i, t.columns() - 1 - j}) < margin) ++near_edge;
+        }
+        std::printf("%s: %d of %zu main channel cells within %d of an edge\n", name, near_edge, path.size(), margin);
+        EXPECT_EQ(near_edge, 0) << name << ": the main channel runs along an edge of the map";
+    }
+    if (maps == 0) GTEST_SKIP() << "no heightmaps in " << shared;
+}
+
 }  // namespace
 }  // namespace mr
