@@ -93,7 +93,7 @@ struct SpawnDef {
     bool auto_rate() const { return flow_rate == kAutoRate; }
     /// The scene (Simulation, solver = pbf on a carved channel) fills the main channel
     /// with water at the start, so the river runs from the first frame; the solver
-    /// itself ignores it. (particles.prefill; docs/river.md, "Prefill".)
+    /// itself ignores it. (particles.prefill; docs/river.md, "Quadratic bed friction and a channel that starts full".)
     bool prefill = false;
     /// Particles per second the source emits.
     float particles_per_second() const {

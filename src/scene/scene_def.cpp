@@ -70,7 +70,7 @@ SceneDef default_scene() {
                .flow_rate = kAutoRate,
                .litres_per_particle = 0.0f};
     // The carved channel starts full: the river runs from the first frame (docs/river.md,
-    // "Prefill"; a 95 m channel's front needed most of a 120 s run to reach its outlet).
+    // "Quadratic bed friction and a channel that starts full"; a 95 m channel's front needed most of a 120 s run to reach its outlet).
     d.spawn.prefill = true;
     d.pbf = PbfDef{};
     // The river's channel is carved from the source to the outlet (a scene without a
@@ -79,7 +79,7 @@ SceneDef default_scene() {
     d.sink = SinkDef{.kind = SinkKind::Edges};
     d.collision = {.mode = CollisionMode::Robust, .damping = 0.002f, .offset = 0.005f, .leaf_triangles = 8,
                    .radius = 0.1f, .query = CollisionQuery::Heightfield,
-                   // Bed friction quadratic in speed (docs/river.md, "Bed friction"):
+                   // Bed friction quadratic in speed (docs/river.md, "Quadratic bed friction ..."):
                    // measured best of 0, 1, 2, 3, 4 m/s over the failing maps.
                    .friction_speed = 4.0f};
     d.integrator = {.gravity = 9.82f, .fixed_dt = 0.0f, .substeps = 2};

@@ -194,7 +194,7 @@ const SceneKey kKeys[] = {
     {.name = "particles.prefill", .type = K::Bool, .readers = kPbfCarved,
      .help = "Fill the carved main channel with water at the start (three quarters of its depth, moving down it at "
              "0.75 m/s, at most half the budget), so the river runs from the first frame instead of after its front "
-             "crossed the channel (docs/river.md, \"Prefill\").",
+             "crossed the channel (docs/river.md, \"Quadratic bed friction and a channel that starts full\").",
      .field = MR_FIELD(spawn.prefill)},
     // [pbf]
     {.name = "pbf.spacing", .type = K::Float, .unit = "m", .range = closed(1e-3, 1e3), .readers = kPbfOrCarve,
@@ -251,7 +251,7 @@ const SceneKey kKeys[] = {
     {.name = "collision.friction_speed", .type = K::Float, .unit = "m/s", .range = closed(0, 1e3), .readers = kPbfContact,
      .help = "The bed friction's law: 0 = the share damping at every speed (linear drag); > 0 = the share damping x "
              "speed / friction_speed, at most 0.5 (quadratic drag, as a river bed's: slow sheets spread, fast chutes "
-             "are held; docs/river.md, \"Bed friction\").",
+             "are held; docs/river.md, \"Quadratic bed friction and a channel that starts full\").",
      .field = MR_FIELD(collision.friction_speed)},
     {.name = "collision.offset", .type = K::Float, .unit = "m", .range = closed(0, 10), .readers = kContact,
      .help = "Placed above the hit point.", .field = MR_FIELD(collision.offset)},

@@ -191,7 +191,7 @@ TEST(Carve, TheRiverRunsDownTheChannelItsCarveWasCutFor) {
 }
 
 TEST(Prefill, TheCarvedChannelStartsFullSoTheRiverRunsFromTheFirstFrame) {
-    // particles.prefill (docs/river.md, "Prefill"): the default river on the valley, the
+    // particles.prefill (docs/river.md, "... a channel that starts full"): the default river on the valley, the
     // same scene with and without. The front from the source needs about 25 s to reach
     // the outlet; the filled channel's water leaves within seconds.
     SceneDef d = default_scene();
