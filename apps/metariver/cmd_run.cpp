@@ -113,8 +113,8 @@ int run(const RunOptions& o) {
     Simulation& sim = *sim_result.value();
     for (const std::string& w : sim.warnings()) fmt::print(stderr, "metariver run: warning: {}\n", w);
     if (const auto& z = sim.sizing())
-        fmt::print("particles sized to the main channel ({:.0f} m): count {}, flow_rate {:.1f}/s{}\n", z->channel_length_m,
-                   sim.def().spawn.count, sim.def().spawn.particles_per_second(),
+        fmt::print("particles sized to the main channel ({:.0f} m): count {}, flow_rate {:.1f}/s, spacing {:.3g} m{}\n",
+                   z->channel_length_m, sim.def().spawn.count, sim.def().spawn.particles_per_second(), sim.def().pbf.spacing,
                    z->capped ? " (budget at its ceiling: the rate was lowered to fit)" : "");
     if (const ConditionReport& c = sim.terrain().condition_report(); c.mode != TerrainCondition::None)
         fmt::print("terrain.condition = {}: {} cells raised, {} lowered, largest change {:.2f} m ({:.0f} m^3)\n",
@@ -262,7 +262,8 @@ int run(const RunOptions& o) {
                           {"volume_m3", cond.volume_m3}}}};
         if (const auto& z = sim.sizing())
             j["sizing"] = {{"channel_length_m", z->channel_length_m}, {"count", d.spawn.count},
-                           {"flow_rate", d.spawn.particles_per_second()}, {"capped", z->capped}};
+                           {"flow_rate", d.spawn.particles_per_second()}, {"capped", z->capped},
+                           {"spacing", d.pbf.spacing}, {"prefilled", sim.prefilled()}};
         j["particles_total"] = sim.particles().size();
         j["particles_active"] = sim.particles().active_count();
         j["triangles"] = sim.surface().triangle_count();
