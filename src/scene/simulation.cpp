@@ -124,6 +124,19 @@ std::vector<std::pair<int, int>> main_channel_path(const Terrain& t, const Chann
     return m.path_from(a, b);
 }
 
+/// Particles per second that fill kRiverFill (three quarters) of the carved section at
+/// kRiverSpeed: a river a couple of layers deep on the channel's floor, inside its walls.
+float section_rate(const SceneDef& def, float area_scale) {
+    const CarveDef c = carve_def(def, area_scale);
+    const float s = def.pbf.spacing;
+    return kRiverFill * c.floor_m * c.depth_m * kRiverSpeed / (s * s * s);
+}
+
+/// Radius of the source's footprint, metres: a disc's, or the larger half extent of a box.
+float source_footprint(const SpawnDef& spawn) {
+    return std::max(spawn.half_extent.x, spawn.shape == SourceShape::Disc ? 0.0f : spawn.half_extent.z);
+}
+
 }  // namespace
 
 Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh)
@@ -171,9 +184,7 @@ Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh)
 float Simulation::prefill_share() const {
     // The section's rate (size_river before a ceiling lowered it) against the source's:
     // a thinner river than the section starts as thin.
-    const CarveDef carve = carve_def(def_, terrain_.area_scale());
-    const float s = def_.pbf.spacing;
-    const float section = kRiverFill * carve.floor_m * carve.depth_m * kRiverSpeed / (s * s * s);
+    const float section = section_rate(def_, terrain_.area_scale());
     const float rate = float(def_.spawn.particles_per_second());
     return section > 0.0f && rate > 0.0f ? std::min(1.0f, rate / section) : 1.0f;
 }
@@ -190,8 +201,7 @@ void Simulation::prefill_channel() {
                             .clearance_m = def_.collision.radius + def_.collision.offset,
                             .speed = kRiverTransitSpeed,
                             .skip_center = sp.center,
-                            .skip_radius_m = std::max(sp.half_extent.x, sp.shape == SourceShape::Disc ? 0.0f : sp.half_extent.z) +
-                                             2.0f * def_.pbf.spacing,
+                            .skip_radius_m = source_footprint(sp) + 2.0f * def_.pbf.spacing,
                             .most = size_t(std::max(sp.count, 0)) / 2,
                             .share = prefill_share()};
     const ChannelFill fill = fill_channel(terrain_, main_path_, fd);
@@ -266,14 +276,9 @@ std::vector<std::pair<int, int>> keep_off_edges(std::span<const std::pair<int, i
 }
 
 RiverSize size_river(const SceneDef& def, float area_scale, float channel_length_m) {
-    const CarveDef c = carve_def(def, area_scale);
-    const float s = def.pbf.spacing;
     RiverSize r;
     r.channel_length_m = channel_length_m;
-    // kRiverFill (three quarters) of the carved section full at kRiverSpeed: a river a
-    // couple of layers deep on the channel's floor, inside its walls.
-    const float area_m2 = kRiverFill * c.floor_m * c.depth_m;
-    r.rate = std::clamp(area_m2 * kRiverSpeed / (s * s * s), kRiverMinRate, kRiverMaxRate);
+    r.rate = std::clamp(section_rate(def, area_scale), kRiverMinRate, kRiverMaxRate);
     // The budget: the particles on their way (the rate times the time they spend on the
     // channel at kRiverTransitSpeed, twice over: slower reaches, the source's basin,
     // eddies) plus the particles the source's pile holds.
@@ -320,10 +325,7 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, cons
             CarveDef carve = carve_def(def, terrain->area_scale());
             carve.basin_center = spawn.center;
             carve.basin_radius_m =
-                spawn.shape == SourceShape::Point
-                    ? 0.0f
-                    : std::max(spawn.half_extent.x, spawn.shape == SourceShape::Disc ? 0.0f : spawn.half_extent.z) +
-                          carve_spacing_of(def);
+                spawn.shape == SourceShape::Point ? 0.0f : source_footprint(spawn) + carve_spacing_of(def);
             // Off the map's edges by the section's half width and the levee (1.5 samples).
             const float as = terrain->area_scale();
             const int margin = int(std::ceil((0.5f * carve.width_m) / as + 1.5f));
