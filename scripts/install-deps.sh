@@ -8,7 +8,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 pkgs=(cmake ninja-build g++ pkg-config
-      libtbb-dev libglm-dev libfmt-dev libtomlplusplus-dev libcli11-dev libstb-dev
+      libtbb-dev libglm-dev libfmt-dev libtomlplusplus-dev libcli11-dev libstb-dev libturbojpeg0-dev
       libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev
       libbullet-dev
       libepoxy-dev libglfw3-dev libimgui-dev libegl-dev libgl1-mesa-dri libegl-mesa0 ffmpeg xvfb

@@ -124,10 +124,14 @@ std::vector<uint8_t> corpus_file(const char* name) {
     return b;
 }
 
-TEST(ImageLoader, AJpegHuffmanTableWithMoreThan256CodesIsRefusedBeforeStbReadsIt) {
-    // Found by fuzz/image_fuzz.cpp: stb_image wrote past its Huffman arrays (UBSan: index
-    // 257 out of bounds for stbi_uc[257]) for a DHT table whose 16 code counts add up to
-    // more than 256. A real JPEG (ffmpeg's, from the fuzz corpus) still loads.
+// JPEGs are decoded by libjpeg-turbo (src/render/image.cpp, decode_jpeg): Debian 12's
+// stb_image JPEG decoder is not compiled in (src/io/stb_impl.cpp, STBI_ONLY_PNG) after the
+// fuzzer found three bugs in it. The inputs of those bugs stay here as tests.
+
+TEST(ImageLoader, AJpegHuffmanTableWithMoreThan256CodesIsAnErrorNamingTheFile) {
+    // Found by fuzz/image_fuzz.cpp in stb_image: writes past its Huffman arrays (UBSan:
+    // index 257 out of bounds for stbi_uc[257]) for a DHT table whose 16 code counts add up
+    // to more than 256. A real JPEG (ffmpeg's, from the fuzz corpus) still loads.
     const std::vector<uint8_t> good = corpus_file("color_8x8.jpg");
     ASSERT_GT(good.size(), 100u);
     auto ok = load_image_memory(good, "good.jpg", 3);
@@ -138,7 +142,7 @@ TEST(ImageLoader, AJpegHuffmanTableWithMoreThan256CodesIsRefusedBeforeStbReadsIt
     for (int i = 0; i < 16; ++i) bad.push_back(0xff);
     auto img = load_image_memory(bad, "bad.jpg", 3);
     ASSERT_FALSE(img.ok());
-    EXPECT_EQ(img.error().message, "bad.jpg: corrupt JPEG (a Huffman table with 4080 codes; at most 256)");
+    EXPECT_EQ(img.error().message, "bad.jpg: cannot read image (corrupt JPEG: Bogus Huffman table definition)");
     // The same table after a valid one, and inside a JPEG that is otherwise fine: the
     // fuzzer's input was a real file with its second table's counts changed.
     std::vector<uint8_t> spliced = good;
@@ -151,13 +155,16 @@ TEST(ImageLoader, AJpegHuffmanTableWithMoreThan256CodesIsRefusedBeforeStbReadsIt
     ASSERT_TRUE(found);
     auto spliced_img = load_image_memory(spliced, "spliced.jpg", 3);
     ASSERT_FALSE(spliced_img.ok());
-    EXPECT_NE(spliced_img.error().message.find("1024 codes"), std::string::npos) << spliced_img.error().message;
+    EXPECT_EQ(spliced_img.error().message,
+              "spliced.jpg: cannot read image (corrupt JPEG: Bogus Huffman table definition)");
 }
 
-TEST(ImageLoader, AScanWithAnUndefinedHuffmanTableIsRefusedAndProgressiveJpegsStillLoad) {
-    // Found by fuzz/image_fuzz.cpp: a scan using a Huffman table no DHT segment defined
-    // made stb decode with uninitialised memory (an index of 1061349242 into a 256-entry
-    // table). Progressive files define their tables scan by scan; they must still load.
+TEST(ImageLoader, AScanWithoutHuffmanTablesUsesTheStandardOnesAndProgressiveJpegsStillLoad) {
+    // Found by fuzz/image_fuzz.cpp in stb_image: a scan using a Huffman table no DHT segment
+    // defined made stb decode with uninitialised memory (an index of 1061349242 into a
+    // 256-entry table). libjpeg-turbo decodes such a scan with the standard tables of the
+    // JPEG specification (Annex K), as Motion-JPEG frames need. Progressive files define
+    // their tables scan by scan; they must load.
     for (const char* name : {"progressive_color_16x9.jpg", "progressive_gray_7x5.jpg", "color_16x9.jpg"}) {
         const std::vector<uint8_t> good = corpus_file(name);
         ASSERT_GT(good.size(), 100u) << name;
@@ -175,8 +182,55 @@ TEST(ImageLoader, AScanWithAnUndefinedHuffmanTableIsRefusedAndProgressiveJpegsSt
         }
     ASSERT_GT(renamed, 0u);
     auto img = load_image_memory(bad, "bad.jpg", 3);
-    ASSERT_FALSE(img.ok());
-    EXPECT_EQ(img.error().message, "bad.jpg: corrupt JPEG (a scan uses a Huffman table that was never defined)");
+    ASSERT_TRUE(img.ok()) << img.error().message;
+    EXPECT_EQ(img->width, 16);
+    EXPECT_EQ(img->height, 9);
+    EXPECT_EQ(img->pixels.size(), 16u * 9u * 3u);
+}
+
+TEST(ImageLoader, MarkersAndCutsInsideTheScanDataGiveAnImageOrAnErrorNamingTheFile) {
+    // Found by fuzz/image_fuzz.cpp in stb_image (CI, stop 22): a marker cutting the
+    // entropy-coded data short left its bit count negative, and the next read shifted an
+    // unsigned int by 32 (UBSan, stb_image.h:2065). Every such file here: a marker (restart,
+    // end of image, DHT, comment, APP1) written over each byte after the first scan header of
+    // the corpus's five JPEGs, and each file cut at each of those bytes (7,734 files). libjpeg-turbo
+    // reports most as warnings and keeps what it decoded (an image of the full size) or
+    // refuses them; the sanitizer build checks that nothing reads out of bounds.
+    size_t images = 0, errors = 0;
+    for (const char* name : {"color_16x9.jpg", "color_8x8.jpg", "gray_7x5.jpg", "progressive_color_16x9.jpg",
+                             "progressive_gray_7x5.jpg"}) {
+        const std::vector<uint8_t> good = corpus_file(name);
+        ASSERT_GT(good.size(), 100u) << name;
+        auto reference = load_image_memory(good, name, 3);
+        ASSERT_TRUE(reference.ok()) << reference.error().message;
+        size_t scan = 0;
+        for (size_t i = 2; i + 3 < good.size() && scan == 0; ++i)
+            if (good[i] == 0xff && good[i + 1] == 0xda) scan = i + 2 + size_t((good[i + 2] << 8) | good[i + 3]);
+        ASSERT_GT(scan, 0u) << name;
+        auto check = [&](const std::vector<uint8_t>& bytes, size_t at) {
+            auto img = load_image_memory(bytes, "mutant.jpg", 3);
+            if (img.ok()) {
+                ++images;
+                EXPECT_EQ(img->width, reference->width) << name << " at " << at;
+                EXPECT_EQ(img->height, reference->height) << name << " at " << at;
+                EXPECT_EQ(img->pixels.size(), reference->pixels.size()) << name << " at " << at;
+            } else {
+                ++errors;
+                EXPECT_EQ(img.error().message.rfind("mutant.jpg: ", 0), 0u) << img.error().message;
+            }
+        };
+        for (size_t p = scan; p + 2 < good.size(); ++p) {
+            for (uint8_t marker : {uint8_t{0xd0}, uint8_t{0xd9}, uint8_t{0xc4}, uint8_t{0xfe}, uint8_t{0xe1}}) {
+                std::vector<uint8_t> bytes = good;
+                bytes[p] = 0xff;
+                bytes[p + 1] = marker;
+                check(bytes, p);
+            }
+            check(std::vector<uint8_t>(good.begin(), good.begin() + static_cast<std::ptrdiff_t>(p)), p);
+        }
+    }
+    EXPECT_GT(images, 0u);  // damaged files that still decode are kept, as viewers keep them
+    EXPECT_GT(errors, 0u);
 }
 
 TEST(ImageLoader, FilesGoThroughTheSameChecks) {
