@@ -98,6 +98,9 @@ struct CarveDef {
 
 /// The steepest least slope a carved bed keeps (Terrain::carve_channel).
 inline constexpr float kCarveMaxSlope = 0.02f;
+/// The steepest drop a carved bed keeps (Terrain::carve_channel), unless the path's mean
+/// slope is steeper: water leaving a cliff's edge flies off as spray.
+inline constexpr float kCarveSteepest = 1.0f;
 
 /// What conditioning changed.
 struct ConditionReport {
@@ -168,7 +171,9 @@ public:
     /// neighbours 8-connected): the bed under path cell k is the lower of its ground
     /// minus `depth_m` and the previous bed minus a least slope per metre (half the
     /// path's mean ground slope, within [kConditionSlope, kCarveMaxSlope]), so it
-    /// descends all the way; every sample within width_m / 2 of a path cell is lowered
+    /// descends all the way, and where the bed would drop faster than kCarveSteepest per
+    /// metre (or 1.5 x the path's mean slope, if steeper) the bed upstream is cut down into
+    /// a ramp of that slope; every sample within width_m / 2 of a path cell is lowered
     /// to at most the bed (within floor_m / 2) or bed + depth_m u^2, u rising from 0 at
     /// the floor's edge to 1 at the bank (parabolic walls); the samples just outside
     /// the banks (1.5 samples) are raised to bed + depth_m where lower (levees); the basin (if any) likewise around its centre with the

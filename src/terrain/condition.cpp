@@ -166,6 +166,15 @@ void Terrain::carve_channel(std::span<const std::pair<int, int>> path, const Car
         beds.emplace_back(double(pj) * s, double(pi) * s, bed);
     }
     if (beds.empty()) return;
+    // No drop steeper than kCarveSteepest (or 1.5 x the path's mean slope on a terrain that
+    // steep throughout): where the ground falls off a cliff, the bed upstream of it is
+    // cut down into a ramp of that slope, from the cliff's foot back up.
+    const double steepest = std::max(double(kCarveSteepest), 1.5 * mean_slope);
+    for (size_t k = beds.size() - 1; k-- > 0;) {
+        auto& [x, z, b] = beds[k];
+        const auto& [nx, nz, nb] = beds[k + 1];
+        b = std::min(b, nb + steepest * std::hypot(nx - x, nz - z));
+    }
     const double levee = half + 1.5 * s;
     for (const auto& [x, z, b] : beds) {
         const int r = int(std::ceil(levee / s)), ci = int(std::lround(z / s)), cj = int(std::lround(x / s));

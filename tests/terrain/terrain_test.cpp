@@ -384,6 +384,34 @@ TEST(TerrainCondition, CarveLaysABedThatDescendsFromSourceToOutletWithBanksAndLe
     EXPECT_LT(r.max_change_m, 4.5f) << "a channel, not a gorge (the breach, the pit 3 m deep, plus 1 m)";
 }
 
+TEST(TerrainCondition, CarveCutsACliffOnThePathIntoARampNoSteeperThanKCarveSteepest) {
+    // A ledge 6 m high (columns 12..24), a cliff, a gentle plain down to the edge at
+    // column 0 (mean slope well under 1). Water leaving the cliff's edge flew off as
+    // spray (paper-nile: a source on a ledge 4 m above its pool; colorado_rockies).
+    Heightmap m = flat_heightmap(25, 9);
+    for (int i = 0; i < 9; ++i)
+        for (int j = 0; j < 25; ++j) m.samples[size_t(i) * 25 + size_t(j)] = (j >= 12 ? 0.7f : 0.1f) + 0.002f * float(j);
+    auto t = Terrain::build(m, TerrainDef{.area_scale = 1.0f, .height_scale = 10.0f});
+    ASSERT_TRUE(t.ok());
+    std::vector<std::pair<int, int>> path;
+    for (int j = 24; j >= 0; --j) path.emplace_back(4, j);
+    const CarveDef def{.width_m = 3.0f, .floor_m = 1.0f, .depth_m = 0.5f};
+    Terrain carved = t.value();
+    carved.carve_channel(path, def);
+    float steepest = 0.0f;
+    for (size_t k = 1; k < path.size(); ++k) {
+        const float drop = carved.sample(4, path[k - 1].second) - carved.sample(4, path[k].second);
+        EXPECT_GE(drop, 0.0f) << "the bed never rises, column " << path[k].second;
+        steepest = std::max(steepest, drop);
+    }
+    EXPECT_LE(steepest, kCarveSteepest + 1e-4f);
+    EXPECT_GT(steepest, 0.9f * kCarveSteepest) << "the ramp is as steep as allowed, no shallower";
+    // Upstream of the cliff the ramp ends: the head of the ledge keeps its bed (ground - depth).
+    EXPECT_NEAR(carved.sample(4, 24), t->sample(4, 24) - def.depth_m, 1e-4f);
+    // Without the limit the bed would drop 6 m in one step.
+    EXPECT_GT(t->sample(4, 12) - t->sample(4, 11), 5.0f);
+}
+
 TEST(TerrainCondition, CarveWithAnEmptyPathOrOutsideTheGridChangesNothing) {
     auto t = Terrain::build(pit_map(), TerrainDef{.area_scale = 1.0f, .height_scale = 10.0f});
     ASSERT_TRUE(t.ok());
