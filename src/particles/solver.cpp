@@ -90,6 +90,12 @@ void ParticleSolver::spawn(size_t i) {
         p.z += r * std::sin(a);
         p.y = rng_.uniform(lo.y, hi.y);
     }
+    // A source volume that dips into the terrain (an automatic source on a slope, a box
+    // drawn through a hill) must not place water in the ground: where the drawn point
+    // is under the (radius-lifted) mesh it starts on it. Before this the springs valley
+    // counted 18 tunneled in 600 frames, every one a particle born 1 m underground.
+    if (collision_.mode != CollisionMode::None && terrain_.contains_xz(p.x, p.z))
+        p.y = std::max(p.y, terrain_.height_mesh(p.x, p.z) + collision_.radius + collision_.offset);
     particles_.position[i] = p;
     particles_.last_position[i] = p;
     particles_.velocity[i] = spawn_.initial_velocity;
