@@ -56,6 +56,7 @@ struct BenchOptions {
     int threads = 0;
     std::string json_path;
     std::string maps_dir = "../shared/heightmaps/metawater";
+    std::vector<std::string> heightmaps;  ///< --heightmap: scenario maps, the default river on each
     std::string peers_dir = "bench/peers";
     bool peers = false;
 };
@@ -248,6 +249,9 @@ ScenarioResult bench_w2(int n) {
                  {"respawned", solver.counters().respawned}};
     return r;
 }
+
+/// Scenario maps: frames of flow before measuring (30 s).
+constexpr int kMapsWarmupFrames = 1800;
 
 /// Allowed sizes of the PBF river and of W3 (bad values exit 2 naming the range).
 constexpr int kPbfMinParticles = 100, kPbfMaxParticles = 400'000;
@@ -464,8 +468,9 @@ int run_bench(const BenchOptions& o) {
         fmt::print(stderr, "metariver bench: --threads: must be in [0, 256] (got {})\n", o.threads);
         return kExitBadInput;
     }
-    const std::vector<std::string> known = {"paper", "river", "pbf", "w1", "w2", "w3", "export"};
+    const std::vector<std::string> known = {"paper", "river", "pbf", "w1", "w2", "w3", "export", "maps"};
     std::vector<std::string> chosen;  // --scenario a,b: several in one run (one JSON, one plot)
+    if (o.scenario.empty() && !o.heightmaps.empty()) chosen.push_back("maps");  // --heightmap alone: just those
     for (std::string rest = o.scenario; !rest.empty();) {
         const size_t comma = rest.find(',');
         chosen.push_back(rest.substr(0, comma));
@@ -473,7 +478,7 @@ int run_bench(const BenchOptions& o) {
         if (std::find(known.begin(), known.end(), chosen.back()) == known.end()) {
             fmt::print(stderr,
                        "metariver bench: --scenario: must be one or more (comma-separated) of paper, river, pbf, w1, w2, "
-                       "w3, export (got '{}')\n",
+                       "w3, export, maps (got '{}')\n",
                        o.scenario);
             return kExitBadInput;
         }
@@ -508,6 +513,30 @@ int run_bench(const BenchOptions& o) {
     if (o.frames < 0 || o.frames > 100000) {
         fmt::print(stderr, "metariver bench: --frames: must be in [1, 100000] (got {})\n", o.frames);
         return kExitBadInput;
+    }
+    // Scenario maps: every scene resolved (and so every file read) before anything runs.
+    std::vector<std::pair<std::string, SceneDef>> map_scenes;
+    if (!o.heightmaps.empty() && !want("maps")) {
+        fmt::print(stderr, "metariver bench: --heightmap: only for scenario maps (--scenario {})\n", o.scenario);
+        return kExitBadInput;
+    }
+    if (want("maps") && !chosen.empty()) {
+        if (o.heightmaps.empty()) {
+            fmt::print(stderr, "metariver bench: --scenario maps: needs --heightmap FILE[,FILE...]\n");
+            return kExitBadInput;
+        }
+        for (const std::string& file : o.heightmaps) {
+            SceneOptions so;
+            so.heightmap = file;
+            auto def = so.resolve();
+            if (def)  // the file read and checked now: a broken map is an error, not a skipped row
+                if (auto map = load_heightmap_png(file); !map) def = map.error();
+            if (!def) {
+                fmt::print(stderr, "metariver bench: --heightmap: {}\n", def.error().message);
+                return kExitBadInput;
+            }
+            map_scenes.emplace_back(file, std::move(def.value()));
+        }
     }
     if (!o.json_path.empty()) {
         const fs::path dir = fs::path(o.json_path).parent_path();
@@ -592,6 +621,13 @@ int run_bench(const BenchOptions& o) {
         peer_request.w3_nx = sides;
     }
 
+    // The default river on each --heightmap (as `run --heightmap FILE`), surface on, measured
+    // after 30 s of flow (the channel starts full: particles.prefill): the frame budget
+    // of the river table (docs/river.md).
+    for (const auto& [file, def] : map_scenes)
+        results.push_back(bench_simulation(fmt::format("default on {}", fs::path(file).filename().string()), def,
+                                           o.warmup >= 0 ? o.warmup : kMapsWarmupFrames, frames ? frames : 120));
+
     if (want("export")) results.push_back(bench_export(o.particles, 600, frames ? frames : 30));
 
     print_table(results);
@@ -650,7 +686,9 @@ int run_bench(const BenchOptions& o) {
 void register_bench(CLI::App& app, std::function<int()>& action) {
     auto o = std::make_shared<BenchOptions>();
     CLI::App* cmd = app.add_subcommand("bench", "time every stage on the project's workloads (and peers with --peers)");
-    cmd->add_option("--scenario", o->scenario, "one or more (comma-separated) of paper, river, pbf, w1, w2, w3, export (default: all)");
+    cmd->add_option("--scenario", o->scenario,
+                    "one or more (comma-separated) of paper, river, pbf, w1, w2, w3, export, maps (default: all but maps; "
+                    "with --heightmap: maps)");
     cmd->add_option("--balls", o->balls, "W1: number of balls");
     cmd->add_option("--res", o->res, "W1: samples per axis");
     cmd->add_option("--spheres", o->spheres, "W2: number of spheres");
@@ -665,6 +703,10 @@ void register_bench(CLI::App& app, std::function<int()>& action) {
     cmd->add_option("--threads", o->threads, "worker threads (default: all cores)");
     cmd->add_option("--json", o->json_path, "write the results as JSON");
     cmd->add_option("--maps", o->maps_dir, "folder with the paper's heightmaps (default ../shared/heightmaps/metawater)");
+    cmd->add_option("--heightmap", o->heightmaps,
+                    "scenario maps: the default river on each of these PNG heightmaps (comma-separated), as `run "
+                    "--heightmap FILE`, surface on, after 1800 warm-up frames")
+        ->delimiter(',');
     cmd->add_flag("--peers", o->peers, "also run the installed peers on the same workloads");
     cmd->add_option("--peers-dir", o->peers_dir, "folder with the peer drivers (default bench/peers)");
     cmd->callback([o, &action, particles, nx] {

@@ -153,6 +153,38 @@ TEST_F(Bench, W3StepAndAnchorOrMissingLine) {
     EXPECT_TRUE(fs::exists(dir_ / "bench.svg"));
 }
 
+// Scenario maps (issue 10's frame budget): the default river on each --heightmap, one
+// row each with its stages (surface on) and the river's plausibility.
+TEST_F(Bench, MapsRunTheDefaultRiverOnEachHeightmap) {
+    const fs::path out = dir_ / "bench.json";
+    const std::string maps = "../shared/heightmaps/metawater";
+    if (!fs::exists(fs::path(METARIVER_SOURCE_DIR) / maps / "nile.png")) GTEST_SKIP() << maps << " not there";
+    const BenchRun r = run("--heightmap " + maps + "/nile.png," + maps + "/strict17.png --warmup 30 --frames 3 --json " +
+                           out.string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    const json res = json::parse(slurp(out))["results"];
+    ASSERT_EQ(res.size(), 2u) << "--heightmap alone runs only the maps";
+    EXPECT_EQ(res[0]["scenario"].get<std::string>(), "default on nile.png");
+    EXPECT_EQ(res[1]["scenario"].get<std::string>(), "default on strict17.png");
+    for (const json& row : res) {
+        ASSERT_FALSE(row.contains("note")) << row.dump();
+        EXPECT_GT(row["particles"].get<int>(), 0);
+        EXPECT_GT(row["triangles"].get<int>(), 0) << "surface on";
+        for (const char* stage : {"simulate", "field", "surface", "total"})
+            EXPECT_EQ(row["stages"][stage]["samples"].get<int>(), 3) << stage;
+        for (const char* key : {"channel_coverage", "outflow_over_inflow", "spray_fraction", "tunneled"})
+            EXPECT_TRUE(row["quality"].contains(key)) << key;
+    }
+}
+
+TEST_F(Bench, MapsRefuseAMissingOrBrokenHeightmapBeforeRunning) {
+    expect_bad("--heightmap " + (dir_ / "none.png").string(), "none.png: no such file");
+    std::ofstream(dir_ / "broken.png", std::ios::binary) << "\x89PNG\r\n\x1a\nbroken";
+    expect_bad("--heightmap " + (dir_ / "broken.png").string(), "broken.png");
+    expect_bad("--scenario maps", "needs --heightmap");
+    expect_bad("--scenario w1 --heightmap " + (dir_ / "none.png").string(), "only for scenario maps");
+}
+
 TEST_F(Bench, BadSizesNameTheOptionAndTheRange) {
     expect_bad("--scenario pbf --particles 0", "--particles");
     expect_bad("--scenario pbf --particles 0", "[100, 400000]");
