@@ -14,6 +14,7 @@
 #include <metariver/render.h>
 
 #include "flow_texture.h"
+#include "gl_objects.h"
 #include "shaders.h"
 
 #include <epoxy/gl.h>
@@ -63,90 +64,7 @@ struct BoxInstance {
     float depth;
 };
 
-Result<GLuint> compile(GLenum stage, const char* body, const char* what) {
-    const GLuint s = glCreateShader(stage);
-    const char* sources[] = {glsl::kCommon, body};
-    glShaderSource(s, 2, sources, nullptr);
-    glCompileShader(s);
-    GLint ok = 0;
-    glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        std::array<char, 4096> log{};
-        glGetShaderInfoLog(s, static_cast<GLsizei>(log.size()), nullptr, log.data());
-        glDeleteShader(s);
-        std::string msg(log.data());
-        std::replace(msg.begin(), msg.end(), '\n', ' ');
-        return Error{fmt::format("renderer: {} shader does not compile: {}", what, msg)};
-    }
-    return s;
-}
-
-Result<GLuint> link(const char* vert, const char* frag, const char* what) {
-    auto vs = compile(GL_VERTEX_SHADER, vert, what);
-    if (!vs) return vs.error();
-    auto fs = compile(GL_FRAGMENT_SHADER, frag, what);
-    if (!fs) {
-        glDeleteShader(vs.value());
-        return fs.error();
-    }
-    const GLuint p = glCreateProgram();
-    glAttachShader(p, vs.value());
-    glAttachShader(p, fs.value());
-    glLinkProgram(p);
-    glDeleteShader(vs.value());
-    glDeleteShader(fs.value());
-    GLint ok = 0;
-    glGetProgramiv(p, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        std::array<char, 4096> log{};
-        glGetProgramInfoLog(p, static_cast<GLsizei>(log.size()), nullptr, log.data());
-        glDeleteProgram(p);
-        return Error{fmt::format("renderer: {} program does not link: {}", what, log.data())};
-    }
-    return p;
-}
-
 }  // namespace
-
-/// A GL buffer refilled whole each time: created once; orphaned with glBufferData
-/// before each refill (the driver hands out fresh storage instead of waiting for draws
-/// still reading the old one) and grown by 1.5x when the data outgrows it.
-struct DynamicBuffer {
-    GLuint id = 0;
-    size_t capacity = 0;
-    size_t size = 0;
-
-    void upload(const void* data, size_t bytes, RenderStats& stats) {
-        if (bytes > capacity) {
-            capacity = std::max({bytes, capacity + capacity / 2, size_t{4096}});
-            ++stats.buffer_reallocations;
-        }
-        glNamedBufferData(id, static_cast<GLsizeiptr>(capacity), nullptr, GL_DYNAMIC_DRAW);
-        if (bytes) glNamedBufferSubData(id, 0, static_cast<GLsizeiptr>(bytes), data);
-        size = bytes;
-        stats.bytes_uploaded += bytes;
-        stats.last_upload_bytes += bytes;
-    }
-};
-
-/// A framebuffer with a colour texture and a depth texture, re-specified on resize.
-struct Target {
-    GLuint fbo = 0, color = 0, depth = 0;
-    int width = 0, height = 0;
-
-    void resize(int w, int h) {
-        if (w == width && h == height) return;
-        width = w;
-        height = h;
-        glBindTexture(GL_TEXTURE_2D, color);
-        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, w, h, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
-        glBindTexture(GL_TEXTURE_2D, depth);
-        glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT32F, w, h, 0, GL_DEPTH_COMPONENT, GL_FLOAT, nullptr);
-        glBindTexture(GL_TEXTURE_2D, 0);
-        glNamedFramebufferTexture(fbo, GL_COLOR_ATTACHMENT0, color, 0);
-        glNamedFramebufferTexture(fbo, GL_DEPTH_ATTACHMENT, depth, 0);
-    }
-};
 
 struct Renderer::Impl {
     RenderStats stats;
