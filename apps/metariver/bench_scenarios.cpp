@@ -6,19 +6,14 @@
 #include <metariver/sparse_field.h>
 #include <metariver/surface.h>
 #include <metariver/workloads.h>
+
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
-#include <tbb/global_control.h>
-#include <tbb/info.h>
+
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
-#include <fstream>
-#include <map>
-#include <memory>
 #include <random>
-#include <sstream>
-#include <thread>
 #include <unistd.h>
 
 namespace mr::app {
@@ -34,10 +29,17 @@ double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std
 
 ScenarioResult bench_simulation(const std::string& name, const SceneDef& def, int warmup, int frames,
                                 const std::string& note) {
+    auto map = load_scene_heightmap(def);
+    if (!map) return ScenarioResult{.name = name, .note = "skipped: " + map.error().message};
+    return bench_simulation(name, def, map.value(), warmup, frames, note);
+}
+
+ScenarioResult bench_simulation(const std::string& name, const SceneDef& def, const Heightmap& map, int warmup,
+                                int frames, const std::string& note) {
     ScenarioResult r;
     r.name = name;
     r.note = note;
-    auto sim = Simulation::create(def);
+    auto sim = Simulation::create(def, map);
     if (!sim) {
         r.note = "skipped: " + sim.error().message;
         return r;
@@ -286,7 +288,5 @@ ScenarioResult bench_export(int particles, int warmup, int frames) {
     r.quality = {{"mb_per_frame", bytes}};
     return r;  // the export is not finished: its files go with it
 }
-
-// --- output ----------------------------------------------------------------------
 
 }  // namespace mr::app

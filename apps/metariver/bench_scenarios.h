@@ -49,6 +49,9 @@ constexpr int kPbfWarmupFrames = 2400;
 /// when the scene makes foam, field, surface, total; the river's plausibility in quality).
 ScenarioResult bench_simulation(const std::string& name, const SceneDef& def, int warmup, int frames,
                                 const std::string& note = {});
+/// The same on a heightmap already loaded (load_scene_heightmap) for `def`.
+ScenarioResult bench_simulation(const std::string& name, const SceneDef& def, const Heightmap& map, int warmup,
+                                int frames, const std::string& note = {});
 /// W1: n metaballs on an res^3 grid, field + surface.
 ScenarioResult bench_w1(int n, int res, int frames);
 /// W2: n spheres dropped on the W2 terrain (the springs solver as rigid spheres).

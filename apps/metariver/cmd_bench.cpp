@@ -12,10 +12,7 @@
 #include "bench_plot.h"
 #include "bench_scenarios.h"
 
-#include <metariver/export.h>
 #include <metariver/io.h>
-#include <metariver/sparse_field.h>
-#include <metariver/surface.h>
 #include <metariver/workloads.h>
 
 #include <fmt/format.h>
@@ -24,13 +21,8 @@
 #include <tbb/info.h>
 
 #include <algorithm>
-#include <chrono>
 #include <filesystem>
 #include <fstream>
-#include <map>
-#include <memory>
-#include <random>
-#include <sstream>
 #include <thread>
 #include <unistd.h>
 
@@ -226,8 +218,14 @@ int run_bench(const BenchOptions& o) {
         fmt::print(stderr, "metariver bench: --frames: must be in [1, 100000] (got {})\n", o.frames);
         return kExitBadInput;
     }
-    // Scenario maps: every scene resolved (and so every file read) before anything runs.
-    std::vector<std::pair<std::string, SceneDef>> map_scenes;
+    // Scenario maps: every scene resolved and its heightmap read and checked before anything
+    // runs (a broken map is an error, not a skipped row); the simulations use what was read.
+    struct MapScene {
+        std::string file;
+        SceneDef def;
+        Heightmap map;
+    };
+    std::vector<MapScene> map_scenes;
     if (!o.heightmaps.empty() && !want("maps")) {
         fmt::print(stderr, "metariver bench: --heightmap: only for scenario maps (--scenario {})\n", o.scenario);
         return kExitBadInput;
@@ -241,13 +239,12 @@ int run_bench(const BenchOptions& o) {
             SceneOptions so;
             so.heightmap = file;
             auto def = so.resolve();
-            if (def)  // the file read and checked now: a broken map is an error, not a skipped row
-                if (auto map = load_heightmap_png(file); !map) def = map.error();
-            if (!def) {
-                fmt::print(stderr, "metariver bench: --heightmap: {}\n", def.error().message);
+            auto map = def ? load_scene_heightmap(def.value()) : Result<Heightmap>(def.error());
+            if (!map) {
+                fmt::print(stderr, "metariver bench: --heightmap: {}\n", map.error().message);
                 return kExitBadInput;
             }
-            map_scenes.emplace_back(file, std::move(def.value()));
+            map_scenes.push_back({file, std::move(def.value()), std::move(map.value())});
         }
     }
     if (!o.json_path.empty()) {
@@ -336,9 +333,9 @@ int run_bench(const BenchOptions& o) {
     // The default river on each --heightmap (as `run --heightmap FILE`), surface on, measured
     // after 30 s of flow (the channel starts full: particles.prefill): the frame budget
     // of the river table (docs/river.md).
-    for (const auto& [file, def] : map_scenes)
-        results.push_back(bench_simulation(fmt::format("default on {}", fs::path(file).filename().string()), def,
-                                           o.warmup >= 0 ? o.warmup : kMapsWarmupFrames, frames ? frames : 120));
+    for (const MapScene& m : map_scenes)
+        results.push_back(bench_simulation(fmt::format("default on {}", fs::path(m.file).filename().string()), m.def,
+                                           m.map, o.warmup >= 0 ? o.warmup : kMapsWarmupFrames, frames ? frames : 120));
 
     if (want("export")) results.push_back(bench_export(o.particles, 600, frames ? frames : 30));
 
