@@ -113,8 +113,9 @@ int run(const RunOptions& o) {
     Simulation& sim = *sim_result.value();
     for (const std::string& w : sim.warnings()) fmt::print(stderr, "metariver run: warning: {}\n", w);
     if (const auto& z = sim.sizing())
-        fmt::print("particles sized to the main channel ({:.0f} m): count {}, flow_rate {:.1f}/s, spacing {:.3g} m{}\n",
-                   z->channel_length_m, sim.def().spawn.count, sim.def().spawn.particles_per_second(), sim.def().pbf.spacing,
+        fmt::print("particles sized to the main channel ({:.0f} m, mean slope {:.3f}, sized for {:.2f} m/s): count {}, "
+                   "flow_rate {:.1f}/s, spacing {:.3g} m{}\n",
+                   z->channel_length_m, z->channel_slope, z->speed, sim.def().spawn.count, sim.def().spawn.particles_per_second(), sim.def().pbf.spacing,
                    z->capped ? " (budget at its ceiling: the rate was lowered to fit)" : "");
     if (const ConditionReport& c = sim.terrain().condition_report(); c.mode != TerrainCondition::None)
         fmt::print("terrain.condition = {}: {} cells raised, {} lowered, largest change {:.2f} m ({:.0f} m^3)\n",
@@ -261,7 +262,7 @@ int run(const RunOptions& o) {
                           {"max_change_m", cond.max_change_m},
                           {"volume_m3", cond.volume_m3}}}};
         if (const auto& z = sim.sizing())
-            j["sizing"] = {{"channel_length_m", z->channel_length_m}, {"count", d.spawn.count},
+            j["sizing"] = {{"channel_length_m", z->channel_length_m}, {"channel_slope", z->channel_slope}, {"speed_m_s", z->speed}, {"count", d.spawn.count},
                            {"flow_rate", d.spawn.particles_per_second()}, {"capped", z->capped},
                            {"spacing", d.pbf.spacing}, {"prefilled", sim.prefilled()}};
         j["particles_total"] = sim.particles().size();
@@ -303,6 +304,7 @@ int run(const RunOptions& o) {
             {"time_to_outlet_s", os.main.first_s},
             {"channel_coverage", coverage},
             {"main_channel_cells", sim.main_channel().size()},
+            {"main_channel", sim.main_channel()},  // [row, column] from the source to the outlet
             {"outlets", outlets_json(outlets, os)},
             {"outlet_other", {{"particles", os.other.particles}, {"rate_per_s", os.other.rate}}}};
         j["state_hash"] = fmt::format("{:016x}", sim.state_hash());

@@ -56,6 +56,10 @@ public:
         float spacing = 0.5f;    ///< lattice spacing = the fluid's rest spacing, metres
         float clearance = 0.0f;  ///< slots keep their centre this far above the terrain (radius + offset), metres
         float gravity = 9.82f;   ///< m/s^2: how fast a source with no inflow speed drains
+        /// Each column of slots whose ground lies below the centre's is lowered by the
+        /// difference (a source on a slope drapes over it instead of pouring from a flat
+        /// disc metres above the downhill ground).
+        bool follow_ground = false;
     };
     /// A slot is free when no particle is closer than this many spacings.
     static constexpr float kFreeFraction = 0.9f;
@@ -71,12 +75,18 @@ public:
     float max_rate() const { return max_rate_; }
     /// Emits at most `want` particles: writes the chosen slots to `out` (cleared
     /// first), skipping slots within kFreeFraction spacings of any active position
-    /// or of a slot chosen before. Deterministic; O(active + slots).
+    /// or of a slot chosen before: layer by layer across the inflow, downstream first,
+    /// each layer scanned on from where its previous emission stopped (round robin).
+    /// Deterministic; O(active + slots).
     void emit(std::span<const Vec3> positions, size_t active, size_t want, std::vector<Vec3>& out);
 
 private:
     Def def_;
     std::vector<Vec3> slots_;
+    /// Layers across the inflow direction: slots [layer_start_[l], layer_start_[l + 1]),
+    /// downstream first; each layer is scanned from where its last emission stopped
+    /// (next_[l]), so a layer fills evenly instead of always from the same side.
+    std::vector<uint32_t> layer_start_, next_;
     float max_rate_ = 0.0f;
     Aabb box_;  ///< slots' box grown by one spacing
     // Scratch of emit(), reused: active particles in box_, binned by cell.

@@ -64,6 +64,9 @@ inline constexpr int kMaxParticles = 10'000'000;
 inline constexpr int kAutoCount = 0;
 /// `SpawnDef::flow_rate` asking for a rate sized to the terrain (`particles.flow_rate = "auto"`).
 inline constexpr float kAutoRate = -1.0f;
+/// PbfDef::sleep_threshold: the still-water default, and "auto" (resolved per scene).
+inline constexpr float kSleepThreshold = 0.065f;
+inline constexpr float kAutoSleep = -1.0f;
 
 struct SpawnDef {
     int count = 20;                          ///< particle budget, [1, kMaxParticles]; kAutoCount: sized to the terrain (PBF)
@@ -95,6 +98,11 @@ struct SpawnDef {
     /// with water at the start, so the river runs from the first frame; the solver
     /// itself ignores it. (particles.prefill; docs/river.md, "Quadratic bed friction and a channel that starts full".)
     bool prefill = false;
+    /// PBF with a rate (the lattice source): each column of the source's slots is lowered
+    /// until its lowest slot sits just above the ground under it, so water on a slope is
+    /// born on the ground instead of falling from a flat disc metres above its downhill
+    /// side (particles.follow_ground; strict17.png's spray 0.035 -> 0.003, docs/river.md).
+    bool follow_ground = false;
     /// Particles per second the source emits.
     float particles_per_second() const {
         if (auto_rate()) return 0.0f;  // not known before the terrain is
@@ -123,7 +131,10 @@ struct PbfDef {
     /// (0.074 m/s at 120 steps/s under 9.82): an unsupported particle never stays asleep.
     /// 0.065: at 0.05 a last particle or two on a settled pool's surface still rolled at
     /// 0.1-0.25 m/s after 10 s in 3 of 5 pools of 2300-2700 particles; at 0.065 none of 8.
-    float sleep_threshold = 0.065f;
+    /// kAutoSleep (`pbf.sleep_threshold = "auto"`, the default scene's): Simulation::create
+    /// resolves it to 0 for a river and kSleepThreshold otherwise (resolved_sleep_threshold).
+    float sleep_threshold = kSleepThreshold;
+    bool auto_sleep() const { return sleep_threshold == kAutoSleep; }
 };
 
 enum class SpringMode {

@@ -126,6 +126,12 @@ Status validate_on_terrain(const SceneDef& def, const Terrain& terrain);
 /// terrain.condition with Auto resolved: Carve for a PBF river (a continuous source,
 /// sink = edges), None for everything else (a still pool keeps its basin).
 TerrainCondition resolved_condition(const SceneDef& def);
+/// A PBF river: a continuous source (or flow_rate "auto") and sink = edges.
+bool is_river(const SceneDef& def);
+/// pbf.sleep_threshold with "auto" resolved: 0 for a river (sleeping froze a slow river
+/// on a gentle bed: docs/river.md, "A least slope of 2 % and no sleeping river"),
+/// kSleepThreshold otherwise (still water comes to rest).
+float resolved_sleep_threshold(const SceneDef& def);
 /// The carved channel's cross-section for a scene (condition Carve): a flat bed
 /// max(3 samples, 4 pbf.spacing) wide, walls max(1.5 samples, 2 pbf.spacing) wide on
 /// each side, the bed 2 pbf.spacing deep (carve_spacing instead when it is set).
@@ -138,6 +144,13 @@ CarveDef carve_def(const SceneDef& def, float area_scale);
 /// kRiverTransitSpeed (the measured median), kRiverBudgetMargin times, plus the source's
 /// pile; above kRiverMaxCount the rate drops so that the budget still covers it.
 inline constexpr float kRiverSpeed = 1.5f;          ///< m/s, the flow speed the section is sized for
+/// The speed the section is sized for on a gentle channel: kRiverSpeedPerRootSlope x
+/// sqrt(mean slope) within [kRiverTransitSpeed, kRiverSpeed] (the quadratic bed friction's
+/// terminal speed grows with the root of the slope; measured median speeds: 0.73 m/s on
+/// the procedural flat's 2 % bed, 0.89 on western_usa, 1.3-1.6 on alps, andes_peru and
+/// random_100x61). A rate sized at 1.5 m/s on a channel that runs at 0.8 overfills it and
+/// the prefilled channel drains slower than the source fills it.
+inline constexpr float kRiverSpeedPerRootSlope = 5.3f;
 inline constexpr float kRiverTransitSpeed = 0.75f;  ///< m/s, the speed the budget's transit time assumes
 inline constexpr float kRiverFill = 0.75f;          ///< share of the carved section the flow fills
 inline constexpr float kRiverBudgetMargin = 2.0f;   ///< budget over rate x transit time
@@ -149,9 +162,13 @@ struct RiverSize {
     int count = 0;              ///< particle budget
     float rate = 0.0f;          ///< particles per second
     float channel_length_m = 0; ///< the main channel's length from the source to its outlet
+    float channel_slope = 1.0f; ///< its mean ground slope (head minus outlet over the length)
+    float speed = kRiverSpeed;  ///< m/s, the speed the rate is sized for (river_speed)
     bool capped = false;        ///< the budget hit kRiverMaxCount (the rate was lowered)
 };
-RiverSize size_river(const SceneDef& def, float area_scale, float channel_length_m);
+RiverSize size_river(const SceneDef& def, float area_scale, float channel_length_m, float channel_slope = 1.0f);
+/// The speed a river's rate is sized for on a channel of mean slope `slope` (above).
+float river_speed(float slope);
 
 /// The path a river's channel is carved along: `path` (cells (row, column), source to
 /// outlet, 8-connected) with every cell but the first and the last moved at least
@@ -349,7 +366,7 @@ public:
     size_t prefilled() const { return prefilled_; }
 
 private:
-    Simulation(const SceneDef& def, Terrain terrain, Bvh bvh);
+    Simulation(const SceneDef& def, Terrain terrain, Bvh bvh, std::optional<RiverSize> sizing);
 
     SceneDef def_;
     Terrain terrain_;

@@ -96,8 +96,11 @@ struct CarveDef {
     float basin_radius_m = 0.0f;
 };
 
-/// The steepest least slope a carved bed keeps (Terrain::carve_channel).
-inline constexpr float kCarveMaxSlope = 0.02f;
+/// The least slope (metres per metre) a carved bed keeps along its path
+/// (Terrain::carve_channel): on a flat reach the river runs at walking pace. Less (the
+/// rule was half the path's mean slope, 0.1 % on a flat) and slow water on a flat
+/// floor stops: measured in docs/river.md, "A least slope of 2 %".
+inline constexpr float kCarveLeastSlope = 0.02f;
 /// The steepest drop a carved bed keeps (Terrain::carve_channel), unless the path's mean
 /// slope is steeper: water leaving a cliff's edge flies off as spray.
 inline constexpr float kCarveSteepest = 1.0f;
@@ -169,8 +172,7 @@ public:
 
     /// Carves a river bed along `path` (grid cells (row, column), source to outlet,
     /// neighbours 8-connected): the bed under path cell k is the lower of its ground
-    /// minus `depth_m` and the previous bed minus a least slope per metre (half the
-    /// path's mean ground slope, within [kConditionSlope, kCarveMaxSlope]), so it
+    /// minus `depth_m` and the previous bed minus kCarveLeastSlope per metre, so it
     /// descends all the way, and where the bed would drop faster than kCarveSteepest per
     /// metre (or 1.5 x the path's mean slope, if steeper) the bed upstream is cut down into
     /// a ramp of that slope; every sample within width_m / 2 of a path cell is lowered

@@ -41,21 +41,51 @@ LatticeSource LatticeSource::build(const Def& def, const Terrain& terrain) {
     // Above the terrain: the slot's centre and the corners of its cell footprint keep
     // the clearance (a slot beside a steep wall must not start inside it).
     const float hd = 0.5f * d;
-    for (const Vec3& q : cand) {
-        if (!terrain.contains_xz(q.x, q.z)) continue;
+    auto footprint_ground = [&](const Vec3& q) {
         float ground = terrain.height_mesh(q.x, q.z);
         for (const Vec3 o : {Vec3(-hd, 0, -hd), Vec3(hd, 0, -hd), Vec3(-hd, 0, hd), Vec3(hd, 0, hd)})
             if (terrain.contains_xz(q.x + o.x, q.z + o.z)) ground = std::max(ground, terrain.height_mesh(q.x + o.x, q.z + o.z));
-        if (q.y >= ground + def.clearance) s.slots_.push_back(q);
+        return ground;
+    };
+    // follow_ground: each column is lowered until its lowest slot sits the clearance and a
+    // quarter spacing above the ground under it (never raised): water is born on the
+    // ground instead of falling from a flat disc metres above a slope.
+    const bool drape = def.follow_ground;
+    const float bottom =
+        def.center.y - (def.shape == SourceShape::Point ? 0.0f : std::floor(std::max(def.half_extent.y, 0.0f) / d + 1e-4f) * d);
+    std::vector<float> lowered;
+    for (const Vec3& q : cand) {
+        if (!terrain.contains_xz(q.x, q.z)) continue;
+        const float ground = footprint_ground(q);
+        const float drop = drape ? std::max(bottom - (ground + def.clearance + 0.25f * d), 0.0f) : 0.0f;
+        if (q.y - drop >= ground + def.clearance) {
+            s.slots_.push_back(q - Vec3(0.0f, drop, 0.0f));
+            lowered.push_back(drop);
+        }
     }
     // Downstream first: along the inflow direction (down when there is none); ties by
     // position so the order is fixed.
     const float vin = glm::length(def.inflow);
     const Vec3 u = vin > 0.0f ? def.inflow / vin : Vec3(0.0f, -1.0f, 0.0f);
-    std::stable_sort(s.slots_.begin(), s.slots_.end(),
-                     [&](const Vec3& a, const Vec3& b) { return glm::dot(a, u) > glm::dot(b, u); });
+    // Ordered and measured as drawn (before any lowering): each column still leaves
+    // one layer per spacing / speed.
+    std::vector<size_t> order(s.slots_.size());
+    std::iota(order.begin(), order.end(), size_t(0));
+    auto drawn = [&](size_t k) { return s.slots_[k] + Vec3(0.0f, lowered[k], 0.0f); };
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return glm::dot(drawn(a), u) > glm::dot(drawn(b), u); });
+    {
+        std::vector<Vec3> sorted(order.size());
+        std::vector<float> low(order.size());
+        for (size_t k = 0; k < order.size(); ++k) sorted[k] = s.slots_[order[k]], low[k] = lowered[order[k]];
+        s.slots_.swap(sorted);
+        lowered.swap(low);
+    }
+    for (size_t k = 0; k < s.slots_.size(); ++k)
+        if (k == 0 || glm::dot(drawn(k - 1), u) - glm::dot(drawn(k), u) > 1e-3f * d) s.layer_start_.push_back(uint32_t(k));
+    s.layer_start_.push_back(uint32_t(s.slots_.size()));
+    s.next_.assign(s.layer_start_.size() - 1, 0);
     if (!s.slots_.empty()) {
-        float lo = glm::dot(s.slots_.back(), u), hi = glm::dot(s.slots_.front(), u);
+        float lo = glm::dot(drawn(s.slots_.size() - 1), u), hi = glm::dot(drawn(0), u);
         const float speed = std::max(vin, std::sqrt(std::max(def.gravity, 0.0f) * d * 0.5f));
         // Slots per layer across u = slots * d / (extent along u + d); each layer leaves
         // once per d / speed seconds.
@@ -104,25 +134,31 @@ void LatticeSource::emit(std::span<const Vec3> positions, size_t active, size_t 
         cell_of(q, cx, cy, cz);
         binned_[fill_[index(cx, cy, cz)]++] = q;
     }
-    for (const Vec3& slot : slots_) {
+    auto is_free = [&](const Vec3& slot) {
         int cx, cy, cz;
         cell_of(slot, cx, cy, cz);
-        bool free = true;
-        for (int z = std::max(cz - 1, 0); free && z <= std::min(cz + 1, nz - 1); ++z)
-            for (int y = std::max(cy - 1, 0); free && y <= std::min(cy + 1, ny - 1); ++y)
-                for (int x = std::max(cx - 1, 0); free && x <= std::min(cx + 1, nx - 1); ++x) {
+        for (int z = std::max(cz - 1, 0); z <= std::min(cz + 1, nz - 1); ++z)
+            for (int y = std::max(cy - 1, 0); y <= std::min(cy + 1, ny - 1); ++y)
+                for (int x = std::max(cx - 1, 0); x <= std::min(cx + 1, nx - 1); ++x) {
                     const size_t c = index(x, y, z);
                     for (uint32_t k = start_[c]; k < start_[c + 1]; ++k) {
                         const Vec3 dd = binned_[k] - slot;
-                        if (glm::dot(dd, dd) < free2) {
-                            free = false;
-                            break;
-                        }
+                        if (glm::dot(dd, dd) < free2) return false;
                     }
                 }
-        if (!free) continue;
-        out.push_back(slot);  // distinct lattice slots are a spacing apart: no clash among them
-        if (out.size() == want) break;
+        return true;
+    };
+    // Layer by layer, downstream first; within a layer from where its last emission
+    // stopped, so the layer fills evenly (from one side only, the source's far side
+    // stayed dry: strict17.png's channel head).
+    for (size_t l = 0; l + 1 < layer_start_.size() && out.size() < want; ++l) {
+        const uint32_t b = layer_start_[l], n = layer_start_[l + 1] - b, from = next_[l];
+        for (uint32_t t = 0; t < n && out.size() < want; ++t) {
+            const uint32_t k = b + (from + t) % n;
+            if (!is_free(slots_[k])) continue;
+            out.push_back(slots_[k]);  // distinct slots are a spacing apart: no clash among them
+            next_[l] = (k - b + 1) % n;
+        }
     }
 }
 

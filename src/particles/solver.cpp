@@ -201,7 +201,8 @@ void ParticleSolver::build_lattice() {
                          .inflow = spawn_.initial_velocity,
                          .spacing = pbf_->spacing,
                          .clearance = collision_.mode == CollisionMode::None ? 0.0f : collision_.radius + collision_.offset,
-                         .gravity = integrator_.gravity};
+                         .gravity = integrator_.gravity,
+                         .follow_ground = spawn_.follow_ground};
     lattice_ = LatticeSource::build(d, terrain_);
 }
 

@@ -72,6 +72,7 @@ SceneDef default_scene() {
     // The carved channel starts full: the river runs from the first frame (docs/river.md,
     // "Quadratic bed friction and a channel that starts full"; a 95 m channel's front needed most of a 120 s run to reach its outlet).
     d.spawn.prefill = true;
+    d.spawn.follow_ground = true;
     d.pbf = PbfDef{};
     // The river's channel is carved from the source to the outlet (a scene without a
     // continuous source and an edge sink keeps its heights): docs/river.md, "Depressions".
@@ -95,6 +96,7 @@ SceneDef default_scene() {
     // Diffuse spray, foam and bubbles where the river is fast or broken (docs/rendering.md,
     // "Foam and spray": their cost measured there).
     d.foam.enabled = true;
+    d.pbf.sleep_threshold = kAutoSleep;  // off for the river, on for still water
     return d;
 }
 

@@ -50,6 +50,8 @@ constexpr KeyReaders kAutoCentre{"spawn_center auto, channel", [](S d) { return 
 constexpr KeyReaders kNotPoint{"source_shape box, disc", [](S d) { return d.spawn.shape != SourceShape::Point; }};
 constexpr KeyReaders kNoRate{"a scene without a particle rate", [](S d) { return !with_rate(d); }};
 constexpr KeyReaders kRate{"a scene with a particle rate", [](S d) { return with_rate(d); }};
+constexpr KeyReaders kPbfRate{"solver = pbf with a particle rate",
+                              [](S d) { return d.solver == SolverKind::Pbf && with_rate(d); }};
 constexpr KeyReaders kPbfOrCarve{"solver = pbf; terrain.condition = carve",
                                  [](S d) { return d.solver == SolverKind::Pbf || d.terrain.condition == TerrainCondition::Carve; }};
 constexpr KeyReaders kScorr{"solver = pbf, scorr_k > 0", [](S d) { return d.solver == SolverKind::Pbf && d.pbf.scorr_k > 0.0f; }};
@@ -113,6 +115,10 @@ constexpr KeyWords kRateWords{kAuto, [](S d) { return d.spawn.auto_rate() ? 0 : 
                               [](SceneDef& d, int i) {
                                   if (i == 0) d.spawn.flow_rate = kAutoRate;
                               }};
+constexpr KeyWords kSleepWords{kAuto, [](S d) { return d.pbf.auto_sleep() ? 0 : -1; },
+                               [](SceneDef& d, int i) {
+                                   if (i == 0) d.pbf.sleep_threshold = kAutoSleep;
+                               }};
 // A centre given as [x, y, z] turns both automatic placements off.
 constexpr KeyWords kCentreWords{kCentres, [](S d) { return d.spawn.auto_center ? (d.spawn.auto_channel ? 1 : 0) : -1; },
                                 [](SceneDef& d, int i) {
@@ -157,7 +163,7 @@ const SceneKey kKeys[] = {
     {.name = "terrain.condition", .type = K::Choice, .choices = kConditions, .readers = kAll,
      .help = "Drainage conditioning before the mesh is built. fill: priority-flood filling with a 0.1 % slope; breach: a "
              "channel carved from each depression through its rim; carve: breach, then the river's main channel (source to "
-             "outlet) cut in: a flat bed max(3 samples, 4 pbf.spacing) wide and 2 pbf.spacing deep that never rises (least slope half the path's mean slope, 0.1-2 %), "
+             "outlet) cut in: a flat bed max(3 samples, 4 pbf.spacing) wide and 2 pbf.spacing deep that never rises (least slope 2 %), "
              "parabolic walls, levees where the ground beside is lower, a basin under the source; auto: carve for a PBF "
              "river (a flow rate and sink.kind = \"edges\"), none otherwise (a still pool keeps its basin). `run --stats` "
              "reports what it changed (docs/river.md).",
@@ -196,6 +202,11 @@ const SceneKey kKeys[] = {
              "0.75 m/s, at most half the budget), so the river runs from the first frame instead of after its front "
              "crossed the channel (docs/river.md, \"Quadratic bed friction and a channel that starts full\").",
      .field = MR_FIELD(spawn.prefill)},
+    {.name = "particles.follow_ground", .type = K::Bool, .readers = kPbfRate,
+     .help = "Lower each column of the source's lattice slots until its lowest slot sits just above the ground under "
+             "it, so water on a slope is born on the ground instead of falling from a flat disc above its downhill "
+             "side (docs/river.md, \"A source that follows the ground\").",
+     .field = MR_FIELD(spawn.follow_ground)},
     // [pbf]
     {.name = "pbf.spacing", .type = K::Float, .unit = "m", .range = closed(1e-3, 1e3), .readers = kPbfOrCarve,
      .help = "Rest spacing (below 1 mm the kernel constants overflow); a carved channel's depth and width.", .field = MR_FIELD(pbf.spacing)},
@@ -213,9 +224,11 @@ const SceneKey kKeys[] = {
     {.name = "pbf.xsph", .type = K::Float, .range = closed(0, 1), .readers = kPbf, .help = "XSPH viscosity.", .field = MR_FIELD(pbf.xsph)},
     {.name = "pbf.vorticity", .type = K::Float, .range = closed(0, 100), .readers = kPbf,
      .help = "Vorticity confinement; 0 = off.", .field = MR_FIELD(pbf.vorticity)},
-    {.name = "pbf.sleep_threshold", .type = K::Float, .unit = "m/s", .range = closed(0, 1), .readers = kPbf,
+    {.name = "pbf.sleep_threshold", .type = K::Float, .unit = "m/s", .range = closed(0, 1), .words = kSleepWords, .readers = kPbf,
      .help = "0 = off. A particle slower than this for 0.1 s sleeps (its slow steps are undone) until a step moves it "
-             "faster (docs/river.md, \"Sleeping\"); capped at 0.9 x gravity x the step so nothing sleeps in mid-air.",
+             "faster (docs/river.md, \"Sleeping\"); capped at 0.9 x gravity x the step so nothing sleeps in mid-air. "
+             "\"auto\": 0 for a river (a flow rate and sink.kind = \"edges\": a slow river on a gentle bed fell asleep "
+             "and stopped), 0.065 otherwise (still water comes to rest).",
      .field = MR_FIELD(pbf.sleep_threshold)},
     // [sink]
     {.name = "sink.kind", .type = K::Choice, .choices = kSinks, .readers = kNotBullet,

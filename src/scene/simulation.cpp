@@ -125,11 +125,11 @@ std::vector<std::pair<int, int>> main_channel_path(const Terrain& t, const Chann
 }
 
 /// Particles per second that fill kRiverFill (three quarters) of the carved section at
-/// kRiverSpeed: a river a couple of layers deep on the channel's floor, inside its walls.
-float section_rate(const SceneDef& def, float area_scale) {
+/// `speed`: a river a couple of layers deep on the channel's floor, inside its walls.
+float section_rate(const SceneDef& def, float area_scale, float speed) {
     const CarveDef c = carve_def(def, area_scale);
     const float s = def.pbf.spacing;
-    return kRiverFill * c.floor_m * c.depth_m * kRiverSpeed / (s * s * s);
+    return kRiverFill * c.floor_m * c.depth_m * speed / (s * s * s);
 }
 
 /// Radius of the source's footprint, metres: a disc's, or the larger half extent of a box.
@@ -139,8 +139,12 @@ float source_footprint(const SpawnDef& spawn) {
 
 }  // namespace
 
-Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh)
-    : def_(def), terrain_(std::move(terrain)), bvh_(std::move(bvh)), channel_(ChannelMap::build(terrain_)) {
+Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh, std::optional<RiverSize> sizing)
+    : def_(def),
+      terrain_(std::move(terrain)),
+      bvh_(std::move(bvh)),
+      channel_(ChannelMap::build(terrain_)),
+      sizing_(sizing) {  // before the prefill, which reads it
     SpawnDef spawn = def_.spawn;
     if (resolve_source(terrain_, channel_, spawn)) def_.spawn = spawn;
     main_path_ = main_channel_path(terrain_, channel_, def.spawn, def_.spawn.center);
@@ -184,7 +188,7 @@ Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh)
 float Simulation::prefill_share() const {
     // The section's rate (size_river before a ceiling lowered it) against the source's:
     // a thinner river than the section starts as thin.
-    const float section = section_rate(def_, terrain_.area_scale());
+    const float section = section_rate(def_, terrain_.area_scale(), sizing_ ? sizing_->speed : kRiverSpeed);
     const float rate = float(def_.spawn.particles_per_second());
     return section > 0.0f && rate > 0.0f ? std::min(1.0f, rate / section) : 1.0f;
 }
@@ -227,11 +231,19 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def) {
     return create(def, map.value());
 }
 
+bool is_river(const SceneDef& def) {
+    return def.solver == SolverKind::Pbf && def.sink.kind == SinkKind::Edges &&
+           (def.spawn.particles_per_second() > 0.0 || def.spawn.auto_rate());
+}
+
 TerrainCondition resolved_condition(const SceneDef& def) {
     if (def.terrain.condition != TerrainCondition::Auto) return def.terrain.condition;
-    const bool river = def.solver == SolverKind::Pbf && def.sink.kind == SinkKind::Edges &&
-                       (def.spawn.particles_per_second() > 0.0 || def.spawn.auto_rate());
-    return river ? TerrainCondition::Carve : TerrainCondition::None;
+    return is_river(def) ? TerrainCondition::Carve : TerrainCondition::None;
+}
+
+float resolved_sleep_threshold(const SceneDef& def) {
+    if (!def.pbf.auto_sleep()) return def.pbf.sleep_threshold;
+    return is_river(def) ? 0.0f : kSleepThreshold;
 }
 
 namespace {
@@ -275,10 +287,17 @@ std::vector<std::pair<int, int>> keep_off_edges(std::span<const std::pair<int, i
     return out;
 }
 
-RiverSize size_river(const SceneDef& def, float area_scale, float channel_length_m) {
+float river_speed(float slope) {
+    const float s = std::isfinite(slope) ? std::max(slope, kCarveLeastSlope) : 1.0f;
+    return std::clamp(kRiverSpeedPerRootSlope * std::sqrt(s), kRiverTransitSpeed, kRiverSpeed);
+}
+
+RiverSize size_river(const SceneDef& def, float area_scale, float channel_length_m, float channel_slope) {
     RiverSize r;
     r.channel_length_m = channel_length_m;
-    r.rate = std::clamp(section_rate(def, area_scale), kRiverMinRate, kRiverMaxRate);
+    r.channel_slope = channel_slope;
+    r.speed = river_speed(channel_slope);
+    r.rate = std::clamp(section_rate(def, area_scale, r.speed), kRiverMinRate, kRiverMaxRate);
     // The budget: the particles on their way (the rate times the time they spend on the
     // channel at kRiverTransitSpeed, twice over: slower reaches, the source's basin,
     // eddies) plus the particles the source's pile holds.
@@ -296,6 +315,7 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, cons
     if (auto v = validate(def); !v) return v.error();
     SceneDef resolved = def;
     resolved.terrain.condition = resolved_condition(def);
+    resolved.pbf.sleep_threshold = resolved_sleep_threshold(def);
     auto terrain = Terrain::build(map, resolved.terrain);
     if (!terrain) return terrain.error();
     const bool auto_size = def.solver == SolverKind::Pbf && (def.spawn.count == kAutoCount || def.spawn.auto_rate());
@@ -314,7 +334,12 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, cons
             for (size_t k = 1; k < path.size(); ++k)
                 length += as * std::hypot(float(path[k].first - path[k - 1].first), float(path[k].second - path[k - 1].second));
             if (path.size() < 2) length = std::hypot(terrain->bounds().extent().x, terrain->bounds().extent().z);
-            const RiverSize size = size_river(def, as, length);
+            // The mean ground slope from the head to the outlet, on the breached terrain.
+            const float slope = path.size() < 2 || !(length > 0.0f)
+                                    ? 1.0f
+                                    : (terrain->sample(path.front().first, path.front().second) -
+                                       terrain->sample(path.back().first, path.back().second)) / length;
+            const RiverSize size = size_river(def, as, length, slope);
             sizing = size;
             if (def.spawn.count == kAutoCount) resolved.spawn.count = size.count;
             if (def.spawn.auto_rate())  // in the unit flow_rate is given in
@@ -359,9 +384,9 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, cons
     }
     auto bvh = Bvh::build(terrain.value(), BvhDef{.leaf_triangles = def.collision.leaf_triangles});
     if (!bvh) return bvh.error();
-    std::unique_ptr<Simulation> sim(new Simulation(resolved, std::move(terrain.value()), std::move(bvh.value())));
+    std::unique_ptr<Simulation> sim(
+        new Simulation(resolved, std::move(terrain.value()), std::move(bvh.value()), sizing));
     if (auto v = validate_on_terrain(sim->def(), sim->terrain()); !v) return v.error();  // resolved source
-    sim->sizing_ = sizing;
     return sim;
 }
 

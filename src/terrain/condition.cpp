@@ -118,9 +118,8 @@ void Terrain::carve_channel(std::span<const std::pair<int, int>> path, const Car
     // previous one is already in that one's cross-section).
     std::vector<float> before(vertices_.size());
     for (size_t k = 0; k < vertices_.size(); ++k) before[k] = vertices_[k].y;
-    // The bed's least slope: half the path's mean slope (ground at the head to ground
-    // at the outlet over the path's length), within [kConditionSlope, kCarveMaxSlope]:
-    // water crosses a breached flat at walking pace instead of creeping over it.
+    // The path's mean slope (ground at the head to ground at the outlet over the path's
+    // length), for the steepest drop below.
     double length = 0.0, head_ground = 0.0, end_ground = 0.0;
     {
         std::pair<int, int> a{-1, -1};
@@ -133,7 +132,9 @@ void Terrain::carve_channel(std::span<const std::pair<int, int>> path, const Car
         }
     }
     const double mean_slope = length > 0.0 ? (head_ground - end_ground) / length : 0.0;
-    const double slope = std::clamp(0.5 * mean_slope, double(kConditionSlope), double(kCarveMaxSlope));
+    // The bed's least slope, kCarveLeastSlope: water crosses a flat reach at walking pace
+    // instead of creeping over it and falling asleep.
+    const double slope = kCarveLeastSlope;
     double bed = 0.0;
     std::pair<int, int> prev{-1, -1};
     // Lowers every sample within `half` metres of (cx, cz) (metres) to its parabola.

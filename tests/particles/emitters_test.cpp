@@ -3,6 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
+#include <set>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -258,6 +261,61 @@ TEST(LatticeSource, NeverEmitsOntoWaterOrTwiceIntoOneSlot) {
     // Inactive particles (past `active`) do not block.
     src.emit(all, 0, 1000, again);
     EXPECT_EQ(again.size(), src.slots().size());
+}
+
+TEST(LatticeSource, FollowGroundLowersEachColumnToJustAboveItsGroundAndKeepsTheRate) {
+    // A disc over the ramp (8 m over 32 m along x: the ground under the disc falls 1.25 m).
+    World w = ramp_world();
+    LatticeSource::Def def{.shape = SourceShape::Disc, .center = Vec3(12, 8, 8), .half_extent = Vec3(2.5f, 0.5f, 0),
+                           .inflow = Vec3(0, -3, 0), .spacing = 0.5f, .clearance = 0.1f};
+    const LatticeSource flat = LatticeSource::build(def, w.terrain);
+    def.follow_ground = true;
+    const LatticeSource draped = LatticeSource::build(def, w.terrain);
+    ASSERT_EQ(flat.slots().size(), draped.slots().size()) << "the same columns and layers";
+    // Each column's lowest slot: clearance + d / 4 above the highest ground of its cell footprint.
+    std::map<std::pair<int, int>, float> lowest;
+    for (const Vec3& q : draped.slots()) {
+        const auto key = std::make_pair(int(std::lround(q.x * 2.0f)), int(std::lround(q.z * 2.0f)));
+        auto [it, fresh] = lowest.emplace(key, q.y);
+        if (!fresh) it->second = std::min(it->second, q.y);
+        EXPECT_GE(q.y, w.terrain.height_mesh(q.x, q.z) + def.clearance) << "slot under the ground";
+    }
+    float most_over = 0.0f;
+    for (const auto& [key, y] : lowest) {
+        const float x = 0.5f * float(key.first), z = 0.5f * float(key.second);
+        float ground = -1e9f;
+        for (float dx : {-0.25f, 0.25f})
+            for (float dz : {-0.25f, 0.25f}) ground = std::max(ground, w.terrain.height_mesh(x + dx, z + dz));
+        EXPECT_NEAR(y, ground + def.clearance + 0.125f, 1e-3f) << "column at x " << x << ", z " << z;
+        most_over = std::max(most_over, y - w.terrain.height_mesh(x, z));
+    }
+    float flat_over = 0.0f;
+    for (const Vec3& q : flat.slots()) flat_over = std::max(flat_over, q.y - 0.5f - w.terrain.height_mesh(q.x, q.z));
+    EXPECT_GT(flat_over, 2.0f) << "the flat disc's downhill side starts metres above its ground";
+    EXPECT_LT(most_over, 0.5f);
+    EXPECT_FLOAT_EQ(draped.max_rate(), flat.max_rate()) << "each column still leaves a layer per spacing / speed";
+}
+
+TEST(LatticeSource, ALayerFillsRoundRobinNotAlwaysFromOneSide) {
+    // One particle per call with nothing near the source: consecutive calls walk the
+    // whole bottom layer before any slot repeats (before, every call took its first slot).
+    World w = bowlish_world();
+    LatticeSource src = LatticeSource::build(
+        LatticeSource::Def{.shape = SourceShape::Disc, .center = Vec3(8, 6, 8), .half_extent = Vec3(1.5f, 0.5f, 0),
+                           .inflow = Vec3(0, -3, 0), .spacing = 0.5f},
+        w.terrain);
+    const float bottom = src.slots().front().y;
+    size_t layer = 0;
+    for (const Vec3& q : src.slots()) layer += std::abs(q.y - bottom) < 1e-4f;
+    ASSERT_GT(layer, 4u);
+    std::set<std::pair<float, float>> seen;
+    std::vector<Vec3> out;
+    for (size_t k = 0; k < layer; ++k) {
+        src.emit({}, 0, 1, out);
+        ASSERT_EQ(out.size(), 1u);
+        EXPECT_NEAR(out[0].y, bottom, 1e-4f) << "the bottom layer first";
+        EXPECT_TRUE(seen.emplace(out[0].x, out[0].z).second) << "slot repeated after " << k << " calls";
+    }
 }
 
 TEST(LatticeSource, AFlowRateTheSourceCannotDeliverIsAWarningAndCapped) {

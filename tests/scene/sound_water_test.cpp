@@ -270,6 +270,58 @@ TEST(River, AutoConditionCarvesForARiverAndKeepsTheHeightsOtherwise) {
     EXPECT_EQ(resolved_condition(asked), TerrainCondition::None) << "an explicit choice stands";
 }
 
+TEST(River, AutoSleepIsOffForARiverAndOnForStillWater) {
+    SceneDef river = default_scene();
+    ASSERT_TRUE(river.pbf.auto_sleep());
+    EXPECT_EQ(resolved_sleep_threshold(river), 0.0f);
+    SceneDef pool = river;
+    pool.spawn.flow_rate = 0.0f;
+    pool.sink.kind = SinkKind::None;
+    EXPECT_EQ(resolved_sleep_threshold(pool), kSleepThreshold);
+    SceneDef asked = river;
+    asked.pbf.sleep_threshold = 0.03f;
+    EXPECT_EQ(resolved_sleep_threshold(asked), 0.03f) << "an explicit value stands";
+    auto sim = Simulation::create(river);
+    ASSERT_TRUE(sim.ok()) << sim.error().message;
+    EXPECT_EQ(sim.value()->def().pbf.sleep_threshold, 0.0f) << "the solver never sees \"auto\"";
+}
+
+/// The river on the procedural flat: nothing drains but the carved bed's 2 % least slope,
+/// and the self-sized river (sized for 0.75 m/s there) is slow. With sleeping on it fell
+/// asleep in its channel (median speed 0 at 120 s, 0.27 of inflow at the outlet); with
+/// the bed's old least slope (0.1 %) the water stopped as well (0.000). Measured with
+/// this build: 1.04 of inflow over 60-120 s, coverage 1.00.
+TEST(River, OnAFlatTheRiverRunsDownItsCarvedBedAndDoesNotFallAsleep) {
+    SceneDef d = default_scene();
+    d.surface = false;
+    d.foam.enabled = false;
+    d.source = {.kind = TerrainSource::Flat, .heightmap = {}, .width = 65, .height = 97, .seed = 7};
+    auto sim = Simulation::create(d);
+    ASSERT_TRUE(sim.ok()) << sim.error().message;
+    Simulation& s = *sim.value();
+    ASSERT_TRUE(s.sizing().has_value());
+    const double inflow = s.sizing()->rate;
+    const int frames = test::scaled(7200);
+    const auto [m, coverage_least] = run_river(s, frames, 600);
+    const Particles& p = s.particles();
+    std::vector<float> speeds;
+    for (size_t i = 0; i < p.size(); ++i)
+        if (p.active[i]) speeds.push_back(glm::length(p.velocity[i]));
+    ASSERT_FALSE(speeds.empty());
+    std::nth_element(speeds.begin(), speeds.begin() + std::ptrdiff_t(speeds.size() / 2), speeds.end());
+    const float median = speeds[speeds.size() / 2];
+    std::printf("river on a flat, %d frames: median speed %.2f m/s, first outflow %.1f s, main outlet %.1f/s of %.1f, "
+                "coverage (least, second half) %.2f\n",
+                frames, median, m.main.first_s, m.main.rate, inflow, coverage_least);
+    EXPECT_GT(median, 0.3f) << "the river fell asleep";
+    EXPECT_GT(m.main.first_s, 0.0);
+    EXPECT_EQ(s.counters().tunneled, 0u);
+    EXPECT_EQ(s.counters().guarded, 0u);
+    if (!test::full_size()) return;
+    EXPECT_GE(m.main.rate / inflow, 0.9) << "the main outlet's outflow over 60-120 s, over the inflow";
+    EXPECT_GE(coverage_least, 0.9f);
+}
+
 /// A basin with no way out held every particle of the default river before carving
 /// (docs/river.md, the issue-10 baseline: procedural bowl, outflow 0). 40 s of river.
 TEST(River, OnABasinTheCarvedRiverLeavesThroughTheMainOutlet) {

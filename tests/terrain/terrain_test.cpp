@@ -412,6 +412,39 @@ TEST(TerrainCondition, CarveCutsACliffOnThePathIntoARampNoSteeperThanKCarveSteep
     EXPECT_GT(t->sample(4, 12) - t->sample(4, 11), 5.0f);
 }
 
+TEST(TerrainCondition, CarveOnAFlatLaysABedFallingKCarveLeastSlopePerMetre) {
+    // A flat map (flat0.png, the procedural flat): the bed must fall so the river runs.
+    // With the old rule (half the path's mean slope, at least 0.1 %) it fell 0.1 % and
+    // the river on flat0.png stopped (0.002 of inflow at its outlet; 0.989 with 2 %).
+    // The path turns a diagonal corner: the step is measured in metres.
+    Heightmap m = flat_heightmap(30, 12);
+    auto t = Terrain::build(m, TerrainDef{.area_scale = 2.0f, .height_scale = 10.0f});
+    ASSERT_TRUE(t.ok());
+    std::vector<std::pair<int, int>> path;
+    for (int j = 28; j >= 10; --j) path.emplace_back(5, j);
+    for (int k = 1; k <= 4; ++k) path.emplace_back(5 + k, 10 - k);
+    for (int j = 5; j >= 0; --j) path.emplace_back(9, j);
+    const CarveDef def{.width_m = 8.0f, .floor_m = 6.0f, .depth_m = 1.0f};
+    Terrain carved = t.value();
+    carved.carve_channel(path, def);
+    // Each path sample lies at least depth_m + kCarveLeastSlope x (metres along the path
+    // from the head) under the flat ground (the next cells' floors may cut it deeper),
+    // and the bed never rises.
+    float along = 0.0f;
+    for (size_t k = 0; k < path.size(); ++k) {
+        const auto [i, j] = path[k];
+        if (k > 0) {
+            const auto [pi, pj] = path[k - 1];
+            along += 2.0f * std::hypot(float(i - pi), float(j - pj));
+            EXPECT_LE(carved.sample(i, j), carved.sample(pi, pj) + 1e-5f) << "path cell " << k;
+        }
+        EXPECT_LE(carved.sample(i, j), t->sample(i, j) - def.depth_m - kCarveLeastSlope * along + 1e-4f) << "path cell " << k;
+    }
+    const auto [oi, oj] = path.back();
+    EXPECT_GT(t->sample(oi, oj) - carved.sample(oi, oj), def.depth_m + 0.9f * kCarveLeastSlope * along)
+        << "the outlet's bed, " << along << " m down the path";
+}
+
 TEST(TerrainCondition, CarveWithAnEmptyPathOrOutsideTheGridChangesNothing) {
     auto t = Terrain::build(pit_map(), TerrainDef{.area_scale = 1.0f, .height_scale = 10.0f});
     ASSERT_TRUE(t.ok());
