@@ -8,6 +8,7 @@
 #include "commands.h"
 #include "export_options.h"
 #include "scene_panel.h"
+#include "view_support.h"
 
 #include <metariver/export.h>
 #include <metariver/io.h>
@@ -58,87 +59,9 @@ struct ViewOptions {
 /// Frame numbers a recording may reach (its --range is checked against them).
 constexpr long long kMaxRecordFrames = 1'000'000'000;
 
-/// A recording in the viewer: an export session fed every simulation step while it runs,
-/// frame numbers counted from its start.
-struct Recording {
-    std::unique_ptr<Exporter> exporter;
-    long long next_frame = 0;
-
-    bool on() const { return exporter != nullptr; }
-    /// Starts an export session (folder, terrain); the message says what happened.
-    std::string start(const ExportDef& def, const Simulation& sim) {
-        auto e = Exporter::begin(def);
-        if (!e) return e.error().message;
-        if (auto s = e.value()->write_terrain(sim.terrain()); !s) return s.error().message;
-        exporter = std::move(e.value());
-        next_frame = 0;
-        return fmt::format("recording to {}", def.dir);
-    }
-    /// Writes the step just taken when it is due; an error ends the recording (its files go).
-    std::string step(const Simulation& sim, double dt) {
-        const long long f = next_frame++;
-        if (!exporter->due(f)) return {};
-        if (auto s = exporter->write_frame(f, double(f + 1) * dt, sim.surface(), sim.particles(), sim.frame(),
-                                             sim.foam() ? &sim.foam()->particles() : nullptr); !s) {
-            exporter.reset();
-            return s.error().message;
-        }
-        return {};
-    }
-    /// Writes the manifest; the files stay.
-    std::string stop() {
-        if (!exporter) return {};
-        std::string message = fmt::format("exported {} frames to {}", exporter->frames().size(), exporter->def().dir);
-        if (auto s = exporter->finish(); !s) message = s.error().message;
-        exporter.reset();
-        return message;
-    }
-};
-
 int fail(int code, const std::string& message) {
     fmt::print(stderr, "metariver view: {}\n", message);
     return code;
-}
-
-/// State shared with GLFW's callbacks (through the window's user pointer).
-/// Events are queued by callbacks, not read from the button/key state once per frame:
-/// at a few frames per second a click (press and release) fits between two frames.
-struct Input {
-    float scroll = 0.0f;
-    std::vector<std::string> dropped;
-    std::vector<int> keys;           ///< keys pressed since the last frame
-    double press_x = 0.0, press_y = 0.0;
-    std::vector<std::array<double, 2>> clicks;  ///< left press+release without moving, window coordinates
-};
-
-/// What decides whether a scene edit needs the terrain (and tree) rebuilt and uploaded.
-std::string terrain_key(const SceneDef& d) {
-    return fmt::format("{}|{}|{}|{}|{}|{}|{}|{}|{}", to_string(d.source.kind), d.source.heightmap, d.source.width,
-                       d.source.height, d.source.seed, d.terrain.area_scale, d.terrain.height_scale,
-                       d.terrain.paper_row_orientation, d.collision.leaf_triangles);
-}
-
-std::string next_screenshot_path(const std::string& dir) {
-    for (int i = 0; i < 100000; ++i) {
-        const fs::path p = fs::path(dir) / fmt::format("metariver_screenshot_{:03}.png", i);
-        std::error_code ec;
-        if (!fs::exists(p, ec)) return p.string();
-    }
-    return (fs::path(dir) / "metariver_screenshot.png").string();
-}
-
-/// Reads the window's back buffer (scene and UI) and writes it as a PNG.
-Status screenshot(const std::string& path, int width, int height) {
-    std::vector<uint8_t> rgb(static_cast<size_t>(width) * height * 3);
-    glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
-    glReadBuffer(GL_BACK);
-    glPixelStorei(GL_PACK_ALIGNMENT, 1);
-    glReadPixels(0, 0, width, height, GL_RGB, GL_UNSIGNED_BYTE, rgb.data());
-    const size_t row = static_cast<size_t>(width) * 3;
-    for (int y = 0; y < height / 2; ++y)
-        std::swap_ranges(rgb.begin() + static_cast<long>(y * row), rgb.begin() + static_cast<long>((y + 1) * row),
-                         rgb.begin() + static_cast<long>((height - 1 - y) * row));
-    return render::write_png(path, rgb, width, height, 3);
 }
 
 int view(const ViewOptions& o) {
@@ -205,30 +128,7 @@ int view(const ViewOptions& o) {
     glfwSwapInterval(o.vsync ? 1 : 0);
 
     Input input;
-    glfwSetWindowUserPointer(window, &input);
-    // Ours first: ImGui's GLFW backend chains to callbacks installed before it.
-    glfwSetScrollCallback(window, [](GLFWwindow* w, double, double dy) {
-        static_cast<Input*>(glfwGetWindowUserPointer(w))->scroll += static_cast<float>(dy);
-    });
-    glfwSetKeyCallback(window, [](GLFWwindow* w, int key, int, int action, int) {
-        if (action == GLFW_PRESS) static_cast<Input*>(glfwGetWindowUserPointer(w))->keys.push_back(key);
-    });
-    glfwSetMouseButtonCallback(window, [](GLFWwindow* w, int button, int action, int) {
-        if (button != GLFW_MOUSE_BUTTON_LEFT) return;
-        auto* in = static_cast<Input*>(glfwGetWindowUserPointer(w));
-        double x = 0, y = 0;
-        glfwGetCursorPos(w, &x, &y);
-        if (action == GLFW_PRESS) {
-            in->press_x = x;
-            in->press_y = y;
-        } else if (action == GLFW_RELEASE && std::abs(x - in->press_x) + std::abs(y - in->press_y) <= 4.0) {
-            in->clicks.push_back({x, y});
-        }
-    });
-    glfwSetDropCallback(window, [](GLFWwindow* w, int count, const char** paths) {
-        auto* in = static_cast<Input*>(glfwGetWindowUserPointer(w));
-        for (int i = 0; i < count; ++i) in->dropped.emplace_back(paths[i]);
-    });
+    install_input_callbacks(window, input);
 
     IMGUI_CHECKVERSION();
     ImGui::CreateContext();

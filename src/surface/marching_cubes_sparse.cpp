@@ -31,6 +31,8 @@
 // checks it). Output order depends only on the field, not on the threads.
 #include <metariver/surface.h>
 
+#include "mc_sparse_blocks.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -40,115 +42,15 @@
 #include <cmath>
 #include <cstring>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
-
 namespace mr {
 
-namespace {
+using namespace mcs;
 
-constexpr int B = SparseField::kBlock;
-constexpr int P = B + 3;  // padded block edge: samples -1 .. 9
+namespace {
 
 double ms_since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
-
-inline bool is_inside(float v, float threshold) { return v > threshold; }  // NaN: outside
-
-/// Cell corners as read from four rows of inside bits: key bit 2r + d is row r's bit at
-/// x + d, rows r = m00 (y, z), m01 (y, z + 1), m10 (y + 1, z), m11 (y + 1, z + 1).
-/// In Bourke's numbering those are corners 0, 1, 3, 2, 4, 5, 7, 6.
-constexpr std::array<int, 8> kKeyCorner = {0, 1, 3, 2, 4, 5, 7, 6};
-
-/// A triangle corner's edge seen from its cell: one of the 8 edge rows around a cell row
-/// (0-3: x edges at (y + dy, z + dz), slot dy + 2 dz; 4-5: y edges at (y, z + dz);
-/// 6-7: z edges at (y + dy, z)) and the x offset (0 or 1) in that row.
-struct EdgeRef {
-    uint8_t row;
-    uint8_t dx;
-};
-
-struct Tables {
-    std::array<uint8_t, 256> cube_of_key{};        // key -> Bourke cube index
-    std::array<uint8_t, 256> triangles_of_key{};   // triangles of each key
-    std::array<uint16_t, 256> edges_of_key{};      // crossed Bourke edges of each key
-    std::array<std::array<uint8_t, 8>, 256> below{};  // [b][x]: bits of b below bit x
-    std::array<EdgeRef, 12> edge_ref{};            // Bourke edge -> edge row and x offset
-    std::array<uint16_t, 12> local_offset{};       // Bourke edge -> offset in local_id from the cell's
-};
-
-Tables make_tables() {
-    Tables t;
-    for (int e = 0; e < 12; ++e) {
-        const auto& a = mc::kCornerOffset[mc::kEdgeCorners[e][0]];
-        const auto& b = mc::kCornerOffset[mc::kEdgeCorners[e][1]];
-        int axis = 0;
-        for (int d = 0; d < 3; ++d) {
-            if (a[d] != b[d]) axis = d;
-        }
-        const int dx = std::min(a[0], b[0]), dy = std::min(a[1], b[1]), dz = std::min(a[2], b[2]);
-        const int row = axis == 0 ? dy + 2 * dz : axis == 1 ? 4 + dz : 6 + dy;
-        t.edge_ref[e] = EdgeRef{static_cast<uint8_t>(row), static_cast<uint8_t>(dx)};
-        t.local_offset[e] = static_cast<uint16_t>(axis * B * B * B + dx + B * (dy + B * dz));
-    }
-    for (int key = 0; key < 256; ++key) {
-        int cube = 0;
-        for (int b = 0; b < 8; ++b) cube |= ((key >> b) & 1) << kKeyCorner[b];
-        t.cube_of_key[key] = static_cast<uint8_t>(cube);
-        int n = 0;
-        while (n < 16 && mc::kTriTable[cube][n] >= 0) ++n;
-        t.triangles_of_key[key] = static_cast<uint8_t>(n / 3);
-        t.edges_of_key[key] = mc::kEdgeTable[cube];
-        int bits = 0;
-        for (int b = 0; b < 8; ++b) {
-            t.below[key][b] = static_cast<uint8_t>(bits);
-            bits += (key >> b) & 1;
-        }
-    }
-    return t;
-}
-
-const Tables& tables() {
-    static const Tables t = make_tables();
-    return t;
-}
-
-/// The four sample rows of a cell row, packed 16 bits apart for key extraction.
-inline uint64_t pack_rows(unsigned m00, unsigned m01, unsigned m10, unsigned m11) {
-    return uint64_t{m00} | (uint64_t{m01} << 16) | (uint64_t{m10} << 32) | (uint64_t{m11} << 48);
-}
-
-/// Key of cell x of a packed cell row (see kKeyCorner).
-inline unsigned cell_key(uint64_t rows, int x) {
-    uint64_t v = (rows >> x) & 0x0003000300030003ull;
-    v |= v >> 14;  // row 1's pair to bits 2-3, row 3's to bits 34-35
-    v |= v >> 28;  // rows 2-3 to bits 4-7
-    return static_cast<unsigned>(v & 0xffu);
-}
-
-/// Cells of a row (bit x, x < ex) whose 8 corners are not all on one side.
-inline unsigned mixed_cells(unsigned m00, unsigned m01, unsigned m10, unsigned m11, unsigned cell_mask) {
-    const unsigned e = (m00 ^ m01) | (m00 ^ m10) | (m00 ^ m11);
-    return (e | (e >> 1) | (m00 ^ (m00 >> 1))) & cell_mask;
-}
-
-/// Pass-1 results of one candidate block. Rows are indexed y + 8 z (edges) or
-/// y + 9 z (inside bits, which include the neighbours' first layer), bit x.
-struct BlockCells {
-    uint16_t inside[81];    // inside bits of samples x, y, z in [0, 8]
-    uint8_t edges[3][64];   // crossed owned edges along x, y, z whose lower sample is (x, y, z)
-    uint16_t word_base[3][8];  // block-local vertex index of the first edge in layer z
-    uint8_t prefix[3][64];     // crossed edges before row y in layer z (rank = word_base + prefix)
-    uint32_t vertices;      // owned crossed edges (x first, then y, then z)
-    uint32_t triangles;     // triangles of owned cells
-    uint32_t block;         // directory index
-    uint32_t first_vertex;  // global index of the block's first vertex
-    uint32_t first_triangle;
-    int16_t ex, ey, ez;     // cells (= edges along that axis) per axis in this block: 0..8
-    int16_t lx, ly, lz;     // samples per axis in this block: 1..8
-};
 
 }  // namespace
 
@@ -170,148 +72,6 @@ size_t SurfaceWorkspace::capacity_bytes() const {
 }
 
 namespace {
-
-/// Everything the passes read, bundled once per call.
-struct Context {
-    const SparseField* field;
-    const SampleGrid* grid;
-    float threshold;
-    unsigned outside_bits;  // inside bits of an absent block's row (0 < threshold: none)
-    const int32_t* candidate_of_block;
-    BlockCells* cells;
-    SurfaceMesh* out;
-
-    /// Values of block (bi, bj, bk), or nullptr when it is outside the grid or not stored.
-    const float* block(int bi, int bj, int bk) const {
-        if (bi >= field->blocks_x() || bj >= field->blocks_y() || bk >= field->blocks_z()) return nullptr;
-        if (bi < 0 || bj < 0 || bk < 0) return nullptr;
-        const int32_t s = field->slot(bi, bj, bk);
-        return s == SparseField::kNoBlock ? nullptr : field->block_values(s);
-    }
-    void block_coords(uint32_t blk, int& bi, int& bj, int& bk) const {
-        const auto bx = static_cast<uint32_t>(field->blocks_x()), by = static_cast<uint32_t>(field->blocks_y());
-        bi = static_cast<int>(blk % bx);
-        bj = static_cast<int>((blk / bx) % by);
-        bk = static_cast<int>(blk / (bx * by));
-    }
-};
-
-/// Inside bits of 8 consecutive samples.
-inline unsigned row_bits(const float* v, float threshold) {
-#if defined(__SSE2__)
-    const __m128 t = _mm_set1_ps(threshold);  // ordered compare: NaN is outside, as is_inside
-    return static_cast<unsigned>(_mm_movemask_ps(_mm_cmpgt_ps(_mm_loadu_ps(v), t))) |
-           (static_cast<unsigned>(_mm_movemask_ps(_mm_cmpgt_ps(_mm_loadu_ps(v + 4), t))) << 4);
-#else
-    unsigned m = 0;
-    for (int i = 0; i < B; ++i) m |= static_cast<unsigned>(is_inside(v[i], threshold)) << i;
-    return m;
-#endif
-}
-
-/// Pass 1 for one candidate.
-void classify(const Context& cx, BlockCells& bc) {
-    const Tables& tb = tables();
-    const float t = cx.threshold;
-    int bi, bj, bk;
-    cx.block_coords(bc.block, bi, bj, bk);
-    const SampleGrid& g = *cx.grid;
-    bc.lx = static_cast<int16_t>(std::min(B, g.nx - bi * B));
-    bc.ly = static_cast<int16_t>(std::min(B, g.ny - bj * B));
-    bc.lz = static_cast<int16_t>(std::min(B, g.nz - bk * B));
-    bc.ex = static_cast<int16_t>(std::min(B, g.nx - 1 - bi * B));
-    bc.ey = static_cast<int16_t>(std::min(B, g.ny - 1 - bj * B));
-    bc.ez = static_cast<int16_t>(std::min(B, g.nz - 1 - bk * B));
-
-    // Inside bits of samples [0, 8]^3: the block's own 8^3 and the first layer of the
-    // +x, +y, +z, +xy, +xz, +yz, +xyz neighbours. Absent samples give outside_bits; bits
-    // of samples beyond the grid are never used (the e* / l* limits below).
-    const float* own = cx.block(bi, bj, bk);
-    const float* nbx = cx.block(bi + 1, bj, bk);
-    const float* nby = cx.block(bi, bj + 1, bk);
-    const float* nbz = cx.block(bi, bj, bk + 1);
-    const float* nxy = cx.block(bi + 1, bj + 1, bk);
-    const float* nxz = cx.block(bi + 1, bj, bk + 1);
-    const float* nyz = cx.block(bi, bj + 1, bk + 1);
-    const float* nxyz = cx.block(bi + 1, bj + 1, bk + 1);
-    const unsigned out8 = cx.outside_bits & 0xffu, out1 = cx.outside_bits & 1u;
-    const auto bit = [&](const float* blk, int x, int y, int z) {
-        return blk ? static_cast<unsigned>(is_inside(blk[x + B * (y + B * z)], t)) : out1;
-    };
-    // Also as 64-bit words, 8 rows (y = 0..7) of 8 bits per layer z = 0..8 (x8: the
-    // rows' bit 8 in bit 0 of each byte; y8: row y = 8), to find crossed edges for 8
-    // rows at a time.
-    uint64_t xw[9], x8[9];
-    unsigned y8[9];
-    const auto put_row = [&](int y, int z, unsigned lo, unsigned hi) {
-        bc.inside[y + 9 * z] = static_cast<uint16_t>(lo | (hi << 8));
-        if (y < B) {
-            xw[z] |= uint64_t{lo} << (8 * y);
-            x8[z] |= uint64_t{hi} << (8 * y);
-        } else {
-            y8[z] = lo;
-        }
-    };
-    for (int z = 0; z <= B; ++z) xw[z] = x8[z] = 0;
-    for (int z = 0; z < B; ++z) {
-        for (int y = 0; y < B; ++y) put_row(y, z, own ? row_bits(own + B * (y + B * z), t) : out8, bit(nbx, 0, y, z));
-        put_row(B, z, nby ? row_bits(nby + B * (0 + B * z), t) : out8, bit(nxy, 0, 0, z));
-    }
-    for (int y = 0; y < B; ++y) put_row(y, B, nbz ? row_bits(nbz + B * y, t) : out8, bit(nxz, 0, y, 0));
-    put_row(B, B, nyz ? row_bits(nyz, t) : out8, bit(nxyz, 0, 0, 0));
-
-    // Crossed owned edges (bytes: row y of layer z) and their ranks: x edges, then y,
-    // then z; only edges whose samples are both in the grid.
-    constexpr uint64_t kBytes = 0x0101010101010101ull;
-    const auto rows_below = [](int n) { return n >= B ? ~uint64_t{0} : (uint64_t{1} << (8 * n)) - 1; };
-    const uint64_t xmask = kBytes * ((1u << bc.ex) - 1u) & rows_below(bc.ly);  // x edges
-    const uint64_t ymask = kBytes * ((1u << bc.lx) - 1u) & rows_below(bc.ey);  // y edges
-    const uint64_t zmask = kBytes * ((1u << bc.lx) - 1u) & rows_below(bc.ly);  // z edges
-    uint32_t n = 0;
-    for (int axis = 0; axis < 3; ++axis) {
-        for (int z = 0; z < B; ++z) {
-            const uint64_t m = xw[z];
-            uint64_t e = 0;
-            if (axis == 0 && z < bc.lz) {
-                e = (m ^ (((m >> 1) & (kBytes * 0x7fu)) | (x8[z] << 7))) & xmask;
-            } else if (axis == 1 && z < bc.lz) {
-                e = (m ^ ((m >> 8) | (uint64_t{y8[z]} << 56))) & ymask;
-            } else if (axis == 2 && z < bc.ez) {
-                e = (m ^ xw[z + 1]) & zmask;
-            }
-            // Bits per byte, then running sums over the bytes (each <= 64: no carries).
-            uint64_t c = e - ((e >> 1) & (kBytes * 0x55u));
-            c = (c & (kBytes * 0x33u)) + ((c >> 2) & (kBytes * 0x33u));
-            c = (c + (c >> 4)) & (kBytes * 0x0fu);
-            const uint64_t running = c * kBytes;  // byte y: bits in bytes 0..y
-            for (int y = 0; y < B; ++y) {
-                bc.edges[axis][y + B * z] = static_cast<uint8_t>(e >> (8 * y));
-                bc.prefix[axis][y + B * z] = static_cast<uint8_t>((running << 8) >> (8 * y));
-            }
-            bc.word_base[axis][z] = static_cast<uint16_t>(n);
-            n += static_cast<uint32_t>(running >> 56);
-        }
-    }
-    bc.vertices = n;
-
-    // Triangles of owned cells, visiting only cells with corners on both sides.
-    const unsigned cell_mask = (1u << bc.ex) - 1u;
-    uint32_t tris = 0;
-    for (int z = 0; z < bc.ez; ++z) {
-        for (int y = 0; y < bc.ey; ++y) {
-            const unsigned m00 = bc.inside[y + 9 * z], m10 = bc.inside[y + 1 + 9 * z];
-            const unsigned m01 = bc.inside[y + 9 * (z + 1)], m11 = bc.inside[y + 1 + 9 * (z + 1)];
-            unsigned mixed = mixed_cells(m00, m01, m10, m11, cell_mask);
-            if (mixed == 0) continue;
-            const uint64_t rows = pack_rows(m00, m01, m10, m11);
-            while (mixed != 0) {
-                tris += tb.triangles_of_key[cell_key(rows, __builtin_ctz(mixed))];
-                mixed &= mixed - 1;
-            }
-        }
-    }
-    bc.triangles = tris;
-}
 
 template <bool Interior, int Axis>
 uint32_t emit_axis_vertices(const Context& cx, const BlockCells& bc, const float* pad, int i0, int j0, int k0,
@@ -393,8 +153,9 @@ void emit_vertices(const Context& cx, const BlockCells& bc, const float* pad, in
     emit_axis_vertices<Interior, 2>(cx, bc, pad, i0, j0, k0, local_id, n);
 }
 
-/// Pass 2 for one candidate: its vertices and triangles, at their final places.
-void emit(const Context& cx, const BlockCells& bc) {
+}  // namespace
+
+void mcs::emit(const Context& cx, const BlockCells& bc) {
     const Tables& tb = tables();
     const SparseField& f = *cx.field;
     const SampleGrid& g = *cx.grid;
@@ -518,8 +279,6 @@ void emit(const Context& cx, const BlockCells& bc) {
         }
     }
 }
-
-}  // namespace
 
 void extract_surface_sparse(const SparseField& field, float threshold, SurfaceMesh& out, SurfaceWorkspace& ws) {
     auto t0 = std::chrono::steady_clock::now();

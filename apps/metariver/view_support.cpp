@@ -1,0 +1,107 @@
+// The viewer's parts outside its loop (view_support.h).
+#include "view_support.h"
+
+#include <metariver/io.h>
+#include <metariver/render.h>
+
+// libepoxy's GL header first; GLFW must not pull in its own.
+#include <epoxy/gl.h>
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+namespace mr::app {
+
+namespace fs = std::filesystem;
+
+std::string Recording::start(const ExportDef& def, const Simulation& sim) {
+    auto e = Exporter::begin(def);
+    if (!e) return e.error().message;
+    if (auto s = e.value()->write_terrain(sim.terrain()); !s) return s.error().message;
+    exporter = std::move(e.value());
+    next_frame = 0;
+    return fmt::format("recording to {}", def.dir);
+}
+
+std::string Recording::step(const Simulation& sim, double dt) {
+    const long long f = next_frame++;
+    if (!exporter->due(f)) return {};
+    if (auto s = exporter->write_frame(f, double(f + 1) * dt, sim.surface(), sim.particles(), sim.frame(),
+                                       sim.foam() ? &sim.foam()->particles() : nullptr);
+        !s) {
+        exporter.reset();
+        return s.error().message;
+    }
+    return {};
+}
+
+std::string Recording::stop() {
+    if (!exporter) return {};
+    std::string message = fmt::format("exported {} frames to {}", exporter->frames().size(), exporter->def().dir);
+    if (auto s = exporter->finish(); !s) message = s.error().message;
+    exporter.reset();
+    return message;
+}
+
+void install_input_callbacks(GLFWwindow* window, Input& input) {
+    glfwSetWindowUserPointer(window, &input);
+    // Ours first: ImGui's GLFW backend chains to callbacks installed before it.
+    glfwSetScrollCallback(window, [](GLFWwindow* w, double, double dy) {
+        static_cast<Input*>(glfwGetWindowUserPointer(w))->scroll += static_cast<float>(dy);
+    });
+    glfwSetKeyCallback(window, [](GLFWwindow* w, int key, int, int action, int) {
+        if (action == GLFW_PRESS) static_cast<Input*>(glfwGetWindowUserPointer(w))->keys.push_back(key);
+    });
+    glfwSetMouseButtonCallback(window, [](GLFWwindow* w, int button, int action, int) {
+        if (button != GLFW_MOUSE_BUTTON_LEFT) return;
+        auto* in = static_cast<Input*>(glfwGetWindowUserPointer(w));
+        double x = 0, y = 0;
+        glfwGetCursorPos(w, &x, &y);
+        if (action == GLFW_PRESS) {
+            in->press_x = x;
+            in->press_y = y;
+        } else if (action == GLFW_RELEASE && std::abs(x - in->press_x) + std::abs(y - in->press_y) <= 4.0) {
+            in->clicks.push_back({x, y});
+        }
+    });
+    glfwSetDropCallback(window, [](GLFWwindow* w, int count, const char** paths) {
+        auto* in = static_cast<Input*>(glfwGetWindowUserPointer(w));
+        for (int i = 0; i < count; ++i) in->dropped.emplace_back(paths[i]);
+    });
+}
+
+/// What decides whether a scene edit needs the terrain (and tree) rebuilt and uploaded.
+std::string terrain_key(const SceneDef& d) {
+    return fmt::format("{}|{}|{}|{}|{}|{}|{}|{}|{}", to_string(d.source.kind), d.source.heightmap, d.source.width,
+                       d.source.height, d.source.seed, d.terrain.area_scale, d.terrain.height_scale,
+                       d.terrain.paper_row_orientation, d.collision.leaf_triangles);
+}
+
+std::string next_screenshot_path(const std::string& dir) {
+    for (int i = 0; i < 100000; ++i) {
+        const fs::path p = fs::path(dir) / fmt::format("metariver_screenshot_{:03}.png", i);
+        std::error_code ec;
+        if (!fs::exists(p, ec)) return p.string();
+    }
+    return (fs::path(dir) / "metariver_screenshot.png").string();
+}
+
+/// Reads the window's back buffer (scene and UI) and writes it as a PNG.
+Status screenshot(const std::string& path, int width, int height) {
+    std::vector<uint8_t> rgb(static_cast<size_t>(width) * height * 3);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+    glReadBuffer(GL_BACK);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glReadPixels(0, 0, width, height, GL_RGB, GL_UNSIGNED_BYTE, rgb.data());
+    const size_t row = static_cast<size_t>(width) * 3;
+    for (int y = 0; y < height / 2; ++y)
+        std::swap_ranges(rgb.begin() + static_cast<long>(y * row), rgb.begin() + static_cast<long>((y + 1) * row),
+                         rgb.begin() + static_cast<long>((height - 1 - y) * row));
+    return render::write_png(path, rgb, width, height, 3);
+}
+
+}  // namespace mr::app

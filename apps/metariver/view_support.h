@@ -1,0 +1,56 @@
+// The viewer's parts outside its loop: recording, input queued from GLFW's callbacks,
+// the back buffer to PNG (cmd_view.cpp).
+#pragma once
+
+#include <metariver/export.h>
+#include <metariver/scene.h>
+
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+struct GLFWwindow;
+
+namespace mr::app {
+
+/// A recording in the viewer: an export session fed every simulation step while it runs,
+/// frame numbers counted from its start.
+struct Recording {
+    std::unique_ptr<Exporter> exporter;
+    long long next_frame = 0;
+
+    bool on() const { return exporter != nullptr; }
+    /// Starts an export session (folder, terrain); the message says what happened.
+    std::string start(const ExportDef& def, const Simulation& sim);
+    /// Writes the step just taken when it is due; an error ends the recording (its files go).
+    std::string step(const Simulation& sim, double dt);
+    /// Writes the manifest; the files stay.
+    std::string stop();
+};
+
+/// State shared with GLFW's callbacks (through the window's user pointer).
+/// Events are queued by callbacks, not read from the button/key state once per frame:
+/// at a few frames per second a click (press and release) fits between two frames.
+struct Input {
+    float scroll = 0.0f;
+    std::vector<std::string> dropped;
+    std::vector<int> keys;           ///< keys pressed since the last frame
+    double press_x = 0.0, press_y = 0.0;
+    std::vector<std::array<double, 2>> clicks;  ///< left press+release without moving, window coordinates
+};
+
+/// Points the window's user pointer at `input` and installs the callbacks that fill it
+/// (before ImGui's backend, which chains to them).
+void install_input_callbacks(GLFWwindow* window, Input& input);
+
+/// What decides whether a scene edit needs the terrain (and tree) rebuilt and uploaded.
+std::string terrain_key(const SceneDef& d);
+
+/// The first metariver_screenshot_NNN.png in `dir` that does not exist yet.
+std::string next_screenshot_path(const std::string& dir);
+
+/// Reads the window's back buffer (scene and UI) and writes it as a PNG.
+Status screenshot(const std::string& path, int width, int height);
+
+}  // namespace mr::app
