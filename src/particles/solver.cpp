@@ -202,7 +202,7 @@ void ParticleSolver::build_lattice() {
                          .spacing = pbf_->spacing,
                          .clearance = collision_.mode == CollisionMode::None ? 0.0f : collision_.radius + collision_.offset,
                          .gravity = integrator_.gravity,
-                         .follow_ground = spawn_.follow_ground};
+                         .follow_ground = spawn_.follow_ground && spawn_.particles_per_second() > 0.0f};
     lattice_ = LatticeSource::build(d, terrain_);
 }
 
