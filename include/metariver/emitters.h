@@ -56,9 +56,10 @@ public:
         float spacing = 0.5f;    ///< lattice spacing = the fluid's rest spacing, metres
         float clearance = 0.0f;  ///< slots keep their centre this far above the terrain (radius + offset), metres
         float gravity = 9.82f;   ///< m/s^2: how fast a source with no inflow speed drains
-        /// Each column of slots whose ground lies below the centre's is lowered by the
-        /// difference (a source on a slope drapes over it instead of pouring from a flat
-        /// disc metres above the downhill ground).
+        /// Each column of slots is lowered (never raised) until its lowest slot sits
+        /// `clearance` + spacing / 4 above the highest ground of its cell footprint: a
+        /// source on a slope is born on the ground instead of pouring from a flat disc
+        /// metres above its downhill side. Order and max_rate() are as drawn.
         bool follow_ground = false;
     };
     /// A slot is free when no particle is closer than this many spacings.

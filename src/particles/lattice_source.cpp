@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 namespace mr {
@@ -50,42 +51,35 @@ LatticeSource LatticeSource::build(const Def& def, const Terrain& terrain) {
     // follow_ground: each column is lowered until its lowest slot sits the clearance and a
     // quarter spacing above the ground under it (never raised): water is born on the
     // ground instead of falling from a flat disc metres above a slope.
-    const bool drape = def.follow_ground;
-    const float bottom =
-        def.center.y - (def.shape == SourceShape::Point ? 0.0f : std::floor(std::max(def.half_extent.y, 0.0f) / d + 1e-4f) * d);
-    std::vector<float> lowered;
+    float bottom = std::numeric_limits<float>::infinity();  // the lowest layer as drawn
+    for (const Vec3& q : cand) bottom = std::min(bottom, q.y);
+    struct Kept {
+        Vec3 at;     // where the slot is
+        float drop;  // how far follow_ground lowered it
+        Vec3 drawn() const { return at + Vec3(0.0f, drop, 0.0f); }
+    };
+    std::vector<Kept> kept;
     for (const Vec3& q : cand) {
         if (!terrain.contains_xz(q.x, q.z)) continue;
         const float ground = footprint_ground(q);
-        const float drop = drape ? std::max(bottom - (ground + def.clearance + 0.25f * d), 0.0f) : 0.0f;
-        if (q.y - drop >= ground + def.clearance) {
-            s.slots_.push_back(q - Vec3(0.0f, drop, 0.0f));
-            lowered.push_back(drop);
-        }
+        const float drop = def.follow_ground ? std::max(bottom - (ground + def.clearance + 0.25f * d), 0.0f) : 0.0f;
+        if (q.y - drop >= ground + def.clearance) kept.push_back({q - Vec3(0.0f, drop, 0.0f), drop});
     }
     // Downstream first: along the inflow direction (down when there is none); ties by
-    // position so the order is fixed.
+    // position so the order is fixed. Ordered and measured as drawn (before any
+    // lowering): each column still leaves one layer per spacing / speed.
     const float vin = glm::length(def.inflow);
     const Vec3 u = vin > 0.0f ? def.inflow / vin : Vec3(0.0f, -1.0f, 0.0f);
-    // Ordered and measured as drawn (before any lowering): each column still leaves
-    // one layer per spacing / speed.
-    std::vector<size_t> order(s.slots_.size());
-    std::iota(order.begin(), order.end(), size_t(0));
-    auto drawn = [&](size_t k) { return s.slots_[k] + Vec3(0.0f, lowered[k], 0.0f); };
-    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return glm::dot(drawn(a), u) > glm::dot(drawn(b), u); });
-    {
-        std::vector<Vec3> sorted(order.size());
-        std::vector<float> low(order.size());
-        for (size_t k = 0; k < order.size(); ++k) sorted[k] = s.slots_[order[k]], low[k] = lowered[order[k]];
-        s.slots_.swap(sorted);
-        lowered.swap(low);
+    auto along = [&](const Kept& k) { return glm::dot(k.drawn(), u); };
+    std::stable_sort(kept.begin(), kept.end(), [&](const Kept& a, const Kept& b) { return along(a) > along(b); });
+    for (size_t k = 0; k < kept.size(); ++k) {
+        s.slots_.push_back(kept[k].at);
+        if (k == 0 || along(kept[k - 1]) - along(kept[k]) > 1e-3f * d) s.layer_start_.push_back(uint32_t(k));
     }
-    for (size_t k = 0; k < s.slots_.size(); ++k)
-        if (k == 0 || glm::dot(drawn(k - 1), u) - glm::dot(drawn(k), u) > 1e-3f * d) s.layer_start_.push_back(uint32_t(k));
     s.layer_start_.push_back(uint32_t(s.slots_.size()));
     s.next_.assign(s.layer_start_.size() - 1, 0);
     if (!s.slots_.empty()) {
-        float lo = glm::dot(drawn(s.slots_.size() - 1), u), hi = glm::dot(drawn(0), u);
+        const float lo = along(kept.back()), hi = along(kept.front());
         const float speed = std::max(vin, std::sqrt(std::max(def.gravity, 0.0f) * d * 0.5f));
         // Slots per layer across u = slots * d / (extent along u + d); each layer leaves
         // once per d / speed seconds.
