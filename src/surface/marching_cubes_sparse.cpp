@@ -214,9 +214,7 @@ void mcs::emit(const Context& cx, const BlockCells& bc) {
     const unsigned cell_mask = (1u << bc.ex) - 1u;
     for (int z = 0; z < bc.ez; ++z) {
         for (int y = 0; y < bc.ey; ++y) {
-            const unsigned m00 = bc.inside[y + 9 * z], m10 = bc.inside[y + 1 + 9 * z];
-            const unsigned m01 = bc.inside[y + 9 * (z + 1)], m11 = bc.inside[y + 1 + 9 * (z + 1)];
-            unsigned mixed = mixed_cells(m00, m01, m10, m11, cell_mask);
+            auto [mixed, rows] = cell_row(bc, y, z, cell_mask);
             if (mixed == 0) continue;
             // Cells with all edges in this block (x, y, z < 7) read local_id. The others
             // (on the block's +x/+y/+z faces) use the 8 edge rows around this cell row
@@ -243,8 +241,7 @@ void mcs::emit(const Context& cx, const BlockCells& bc) {
                 }
                 rows_ready = true;
             };
-            const uint64_t rows = pack_rows(m00, m01, m10, m11);
-            const int cell_row = B * (y + B * z);
+            const int row_base = B * (y + B * z);
             while (mixed != 0) {
                 const int x = __builtin_ctz(mixed);
                 mixed &= mixed - 1;
@@ -253,7 +250,7 @@ void mcs::emit(const Context& cx, const BlockCells& bc) {
                 uint32_t id[12];
                 unsigned crossed = tb.edges_of_key[key];
                 if (((via_rows >> x) & 1u) == 0) {
-                    const uint16_t* ids = local_id + cell_row + x;
+                    const uint16_t* ids = local_id + row_base + x;
                     while (crossed != 0) {
                         const int e = __builtin_ctz(crossed);
                         crossed &= crossed - 1;

@@ -79,6 +79,18 @@ struct BlockCells {
     int16_t lx, ly, lz;     // samples per axis in this block: 1..8
 };
 
+/// Cell row (y, z) of a classified block: its cells with corners on both sides (bit x)
+/// and its four sample rows packed for cell_key.
+struct CellRow {
+    unsigned mixed;
+    uint64_t rows;
+};
+inline CellRow cell_row(const BlockCells& bc, int y, int z, unsigned cell_mask) {
+    const unsigned m00 = bc.inside[y + 9 * z], m10 = bc.inside[y + 1 + 9 * z];
+    const unsigned m01 = bc.inside[y + 9 * (z + 1)], m11 = bc.inside[y + 1 + 9 * (z + 1)];
+    return {mixed_cells(m00, m01, m10, m11, cell_mask), pack_rows(m00, m01, m10, m11)};
+}
+
 
 /// Everything the passes read, bundled once per call.
 struct Context {

@@ -133,11 +133,7 @@ void classify(const Context& cx, BlockCells& bc) {
     uint32_t tris = 0;
     for (int z = 0; z < bc.ez; ++z) {
         for (int y = 0; y < bc.ey; ++y) {
-            const unsigned m00 = bc.inside[y + 9 * z], m10 = bc.inside[y + 1 + 9 * z];
-            const unsigned m01 = bc.inside[y + 9 * (z + 1)], m11 = bc.inside[y + 1 + 9 * (z + 1)];
-            unsigned mixed = mixed_cells(m00, m01, m10, m11, cell_mask);
-            if (mixed == 0) continue;
-            const uint64_t rows = pack_rows(m00, m01, m10, m11);
+            auto [mixed, rows] = cell_row(bc, y, z, cell_mask);
             while (mixed != 0) {
                 tris += tb.triangles_of_key[cell_key(rows, __builtin_ctz(mixed))];
                 mixed &= mixed - 1;
