@@ -115,7 +115,8 @@ int run(const RunOptions& o) {
     if (const auto& z = sim.sizing())
         fmt::print("particles sized to the main channel ({:.0f} m, mean slope {:.3f}, sized for {:.2f} m/s): count {}, "
                    "flow_rate {:.1f}/s, spacing {:.3g} m{}\n",
-                   z->channel_length_m, z->channel_slope, z->speed, sim.def().spawn.count, sim.def().spawn.particles_per_second(), sim.def().pbf.spacing,
+                   z->channel_length_m, z->channel_slope, z->speed, sim.def().spawn.count,
+                   sim.def().spawn.particles_per_second(), sim.def().pbf.spacing,
                    z->capped ? " (budget at its ceiling: the rate was lowered to fit)" : "");
     if (const ConditionReport& c = sim.terrain().condition_report(); c.mode != TerrainCondition::None)
         fmt::print("terrain.condition = {}: {} cells raised, {} lowered, largest change {:.2f} m ({:.0f} m^3)\n",
@@ -262,7 +263,8 @@ int run(const RunOptions& o) {
                           {"max_change_m", cond.max_change_m},
                           {"volume_m3", cond.volume_m3}}}};
         if (const auto& z = sim.sizing())
-            j["sizing"] = {{"channel_length_m", z->channel_length_m}, {"channel_slope", z->channel_slope}, {"speed_m_s", z->speed}, {"count", d.spawn.count},
+            j["sizing"] = {{"channel_length_m", z->channel_length_m}, {"channel_slope", z->channel_slope},
+                           {"speed_m_s", z->speed}, {"count", d.spawn.count},
                            {"flow_rate", d.spawn.particles_per_second()}, {"capped", z->capped},
                            {"spacing", d.pbf.spacing}, {"prefilled", sim.prefilled()}};
         j["particles_total"] = sim.particles().size();
