@@ -88,9 +88,13 @@ Result<SceneDef> SceneOptions::resolve(bool need_heightmap) const {
         auto s = real_scale_of(def);
         if (!s) return s.error();
         def.terrain.area_scale = static_cast<float>(s->area_scale);
+        def.terrain.auto_area_scale = false;
         def.terrain.height_scale = static_cast<float>(s->height_scale);
     }
-    if (area_scale) def.terrain.area_scale = static_cast<float>(*area_scale);
+    if (area_scale) {
+        def.terrain.area_scale = static_cast<float>(*area_scale);
+        def.terrain.auto_area_scale = false;
+    }
     if (height_scale) def.terrain.height_scale = static_cast<float>(*height_scale);
     if (auto v = validate(def); !v) return v.error();
     return def;

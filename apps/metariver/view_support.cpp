@@ -76,8 +76,8 @@ void install_input_callbacks(GLFWwindow* window, Input& input) {
 
 /// What decides whether a scene edit needs the terrain (and tree) rebuilt and uploaded.
 std::string terrain_key(const SceneDef& d) {
-    return fmt::format("{}|{}|{}|{}|{}|{}|{}|{}|{}", to_string(d.source.kind), d.source.heightmap, d.source.width,
-                       d.source.height, d.source.seed, d.terrain.area_scale, d.terrain.height_scale,
+    return fmt::format("{}|{}|{}|{}|{}|{}|{}|{}|{}|{}", to_string(d.source.kind), d.source.heightmap, d.source.width,
+                       d.source.height, d.source.seed, d.terrain.area_scale, d.terrain.auto_area_scale, d.terrain.height_scale,
                        d.terrain.paper_row_orientation, d.collision.leaf_triangles);
 }
 

@@ -135,6 +135,10 @@ struct PbfDef {
     /// resolves it to 0 for a river and kSleepThreshold otherwise (resolved_sleep_threshold).
     float sleep_threshold = kSleepThreshold;
     bool auto_sleep() const { return sleep_threshold == kAutoSleep; }
+    /// `spacing = "auto"` (the default scene's): a self-sized river (count or flow_rate
+    /// "auto") is resolved at auto_spacing() (scene.h), `spacing` being its value at 1 m
+    /// per sample; the lengths sized in spacings scale with it. A number clears it.
+    bool auto_spacing = false;
 };
 
 enum class SpringMode {

@@ -170,6 +170,23 @@ RiverSize size_river(const SceneDef& def, float area_scale, float channel_length
 /// The speed a river's rate is sized for on a channel of mean slope `slope` (above).
 float river_speed(float slope);
 
+/// `pbf.spacing = "auto"` (the default scene's; docs/river.md, "Spacing"): the spacing a
+/// self-sized river on terrain `t` is resolved at: pbf.spacing (0.5 m) per metre of
+/// area_scale (two particles per sample: the carved bed, three samples wide, holds six
+/// across at any scale, and the budget of a map does not depend on its scale), at most
+/// the terrain's shorter side over kAutoSpacingAcross, within [kAutoSpacingMin,
+/// kAutoSpacingMax]. Not coarsened for a long channel's budget: measured worse
+/// (docs/river.md, "Spacing").
+inline constexpr float kAutoSpacingAcross = 32.0f;
+inline constexpr float kAutoSpacingMin = 0.01f, kAutoSpacingMax = 1000.0f;  ///< metres
+float auto_spacing(const SceneDef& def, const Terrain& t);
+/// Scales a river scene to particle spacing `spacing`: the lengths sized in spacings
+/// (pbf.kernel_radius, collision.radius and offset, field.radius and bounds_offset) by
+/// spacing / pbf.spacing, field.resolution divided by it (at most
+/// max_field_resolution), and, unless carve_spacing keeps the channel, the source's
+/// half extents and auto_height.
+void scale_river_lengths(SceneDef& d, float spacing, float max_field_resolution = 64.0f);
+
 /// The path a river's channel is carved along: `path` (cells (row, column), source to
 /// outlet, 8-connected) with every cell but the first and the last moved at least
 /// `margin` cells in from the grid's edges (at most a quarter of each side), and the

@@ -119,15 +119,31 @@ struct ConditionReport {
 ConditionReport condition_heights(std::vector<float>& heights, int columns, int rows, float area_scale,
                                   TerrainCondition mode);
 
+/// `terrain.area_scale = "auto"` (the default scene's): area_scale metres per sample (1 m
+/// in the default scene), raised so that the terrain's shorter side is at least
+/// kAutoMinSide metres. A PNG has no units; at 1 m a 2 x 2 map is a 1 m terrain (two
+/// triangles under the default 24 m of relief) on which no channel, source or river fits
+/// (docs/river.md, "Sizing": random_2x2 ran 0 of its inflow at 1 m and all of it at 16 m).
+inline constexpr float kAutoMinSide = 16.0f;
+
 struct TerrainDef {
-    float area_scale = 1.0f;    ///< metres between neighbouring samples (x and z)
+    /// Metres between neighbouring samples (x and z); with auto_area_scale the least
+    /// (resolved_area_scale).
+    float area_scale = 1.0f;
     float height_scale = 7.0f;  ///< metres for a normalised height of 1
     /// The paper's (Unity's) row orientation: image row r maps to z = (H-1-r)*area_scale.
     /// false: image row r maps to z = r*area_scale.
     bool paper_row_orientation = true;
     /// Drainage conditioning applied to the heights before the mesh is built.
     TerrainCondition condition = TerrainCondition::None;
+    /// `area_scale = "auto"`: raised for a small map (kAutoMinSide). A number clears it.
+    bool auto_area_scale = false;
 };
+
+/// The metres per sample a terrain of `columns` x `rows` samples is built with:
+/// def.area_scale, or with auto_area_scale max(def.area_scale, kAutoMinSide /
+/// (min(columns, rows) - 1)).
+float resolved_area_scale(const TerrainDef& def, int columns, int rows);
 
 /// The terrain mesh exactly as the paper's figure 2: one vertex per sample, vertex
 /// index c = i*W + j for grid row i (z) and column j (x) at (j*s, h*height_scale, i*s);

@@ -77,6 +77,8 @@ SceneDef default_scene() {
     // The river's channel is carved from the source to the outlet (a scene without a
     // continuous source and an edge sink keeps its heights): docs/river.md, "Depressions".
     d.terrain.condition = TerrainCondition::Auto;
+    // 1 m per sample, a small map stretched to 16 m (a 2 x 2 map would be 1 m wide).
+    d.terrain.auto_area_scale = true;
     d.sink = SinkDef{.kind = SinkKind::Edges};
     d.collision = {.mode = CollisionMode::Robust, .damping = 0.002f, .offset = 0.005f, .leaf_triangles = 8,
                    .radius = 0.1f, .query = CollisionQuery::Heightfield,
@@ -97,6 +99,7 @@ SceneDef default_scene() {
     // "Foam and spray": their cost measured there).
     d.foam.enabled = true;
     d.pbf.sleep_threshold = kAutoSleep;  // off for the river, on for still water
+    d.pbf.auto_spacing = true;           // 0.5 m at 1 m per sample, sized to the terrain
     return d;
 }
 

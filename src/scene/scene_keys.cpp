@@ -119,6 +119,16 @@ constexpr KeyWords kSleepWords{kAuto, [](S d) { return d.pbf.auto_sleep() ? 0 : 
                                [](SceneDef& d, int i) {
                                    if (i == 0) d.pbf.sleep_threshold = kAutoSleep;
                                }};
+constexpr KeyWords kAreaScaleWords{kAuto, [](S d) { return d.terrain.auto_area_scale ? 0 : -1; },
+                                   [](SceneDef& d, int i) {
+                                       d.terrain.auto_area_scale = i == 0;
+                                       if (i == 0) d.terrain.area_scale = 1.0f;
+                                   }};
+constexpr KeyWords kSpacingWords{kAuto, [](S d) { return d.pbf.auto_spacing ? 0 : -1; },
+                                 [](SceneDef& d, int i) {
+                                     d.pbf.auto_spacing = i == 0;
+                                     if (i == 0) d.pbf.spacing = PbfDef{}.spacing;
+                                 }};
 // A centre given as [x, y, z] turns both automatic placements off.
 constexpr KeyWords kCentreWords{kCentres, [](S d) { return d.spawn.auto_center ? (d.spawn.auto_channel ? 1 : 0) : -1; },
                                 [](SceneDef& d, int i) {
@@ -153,8 +163,9 @@ const SceneKey kKeys[] = {
      .help = "Samples along z.", .field = MR_FIELD(source.height)},
     {.name = "terrain.seed", .type = K::Seed, .range = closed(0, 4294967295.0), .readers = kValley,
      .help = "Procedural seed (only the valley is random).", .field = MR_FIELD(source.seed)},
-    {.name = "terrain.area_scale", .type = K::Float, .unit = "m", .range = above(0, 1e4), .readers = kAll,
-     .help = "Metres between neighbouring samples (--area-scale; \"Heightmap scale\" below).", .field = MR_FIELD(terrain.area_scale)},
+    {.name = "terrain.area_scale", .type = K::Float, .unit = "m", .range = above(0, 1e4), .words = kAreaScaleWords, .readers = kAll,
+     .help = "Metres between neighbouring samples (--area-scale; \"Heightmap scale\" below); \"auto\": 1 m, raised so that the "
+             "terrain's shorter side is at least 16 m (a 2 x 2 map at 1 m is a 1 m terrain).", .field = MR_FIELD(terrain.area_scale)},
     {.name = "terrain.height_scale", .type = K::Float, .unit = "m", .range = above(0, 1e5), .readers = kAll,
      .help = "Metres for a normalised height of 1 (--height-scale).", .field = MR_FIELD(terrain.height_scale)},
     {.name = "terrain.paper_row_orientation", .type = K::Bool, .readers = kAll,
@@ -208,8 +219,11 @@ const SceneKey kKeys[] = {
              "side (docs/river.md, \"A source that follows the ground\").",
      .field = MR_FIELD(spawn.follow_ground)},
     // [pbf]
-    {.name = "pbf.spacing", .type = K::Float, .unit = "m", .range = closed(1e-3, 1e3), .readers = kPbfOrCarve,
-     .help = "Rest spacing (below 1 mm the kernel constants overflow); a carved channel's depth and width.", .field = MR_FIELD(pbf.spacing)},
+    {.name = "pbf.spacing", .type = K::Float, .unit = "m", .range = closed(1e-3, 1e3), .words = kSpacingWords, .readers = kPbfOrCarve,
+     .help = "Rest spacing (below 1 mm the kernel constants overflow); a carved channel's depth and width. \"auto\": a "
+             "self-sized river's spacing from its terrain (docs/river.md, \"Spacing\"): 0.5 m per metre of area_scale, at "
+             "most the shorter side / 32, coarser while the budget would thin the river; the kernel, collision and field "
+             "lengths and the source scale with it.", .field = MR_FIELD(pbf.spacing)},
     {.name = "pbf.kernel_radius", .type = K::Float, .unit = "m", .range = {.lo = 0, .hi = 4e3, .lo_open = true, .text = "(pbf.spacing, 4 pbf.spacing]"},
      .readers = kPbf, .help = "Smoothing length h.", .field = MR_FIELD(pbf.kernel_radius)},
     {.name = "pbf.iterations", .type = K::Int, .range = closed(1, 100), .readers = kPbf,

@@ -311,6 +311,33 @@ RiverSize size_river(const SceneDef& def, float area_scale, float channel_length
     return r;
 }
 
+void scale_river_lengths(SceneDef& d, float spacing, float max_field_resolution) {
+    const float k = spacing / d.pbf.spacing;
+    if (!(k > 0.0f) || !std::isfinite(k) || k == 1.0f) return;
+    d.pbf.spacing = spacing;
+    d.pbf.kernel_radius *= k;
+    d.collision.radius *= k;
+    d.collision.offset *= k;
+    d.field.radius *= k;
+    d.field.bounds_offset *= k;
+    d.field.resolution = std::min(max_field_resolution, d.field.resolution / k);
+    if (d.carve_spacing == 0.0f) {  // the source with the channel it was sized for
+        d.spawn.half_extent *= k;
+        d.spawn.auto_height *= k;
+    }
+}
+
+float auto_spacing(const SceneDef& def, const Terrain& t) {
+    // Two particles per sample at the scene's spacing per metre of area_scale (the bed,
+    // three samples wide, holds six across at any scale), at most kAutoSpacingAcross
+    // across the terrain's shorter side.
+    float d = def.pbf.spacing * t.area_scale();
+    const Vec3 e = t.bounds().extent();
+    const float shorter = std::min(e.x, e.z);
+    if (shorter > 0.0f) d = std::min(d, shorter / kAutoSpacingAcross);
+    return std::clamp(d, kAutoSpacingMin, kAutoSpacingMax);
+}
+
 Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, const Heightmap& map) {
     if (auto v = validate(def); !v) return v.error();
     SceneDef resolved = def;
@@ -327,7 +354,7 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, cons
         const ChannelMap m = ChannelMap::build(terrain.value());
         SpawnDef spawn = def.spawn;
         resolve_source(terrain.value(), m, spawn);
-        const auto path = main_channel_path(terrain.value(), m, def.spawn, spawn.center);
+        auto path = main_channel_path(terrain.value(), m, def.spawn, spawn.center);
         if (auto_size) {
             const float as = terrain->area_scale();
             float length = 0.0f;
@@ -339,7 +366,17 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, cons
                                     ? 1.0f
                                     : (terrain->sample(path.front().first, path.front().second) -
                                        terrain->sample(path.back().first, path.back().second)) / length;
-            const RiverSize size = size_river(def, as, length, slope);
+            if (def.pbf.auto_spacing && def.solver == SolverKind::Pbf) {
+                // The river's lengths at the spacing this terrain asks for; the source is
+                // placed again at its scaled size (the channel's path does not depend on it).
+                const float d = auto_spacing(def, terrain.value());
+                scale_river_lengths(resolved, d);
+                resolved.pbf.auto_spacing = false;
+                spawn = resolved.spawn;
+                resolve_source(terrain.value(), m, spawn);
+                path = main_channel_path(terrain.value(), m, resolved.spawn, spawn.center);
+            }
+            const RiverSize size = size_river(resolved, as, length, slope);
             sizing = size;
             if (def.spawn.count == kAutoCount) resolved.spawn.count = size.count;
             if (def.spawn.auto_rate())  // in the unit flow_rate is given in
@@ -347,10 +384,10 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, cons
                     def.spawn.litres_per_particle > 0.0f ? size.rate * def.spawn.litres_per_particle : size.rate;
         }
         if (resolved.terrain.condition == TerrainCondition::Carve) {
-            CarveDef carve = carve_def(def, terrain->area_scale());
+            CarveDef carve = carve_def(resolved, terrain->area_scale());
             carve.basin_center = spawn.center;
             carve.basin_radius_m =
-                spawn.shape == SourceShape::Point ? 0.0f : source_footprint(spawn) + carve_spacing_of(def);
+                spawn.shape == SourceShape::Point ? 0.0f : source_footprint(spawn) + carve_spacing_of(resolved);
             // Off the map's edges by the section's half width and the levee (1.5 samples).
             const float as = terrain->area_scale();
             const int margin = int(std::ceil((0.5f * carve.width_m) / as + 1.5f));
@@ -371,11 +408,11 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, cons
     // Not a PBF river: the budget the default scene had before it sized itself.
     if (resolved.spawn.count == kAutoCount) resolved.spawn.count = kFixedDefaultCount;
     if (resolved.spawn.auto_rate()) resolved.spawn.flow_rate = 0.0f;  // not a PBF river: no continuous source
-    if (def.field.bounds == FieldBounds::Terrain) {
+    if (resolved.field.bounds == FieldBounds::Terrain) {
         // The fixed field box spans the terrain: its samples per axis must fit an int
         // (4096 samples x 1e4 m x 64 per metre would not).
-        const Vec3 e = terrain->bounds().extent() + Vec3(0.0f, 2.0f * def.field.bounds_offset, 0.0f);
-        const double most = double(std::max({e.x, e.y, e.z})) * double(def.field.resolution) + 1.0;
+        const Vec3 e = terrain->bounds().extent() + Vec3(0.0f, 2.0f * resolved.field.bounds_offset, 0.0f);
+        const double most = double(std::max({e.x, e.y, e.z})) * double(resolved.field.resolution) + 1.0;
         if (!(most <= double(kMaxFieldAxisSamples)))
             return Error{fmt::format("field.resolution: with field.bounds = \"terrain\" the field would have {:.3g} "
                                      "samples along the terrain's longest side; at most {} (lower field.resolution "

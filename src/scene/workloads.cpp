@@ -76,16 +76,11 @@ SceneDef pbf_river_scene(int n) {
     const float k = s / s0;
     d.name = "pbf-river-" + std::to_string(n);
     d.carve_spacing = s0;  // the default's channel and basin, whatever the spacing
-    d.pbf.spacing = s;
-    d.pbf.kernel_radius *= k;
-    d.collision.radius *= k;
-    d.collision.offset *= k;
-    d.field.radius *= k;
-    d.field.bounds_offset *= k;
+    d.pbf.auto_spacing = false;
     // Samples per metre follow the spacing up to kPbfRiverMaxFieldResolution: the field's
     // box spans the river's bounding box (up to 65 x 97 x 25 m), whose dense sample
     // count must stay under kMaxFieldSamples.
-    d.field.resolution = std::min(kPbfRiverMaxFieldResolution, d.field.resolution / k);
+    scale_river_lengths(d, s, kPbfRiverMaxFieldResolution);
     // The default's self-sized rate (27 particles/s of 0.125 m^3 on the valley: carve
     // 3 m x 1 m, kRiverFill at kRiverSpeed) as a volume: the same river, finer.
     SceneDef sized = default_scene();

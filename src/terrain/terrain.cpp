@@ -37,6 +37,12 @@ AxisCell axis_cell(float x, float s, int n) {
 
 }  // namespace
 
+float resolved_area_scale(const TerrainDef& def, int columns, int rows) {
+    if (!def.auto_area_scale || !(def.area_scale > 0.0f)) return def.area_scale;
+    const int shorter = std::max(1, std::min(columns, rows) - 1);
+    return std::max(def.area_scale, kAutoMinSide / static_cast<float>(shorter));
+}
+
 Result<Terrain> Terrain::build(const Heightmap& map, const TerrainDef& def) {
     if (map.width < 2 || map.height < 2) {
         return Error{fmt::format("heightmap: must be at least 2 x 2 samples (got {} x {})", map.width, map.height)};
@@ -50,17 +56,18 @@ Result<Terrain> Terrain::build(const Heightmap& map, const TerrainDef& def) {
         return Error{fmt::format("heightmap: has {} samples, expected width x height = {} x {} = {}",
                                  map.samples.size(), map.width, map.height, n)};
     }
-    if (!std::isfinite(def.area_scale) || !(def.area_scale > 0.0f)) {
+    const float as = resolved_area_scale(def, map.width, map.height);
+    if (!std::isfinite(as) || !(as > 0.0f)) {
         return Error{fmt::format("terrain.area_scale: must be finite and > 0 (got {})", def.area_scale)};
     }
     if (!std::isfinite(def.height_scale) || !(def.height_scale > 0.0f)) {
         return Error{fmt::format("terrain.height_scale: must be finite and > 0 (got {})", def.height_scale)};
     }
-    const float extent_x = static_cast<float>(map.width - 1) * def.area_scale;
-    const float extent_z = static_cast<float>(map.height - 1) * def.area_scale;
+    const float extent_x = static_cast<float>(map.width - 1) * as;
+    const float extent_z = static_cast<float>(map.height - 1) * as;
     if (!std::isfinite(extent_x) || !std::isfinite(extent_z)) {
         return Error{fmt::format("terrain.area_scale: too large, the terrain extent overflows (got {})",
-                                 def.area_scale)};
+                                 as)};
     }
     for (size_t k = 0; k < n; ++k) {
         const float y = map.samples[k] * def.height_scale;
@@ -73,14 +80,14 @@ Result<Terrain> Terrain::build(const Heightmap& map, const TerrainDef& def) {
     Terrain t;
     t.columns_ = map.width;
     t.rows_ = map.height;
-    t.area_scale_ = def.area_scale;
+    t.area_scale_ = as;
     const int W = map.width, H = map.height;
     t.vertices_.resize(n);
     for (int i = 0; i < H; ++i) {
         const int r = def.paper_row_orientation ? H - 1 - i : i;
         for (int j = 0; j < W; ++j) {
-            const Vec3 p(static_cast<float>(j) * def.area_scale, map.at(r, j) * def.height_scale,
-                         static_cast<float>(i) * def.area_scale);
+            const Vec3 p(static_cast<float>(j) * as, map.at(r, j) * def.height_scale,
+                         static_cast<float>(i) * as);
             t.vertices_[static_cast<size_t>(i) * W + j] = p;
             t.bounds_.grow(p);
         }
@@ -92,7 +99,7 @@ Result<Terrain> Terrain::build(const Heightmap& map, const TerrainDef& def) {
         for (size_t k = 0; k < n; ++k) h[k] = t.vertices_[k].y;
         t.given_heights_ = h;
         const TerrainCondition mode = def.condition == TerrainCondition::Carve ? TerrainCondition::Breach : def.condition;
-        t.condition_ = condition_heights(h, W, H, def.area_scale, mode);
+        t.condition_ = condition_heights(h, W, H, as, mode);
         t.condition_.mode = def.condition;
         t.bounds_ = Aabb{};
         for (size_t k = 0; k < n; ++k) {

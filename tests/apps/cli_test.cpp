@@ -382,9 +382,15 @@ void expect_extent(const std::array<double, 3>& got, const std::array<double, 3>
 }
 
 TEST_F(CliScale, OptionsSetTheScales) {
-    expect_extent(extent(""), box_of(1.0, 24.0));  // the default scene's scales
+    // The default scene's scales: area_scale "auto", 1 m per sample raised so that the
+    // shorter side (6 samples) is kAutoMinSide = 16 m.
+    expect_extent(extent(""), box_of(16.0 / 6.0, 24.0));
     expect_extent(extent("--area-scale 2.5 --height-scale 60"), box_of(2.5, 60.0));
-    expect_extent(extent("--height-scale 5"), box_of(1.0, 5.0));
+    expect_extent(extent("--height-scale 5"), box_of(16.0 / 6.0, 5.0));
+    // A scene's "auto" is the same rule; a number is used as given.
+    const fs::path autos = write("auto.toml", "[terrain]\narea_scale = \"auto\"\ncondition = \"none\"\n");
+    expect_extent(extent("--scene " + autos.string()), box_of(16.0 / 6.0, 24.0));
+    expect_extent(extent("--area-scale 1"), box_of(1.0, 24.0));
     // Over a scene's keys.
     const fs::path scene =
         write("s.toml", "[terrain]\nheightmap = \"map.png\"\narea_scale = 3.0\nheight_scale = 9.0\ncondition = \"none\"\n");

@@ -104,6 +104,63 @@ TEST(Sizing, EachDerivedValueCanBeGivenInstead) {
     EXPECT_NE(bad_rate.error().message.find("particles.flow_rate: must be \"auto\""), std::string::npos);
 }
 
+// pbf.spacing = "auto" (docs/river.md, "Spacing"): two particles per sample, at most
+// the shorter side over 32, coarser while the budget would thin the river.
+TEST(Sizing, TheSpacingFollowsTheTerrainsScale) {
+    const SceneDef base = default_scene();
+    ASSERT_TRUE(base.pbf.auto_spacing);
+    auto one = make(base);  // the valley at 1 m per sample: the spacing as given
+    ASSERT_TRUE(one);
+    EXPECT_FLOAT_EQ(one->def().pbf.spacing, 0.5f);
+    EXPECT_FLOAT_EQ(one->def().pbf.kernel_radius, 1.0f);
+    EXPECT_FALSE(one->def().pbf.auto_spacing);  // resolved
+    // At 3 m per sample every length sized in spacings is three times longer.
+    SceneDef three = base;
+    three.terrain.area_scale = 3.0f;
+    three.terrain.auto_area_scale = false;
+    auto big = make(three);
+    ASSERT_TRUE(big);
+    const SceneDef& r = big->def();
+    EXPECT_FLOAT_EQ(r.pbf.spacing, 1.5f);
+    EXPECT_FLOAT_EQ(r.pbf.kernel_radius, 3.0f * base.pbf.kernel_radius);
+    EXPECT_FLOAT_EQ(r.collision.radius, 3.0f * base.collision.radius);
+    EXPECT_FLOAT_EQ(r.collision.offset, 3.0f * base.collision.offset);
+    EXPECT_FLOAT_EQ(r.field.radius, 3.0f * base.field.radius);
+    EXPECT_FLOAT_EQ(r.field.resolution, base.field.resolution / 3.0f);
+    EXPECT_FLOAT_EQ(r.spawn.half_extent.x, 3.0f * base.spawn.half_extent.x);
+    // The carved section is the same in samples and in particles: the budget is the one
+    // at 1 m within what the gentler slope changes (the speed, 0.75-1.5 m/s).
+    ASSERT_TRUE(one->sizing() && big->sizing());
+    EXPECT_EQ(carve_def(r, 3.0f).floor_m, 3.0f * carve_def(one->def(), 1.0f).floor_m);
+    EXPECT_NEAR(double(big->sizing()->count), double(one->sizing()->count), 0.5 * double(one->sizing()->count));
+    // A number is used as given.
+    auto given = parse_scene_toml("[pbf]\nspacing = 0.5\n", "g.toml", three);
+    ASSERT_TRUE(given.ok()) << given.error().message;
+    EXPECT_FALSE(given->pbf.auto_spacing);
+    auto fixed = make(given.value());
+    ASSERT_TRUE(fixed);
+    EXPECT_FLOAT_EQ(fixed->def().pbf.spacing, 0.5f);
+    auto back = parse_scene_toml("[pbf]\nspacing = \"auto\"\n", "a.toml", given.value());
+    ASSERT_TRUE(back.ok()) << back.error().message;
+    EXPECT_TRUE(back->pbf.auto_spacing);
+}
+
+TEST(Sizing, TheAutoSpacingIsAtMostTheShorterSideOver32) {
+    const SceneDef d = default_scene();
+    auto tiny = Terrain::build(flat_heightmap(9, 9), TerrainDef{.area_scale = 1.0f, .height_scale = 1.0f});
+    ASSERT_TRUE(tiny.ok());
+    EXPECT_FLOAT_EQ(auto_spacing(d, tiny.value()), 8.0f / kAutoSpacingAcross);  // 0.25 m, not 0.5
+    // random_2x2 under the default scene: 16 m per sample ("auto" area scale), 0.5 m
+    // particles rather than 8 m ones.
+    auto one_cell = Terrain::build(flat_heightmap(2, 2), TerrainDef{.area_scale = 1.0f, .height_scale = 24.0f,
+                                                                    .auto_area_scale = true});
+    ASSERT_TRUE(one_cell.ok());
+    EXPECT_FLOAT_EQ(auto_spacing(d, one_cell.value()), 0.5f);
+    auto wide = Terrain::build(flat_heightmap(200, 100), TerrainDef{.area_scale = 4.0f, .height_scale = 24.0f});
+    ASSERT_TRUE(wide.ok());
+    EXPECT_FLOAT_EQ(auto_spacing(d, wide.value()), 2.0f);
+}
+
 // `bench --scenario pbf` (issue 12): the default river at a finer spacing keeps the
 // default's terrain (carve and basin sized for 0.5 m) and its volume of water per second.
 TEST(Sizing, ThePbfBenchRiverIsTheDefaultRiverFiner) {

@@ -244,6 +244,26 @@ TEST(Terrain, BuildErrorsNameTheField) {
     expect_error(Terrain::build(inf, {}), "not finite");
 }
 
+TEST(Terrain, AutoAreaScaleStretchesASmallMapToKAutoMinSide) {
+    TerrainDef d{.area_scale = 1.0f, .height_scale = 24.0f, .auto_area_scale = true};
+    EXPECT_FLOAT_EQ(resolved_area_scale(d, 2, 2), kAutoMinSide);          // one cell: 16 m
+    EXPECT_FLOAT_EQ(resolved_area_scale(d, 17, 9), kAutoMinSide / 8.0f);  // the shorter side
+    EXPECT_FLOAT_EQ(resolved_area_scale(d, 9, 17), kAutoMinSide / 8.0f);
+    EXPECT_FLOAT_EQ(resolved_area_scale(d, 65, 97), 1.0f);  // already 64 m: as given
+    EXPECT_FLOAT_EQ(resolved_area_scale(d, 17, 17), 1.0f);  // exactly 16 m
+    d.area_scale = 3.0f;  // the value is the least
+    EXPECT_FLOAT_EQ(resolved_area_scale(d, 2, 2), kAutoMinSide);
+    EXPECT_FLOAT_EQ(resolved_area_scale(d, 9, 9), 3.0f);
+    d.auto_area_scale = false;  // a number is used as given
+    EXPECT_FLOAT_EQ(resolved_area_scale(d, 2, 2), 3.0f);
+    // The mesh is built at the resolved scale, and the terrain reports it.
+    auto t = Terrain::build(flat_heightmap(2, 2), TerrainDef{.area_scale = 1.0f, .height_scale = 1.0f, .auto_area_scale = true});
+    ASSERT_TRUE(t.ok()) << t.error().message;
+    EXPECT_FLOAT_EQ(t->area_scale(), kAutoMinSide);
+    EXPECT_FLOAT_EQ(t->bounds().extent().x, kAutoMinSide);
+    EXPECT_FLOAT_EQ(t->bounds().extent().z, kAutoMinSide);
+}
+
 TEST(Terrain, ProceduralMapsBuild) {
     for (const Heightmap& m : {procedural_valley(129, 129, 5), procedural_strict(17, 17), procedural_bowl(33, 33)}) {
         const Terrain t = build_ok(m);
