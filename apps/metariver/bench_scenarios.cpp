@@ -72,6 +72,7 @@ ScenarioResult bench_simulation(const std::string& name, const SceneDef& def, co
                 {"frames", frames},
                 {"warmup", warmup}};
     if (const auto w = s.warnings(); !w.empty()) r.params["warnings"] = w;  // e.g. a flow rate the source capped
+    if (s.field_overflows() > 0) r.params["field_overflows"] = s.field_overflows();  // frames with no surface
     // Plausibility (issues 5 and 9) beside the times: nothing through the ground (and how
     // often the guard had to lift a particle), outflow at the sinks over the measured
     // frames, water in the channel, density error, no explosion, no spray, settled speed.

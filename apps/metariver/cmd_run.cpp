@@ -364,6 +364,9 @@ int run(const RunOptions& o) {
                flow.summary().rate, flow.summary().steady ? "steady" : "not steady", os.main.rate, over_inflow,
                os.main.first_s, 100.0 * coverage, 100.0 * (wet_n ? wet_sum / double(wet_n) : 0.0), 100.0 * spray,
                final_speed.p95, tot.median, tot.p95);
+    if (sim.field_overflows() > 0)
+        fmt::print(stderr, "metariver run: warning: field: no surface on {} of {} frames: {}; lower field.resolution\n",
+                   sim.field_overflows(), o.frames, sim.field_overflow_message());
     if (!o.obj_dir.empty()) fmt::print("wrote {} OBJ files to {}\n", written.size(), o.obj_dir);
     if (exporter) print_export_summary(*exporter);
     if (!o.stats.empty()) fmt::print("wrote stats to {}\n", o.stats);

@@ -351,8 +351,11 @@ public:
     /// The diffuse particles ([foam]); null when foam is off or the solver is not PBF.
     const FoamSystem* foam() const { return foam_ ? &*foam_ : nullptr; }
     uint64_t frame() const { return solver_->frame(); }
-    /// Frames whose field grid would have exceeded kMaxFieldSamples (surface skipped).
+    /// Frames whose field could not be built (its grid over kMaxFieldSamples, or the
+    /// sparse field's kMaxSparseFieldSamples): no surface that frame.
     uint64_t field_overflows() const { return field_overflows_; }
+    /// Why the last such frame's field was refused; empty when none was.
+    const std::string& field_overflow_message() const { return field_overflow_message_; }
     /// FNV-1a hash of the particles' positions and velocities (determinism checks).
     uint64_t state_hash() const;
     /// The terrain's drainage network (automatic source, wet-channel measure).
@@ -398,6 +401,7 @@ private:
     SurfaceMesh surface_;
     FrameTimings timings_;
     uint64_t field_overflows_ = 0;
+    std::string field_overflow_message_;
     ChannelMap channel_;
     std::vector<std::pair<int, int>> main_path_;
     ChannelCoverage coverage_;

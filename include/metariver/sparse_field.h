@@ -69,13 +69,20 @@ enum class DomainMode {
     FixedBox,    ///< `box`, whatever the balls (balls outside add only where they reach in)
 };
 
+/// The sparse field's cap on its grid's dense sample count: the directory holds one
+/// 4-byte slot per 8^3 block (2^23 blocks, 32 MiB, at this cap) and block indices are
+/// 32-bit. Far above kMaxFieldSamples (the dense field's, which stores every sample): a
+/// river along a 1.5 km channel spans 3000 x 80 x 2100 samples at 3 per metre, of which
+/// it stores a few thousand blocks.
+inline constexpr size_t kMaxSparseFieldSamples = size_t{1} << 32;
+
 struct SparseFieldDef {
     KernelDef kernel;
     DomainMode domain = DomainMode::BallBounds;
     float resolution = 2.0f;     ///< BallBounds: samples per metre, > 0
     float bounds_offset = 4.0f;  ///< BallBounds: metres the balls' box grows by on every side, >= 0
     SampleGrid box;              ///< FixedBox: the grid
-    size_t max_samples = kMaxFieldSamples;  ///< refuse grids with more samples (dense count)
+    size_t max_samples = kMaxSparseFieldSamples;  ///< refuse grids with more samples (dense count)
     /// Refuse a build whose (ball, block) pairs exceed this: bounds the binning memory
     /// (4 bytes each) when balls are huge compared with the spacing.
     size_t max_ball_blocks = size_t{1} << 26;

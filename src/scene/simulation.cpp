@@ -446,7 +446,10 @@ void Simulation::step(float frame_dt) {
     t0 = Clock::now();
     solver_->particles().gather_active_positions(balls_);
     if (def_.field.kernel == FieldKernel::Poly6) {
-        if (!sparse_.build(balls_, sparse_def_)) ++field_overflows_;
+        if (auto b = sparse_.build(balls_, sparse_def_); !b) {
+            ++field_overflows_;
+            field_overflow_message_ = b.error().message;
+        }
         timings_.field_ms = ms_since(t0);
         t0 = Clock::now();
         extract_surface_sparse(sparse_, def_.field.threshold, surface_, surface_ws_);
@@ -455,7 +458,11 @@ void Simulation::step(float frame_dt) {
         timings_.surface_ms = ms_since(t0);
         return;
     }
-    if (!compute_field_paper(balls_, def_.field, field_)) ++field_overflows_;
+    if (!compute_field_paper(balls_, def_.field, field_)) {
+        ++field_overflows_;
+        field_overflow_message_ = fmt::format("the field's grid around the particles would have more than {} samples",
+                                              kMaxFieldSamples);
+    }
     timings_.field_ms = ms_since(t0);
 
     t0 = Clock::now();

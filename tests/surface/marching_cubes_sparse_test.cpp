@@ -266,5 +266,30 @@ TEST(MarchingCubesSparse, DegenerateFieldsGiveEmptyMeshes) {
     EXPECT_EQ(ws.stats.candidate_blocks, 0u);
 }
 
+// A river along a 1.5 km channel (random_1000x700 in docs/river.md) spans more samples
+// than a dense field may hold (kMaxFieldSamples) but stores only the blocks its balls
+// reach: the sparse field takes it (it was refused every frame, and that river had no
+// surface at all), and each cluster of balls becomes a closed surface.
+TEST(MarchingCubesSparse, AKilometreWideFieldWithFewBallsIsBuiltAndMeshed) {
+    std::vector<Vec3> balls;
+    for (const Vec3 c : {Vec3(0.0f), Vec3(1000.0f, 25.0f, 700.0f)})
+        for (int k = 0; k < 8; ++k) balls.push_back(c + 0.4f * Vec3(float(k & 1), float((k >> 1) & 1), float(k >> 2)));
+    SparseField f;
+    const Status b = f.build(balls, {.kernel = poly6_kernel(1.0f, 1.0f), .resolution = 3.0f, .bounds_offset = 1.0f});
+    ASSERT_TRUE(b) << b.error().message;
+    EXPECT_GT(f.grid().samples(), kMaxFieldSamples);  // the dense field's cap
+    EXPECT_LE(f.allocated_blocks(), 16u);
+    SurfaceMesh mesh;
+    SurfaceWorkspace ws;
+    extract_surface_sparse(f, 0.4f, mesh, ws);
+    const test::MeshStats m = check_mesh(mesh);
+    EXPECT_EQ(m.components, 2u);
+    EXPECT_EQ(m.boundary_edges, 0u);
+    EXPECT_EQ(m.nonmanifold_edges, 0u);
+    EXPECT_GT(m.volume, 0.0);
+    // Still refused: a grid past kMaxSparseFieldSamples.
+    EXPECT_FALSE(f.build(balls, {.kernel = poly6_kernel(1.0f, 1.0f), .resolution = 30.0f, .bounds_offset = 1.0f}));
+}
+
 }  // namespace
 }  // namespace mr
