@@ -1,8 +1,10 @@
 // `metariver view`: the interactive viewer. A GLFW window (OpenGL 4.5 core) with Dear
 // ImGui: orbit / pan / zoom, pause / step / reset, every scene key the scene reads
-// editable (scene_panel.cpp, listed from the table of scene keys; the Simulation is
-// rebuilt from the edited SceneDef; the heightmap is reloaded only when the terrain
-// changed), click on the terrain to pour water, drop a heightmap file on the window to load it, a screenshot key, a Record button that exports the frames
+// editable (scene_panel.cpp, listed from the table of scene keys; an edit is applied to
+// the running Simulation where it can be (Simulation::apply: the water keeps flowing),
+// else the Simulation is rebuilt from the edited SceneDef, the heightmap reloaded only
+// when the terrain changed), click on the terrain to pour water, drop a heightmap file on
+// the window to load it, a screenshot key, a Record button that exports the frames
 // (docs/export.md), and a stats overlay. The simulation runs at a fixed time step,
 // decoupled from the display rate.
 #include "commands.h"
@@ -181,13 +183,24 @@ int view(const ViewOptions& o) {
             bool left_down = false, dragged = false;
             double last_x = 0, last_y = 0;
 
-            // Rebuilds the Simulation from `next` (terrain and heightmap only if they changed).
+            // Applies `next` to the running Simulation (Simulation::apply: the water keeps
+            // flowing), or rebuilds it where the edit needs that (terrain and heightmap
+            // only if they changed).
             auto apply = [&](const SceneDef& next) -> bool {
-                if (recording.on()) status = recording.stop();  // a new simulation: the recording ends
                 if (auto v = validate(next); !v) {
                     error = v.error().message;
                     return false;
                 }
+                if (auto live = sim->apply(next); !live) {
+                    error = live.error().message;
+                    return false;
+                } else if (live->applied) {
+                    renderer.set_scene(*sim, false);
+                    def = next;
+                    error.clear();
+                    return true;
+                }
+                if (recording.on()) status = recording.stop();  // a new simulation: the recording ends
                 const bool terrain_changed = terrain_key(next) != terrain_key(def);
                 Heightmap next_map;
                 if (terrain_changed) {

@@ -270,6 +270,13 @@ public:
     uint64_t frame() const override { return frame_; }
 
     void set_spawn_center(const Vec3& center) override;
+    /// Live edits (Simulation::apply): the parameters a running solver reads, replaced
+    /// in place; the particles, their ids and the frame count are kept. The source's
+    /// lattice and the PBF rest density are recomputed from the new values. The budget
+    /// (spawn.count) and the solver kind (pbf set or not) must not change: false, and
+    /// nothing changed, when they would.
+    bool set_params(const SpawnDef& spawn, const SpringDef& springs, const CollisionDef& collision,
+                    const IntegratorDef& integrator, const std::optional<PbfDef>& pbf, const SinkDef& sink);
     void pour(const Vec3& center, int count) override;
     std::vector<std::string> warnings() const override;
     /// step_frame clears the list; every step() (substep) appends its exits.

@@ -312,6 +312,16 @@ struct FrameTimings {
     double foam_ms = 0.0;     ///< diffuse particles ([foam]; 0 when off)
 };
 
+/// What Simulation::apply did with an edited scene.
+struct ApplyResult {
+    /// The edit was applied in place (the particles kept), or it changes what the
+    /// terrain, the tree, the budget or an automatic value was built from: nothing was
+    /// changed and the caller creates a new Simulation from the edited scene.
+    bool applied = false;
+    std::vector<std::string> keys;  ///< the scene keys whose values changed, table order
+    std::string rebuild_key;        ///< when not applied: the first key that needs a rebuild
+};
+
 /// Owns one scene's terrain, tree, particles, solver, field and surface.
 /// step(dt) advances one frame and rebuilds the surface; views are read-only.
 class Simulation {
@@ -327,6 +337,18 @@ public:
 
     /// One frame: spawning and `substeps` solver steps, then field and surface.
     void step(float frame_dt);
+    /// Live edit: `next` is the scene this Simulation was created from (requested(),
+    /// "auto" values unresolved) with some keys changed. Keys the running solver, the
+    /// field, the surface, the foam and the renderer read are applied in place: the
+    /// water keeps flowing (the foam's diffuse particles restart when a foam key
+    /// changes). A change of the terrain, the solver, the seed, the budget
+    /// (particles.count), the prefill, pbf.spacing (it sizes the carved channel), the
+    /// tree's leaves, any Bullet key, or to or from an "auto" word needs a new
+    /// Simulation: then nothing is changed (ApplyResult::applied false). An invalid
+    /// scene is an error and changes nothing.
+    Result<ApplyResult> apply(const SceneDef& next);
+    /// The scene as given to create(), "auto" values unresolved (def() has them resolved).
+    const SceneDef& requested() const { return requested_; }
     /// Interaction: pour `count` particles at `center` (the source moves there).
     void pour(const Vec3& center, int count) { solver_->pour(center, count); }
 
@@ -389,6 +411,7 @@ private:
     Simulation(const SceneDef& def, Terrain terrain, Bvh bvh, std::optional<RiverSize> sizing);
 
     SceneDef def_;
+    SceneDef requested_;
     Terrain terrain_;
     Bvh bvh_;
     std::unique_ptr<Solver> solver_;
@@ -411,6 +434,7 @@ private:
 
     void prefill_channel();
     float prefill_share() const;
+    void configure_field();
 };
 
 }  // namespace mr

@@ -126,6 +126,19 @@ void ParticleSolver::place(std::span<const Vec3> positions, std::span<const Vec3
     }
 }
 
+bool ParticleSolver::set_params(const SpawnDef& spawn, const SpringDef& springs, const CollisionDef& collision,
+                                const IntegratorDef& integrator, const std::optional<PbfDef>& pbf, const SinkDef& sink) {
+    if (spawn.count != spawn_.count || pbf.has_value() != pbf_.has_value()) return false;
+    spawn_ = spawn;
+    springs_ = springs;
+    collision_ = collision;
+    integrator_ = integrator;
+    sink_ = sink;
+    pbf_ = pbf;
+    if (pbf_) init_pbf();  // rest density, lattice constants and the source's lattice
+    return true;
+}
+
 void ParticleSolver::set_spawn_center(const Vec3& center) {
     spawn_.center = center;
     if (lattice_) build_lattice();

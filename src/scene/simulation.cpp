@@ -1,5 +1,6 @@
 // The orchestrator of one frame: solver step -> field -> marching cubes.
 #include <metariver/scene.h>
+#include <metariver/scene_keys.h>
 
 #include <fmt/format.h>
 
@@ -149,6 +150,26 @@ Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh, std::optio
     if (resolve_source(terrain_, channel_, spawn)) def_.spawn = spawn;
     main_path_ = main_channel_path(terrain_, channel_, def.spawn, def_.spawn.center);
     coverage_ = ChannelCoverage(terrain_, main_path_);
+    configure_field();
+    switch (def_.solver) {
+        case SolverKind::Springs:
+            solver_ = std::make_unique<ParticleSolver>(terrain_, bvh_, spawn, def_.springs, def_.collision,
+                                                       def_.integrator, def_.seed, std::nullopt, def_.sink);
+            break;
+        case SolverKind::Pbf:
+            solver_ = std::make_unique<ParticleSolver>(terrain_, bvh_, spawn, def_.springs, def_.collision,
+                                                       def_.integrator, def_.seed, def_.pbf, def_.sink);
+            if (def_.foam.enabled) foam_.emplace(def_.foam, def_.pbf.kernel_radius, def_.integrator.gravity);
+            if (def_.spawn.prefill && terrain_.condition_report().mode == TerrainCondition::Carve) prefill_channel();
+            break;
+        case SolverKind::Bullet:
+            solver_ = std::make_unique<BulletSolver>(terrain_, spawn, def_.springs, def_.integrator, def_.bullet,
+                                                     def_.seed);
+            break;
+    }
+}
+
+void Simulation::configure_field() {
     // Compact kernel: the sparse field over the particles' box or the terrain's.
     sparse_def_.kernel = poly6_kernel(def_.field.radius, 1.0f);
     sparse_def_.resolution = def_.field.resolution;
@@ -166,22 +187,6 @@ Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh, std::optio
                                      .nz = samples(b.extent().z)};
     } else {
         sparse_def_.domain = DomainMode::BallBounds;
-    }
-    switch (def_.solver) {
-        case SolverKind::Springs:
-            solver_ = std::make_unique<ParticleSolver>(terrain_, bvh_, spawn, def_.springs, def_.collision,
-                                                       def_.integrator, def_.seed, std::nullopt, def_.sink);
-            break;
-        case SolverKind::Pbf:
-            solver_ = std::make_unique<ParticleSolver>(terrain_, bvh_, spawn, def_.springs, def_.collision,
-                                                       def_.integrator, def_.seed, def_.pbf, def_.sink);
-            if (def_.foam.enabled) foam_.emplace(def_.foam, def_.pbf.kernel_radius, def_.integrator.gravity);
-            if (def_.spawn.prefill && terrain_.condition_report().mode == TerrainCondition::Carve) prefill_channel();
-            break;
-        case SolverKind::Bullet:
-            solver_ = std::make_unique<BulletSolver>(terrain_, spawn, def_.springs, def_.integrator, def_.bullet,
-                                                     def_.seed);
-            break;
     }
 }
 
@@ -338,6 +343,22 @@ float auto_spacing(const SceneDef& def, const Terrain& t) {
     return std::clamp(d, kAutoSpacingMin, kAutoSpacingMax);
 }
 
+namespace {
+/// field.bounds = "terrain": the fixed field box spans the terrain, and its samples per
+/// axis must fit an int (4096 samples x 1e4 m x 64 per metre would not).
+Status field_box_fits(const FieldDef& f, const Terrain& t) {
+    if (f.bounds != FieldBounds::Terrain) return Ok{};
+    const Vec3 e = t.bounds().extent() + Vec3(0.0f, 2.0f * f.bounds_offset, 0.0f);
+    const double most = double(std::max({e.x, e.y, e.z})) * double(f.resolution) + 1.0;
+    if (!(most <= double(kMaxFieldAxisSamples)))
+        return Error{fmt::format("field.resolution: with field.bounds = \"terrain\" the field would have {:.3g} "
+                                 "samples along the terrain's longest side; at most {} (lower field.resolution "
+                                 "or terrain.area_scale, or use field.bounds = \"particles\")",
+                                 most, kMaxFieldAxisSamples)};
+    return Ok{};
+}
+}  // namespace
+
 Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, const Heightmap& map) {
     if (auto v = validate(def); !v) return v.error();
     SceneDef resolved = def;
@@ -408,23 +429,78 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, cons
     // Not a PBF river: the budget the default scene had before it sized itself.
     if (resolved.spawn.count == kAutoCount) resolved.spawn.count = kFixedDefaultCount;
     if (resolved.spawn.auto_rate()) resolved.spawn.flow_rate = 0.0f;  // not a PBF river: no continuous source
-    if (resolved.field.bounds == FieldBounds::Terrain) {
-        // The fixed field box spans the terrain: its samples per axis must fit an int
-        // (4096 samples x 1e4 m x 64 per metre would not).
-        const Vec3 e = terrain->bounds().extent() + Vec3(0.0f, 2.0f * resolved.field.bounds_offset, 0.0f);
-        const double most = double(std::max({e.x, e.y, e.z})) * double(resolved.field.resolution) + 1.0;
-        if (!(most <= double(kMaxFieldAxisSamples)))
-            return Error{fmt::format("field.resolution: with field.bounds = \"terrain\" the field would have {:.3g} "
-                                     "samples along the terrain's longest side; at most {} (lower field.resolution "
-                                     "or terrain.area_scale, or use field.bounds = \"particles\")",
-                                     most, kMaxFieldAxisSamples)};
-    }
+    if (auto f = field_box_fits(resolved.field, terrain.value()); !f) return f.error();
     auto bvh = Bvh::build(terrain.value(), BvhDef{.leaf_triangles = def.collision.leaf_triangles});
     if (!bvh) return bvh.error();
     std::unique_ptr<Simulation> sim(
         new Simulation(resolved, std::move(terrain.value()), std::move(bvh.value()), sizing));
     if (auto v = validate_on_terrain(sim->def(), sim->terrain()); !v) return v.error();  // resolved source
+    sim->requested_ = def;
     return sim;
+}
+
+namespace {
+/// A key whose change needs a new Simulation (Simulation::apply): what the terrain, the
+/// tree, the particle arrays, the random stream or the carve were built from.
+bool needs_rebuild(const SceneKey& k, const SceneDef& d) {
+    const std::string_view n = k.name, sec = k.section();
+    if (sec == "terrain" || sec == "bullet") return true;
+    if (d.solver == SolverKind::Bullet && sec != "field" && sec != "surface" && sec != "render" && !n.empty() &&
+        n != "name")
+        return true;  // the Bullet world is built once from its defs
+    return n == "solver" || n == "seed" || n == "particles.count" || n == "particles.prefill" ||
+           n == "particles.auto_height" || n == "pbf.spacing" || n == "collision.bvh_leaf_triangles";
+}
+
+/// Copies the value of key `k` from `from` into `to` (the same field of another SceneDef).
+void copy_key(const SceneKey& k, const SceneDef& from, SceneDef& to) {
+    SceneDef& src = const_cast<SceneDef&>(from);  // FieldRef is mutable; only read here
+    const FieldRef a = k.field(src), b = k.field(to);
+    std::visit(
+        [&](const auto& pa) {
+            using P = std::decay_t<decltype(pa)>;
+            const P& pb = std::get<P>(b);
+            if constexpr (std::is_same_v<P, EnumRef>) pb.set(pb.field, pa.get(pa.field));
+            else *pb = *pa;
+        },
+        a);
+}
+}  // namespace
+
+Result<ApplyResult> Simulation::apply(const SceneDef& next) {
+    if (auto v = validate(next); !v) return v.error();
+    ApplyResult r;
+    SceneDef edited = def_;
+    for (const SceneKey& k : scene_keys()) {
+        if (key_value_toml(k, requested_) == key_value_toml(k, next)) continue;
+        r.keys.emplace_back(k.name);
+        const bool word = k.words.current && (k.words.current(requested_) >= 0 || k.words.current(next) >= 0);
+        if (r.rebuild_key.empty() && (word || needs_rebuild(k, requested_))) r.rebuild_key = std::string(k.name);
+        if (r.rebuild_key.empty()) copy_key(k, next, edited);
+    }
+    if (!r.rebuild_key.empty()) return r;
+    if (auto f = field_box_fits(edited.field, terrain_); !f) return f.error();
+    if (auto v = validate_on_terrain(edited, terrain_); !v) return v.error();
+    if (auto* ps = dynamic_cast<ParticleSolver*>(solver_.get())) {
+        const std::optional<PbfDef> pbf = edited.solver == SolverKind::Pbf ? std::optional<PbfDef>(edited.pbf) : std::nullopt;
+        if (!ps->set_params(edited.spawn, edited.springs, edited.collision, edited.integrator, pbf, edited.sink)) {
+            r.rebuild_key = "particles.count";  // not reached: the budget's key asks for a rebuild above
+            return r;
+        }
+    }
+    const bool foam_changed = std::any_of(r.keys.begin(), r.keys.end(), [](const std::string& k) {
+        return k.starts_with("foam.") || k == "forces.gravity" || k == "pbf.kernel_radius";
+    });
+    def_ = edited;
+    requested_ = next;
+    configure_field();
+    if (foam_changed) {
+        foam_.reset();
+        if (def_.solver == SolverKind::Pbf && def_.foam.enabled)
+            foam_.emplace(def_.foam, def_.pbf.kernel_radius, def_.integrator.gravity);
+    }
+    r.applied = true;
+    return r;
 }
 
 void Simulation::step(float frame_dt) {

@@ -1,0 +1,177 @@
+// Live edits (issue 14): Simulation::apply changes a running simulation's parameters in
+// place, the particles kept, and asks for a new Simulation only where the terrain, the
+// tree, the budget or an automatic value was built from the edited key.
+#include <metariver/scene.h>
+#include <metariver/scene_keys.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace mr {
+namespace {
+
+std::unique_ptr<Simulation> make(const SceneDef& d, int frames) {
+    auto sim = Simulation::create(d);
+    EXPECT_TRUE(sim.ok()) << sim.error().message;
+    if (!sim.ok()) return nullptr;
+    for (int f = 0; f < frames; ++f) sim.value()->step(1.0f / 60.0f);
+    return std::move(sim.value());
+}
+
+bool has(const std::vector<std::string>& v, const std::string& s) { return std::find(v.begin(), v.end(), s) != v.end(); }
+
+TEST(Apply, AnEditKeepsTheWaterFlowing) {
+    auto sim = make(default_scene(), 90);
+    ASSERT_TRUE(sim);
+    const uint64_t hash = sim->state_hash(), frame = sim->frame();
+    const size_t active = sim->particles().active_count();
+    ASSERT_GT(active, 100u);
+    SceneDef next = sim->requested();
+    next.pbf.xsph = 0.1f;
+    next.collision.damping = 0.004f;
+    next.integrator.gravity = 5.0f;
+    next.field.threshold = 0.5f;
+    next.smoothing.iterations = 4;
+    next.foam.max_particles = 500;
+    auto r = sim->apply(next);
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    EXPECT_TRUE(r->applied) << r->rebuild_key;
+    for (const char* k : {"pbf.xsph", "collision.damping", "forces.gravity", "field.threshold", "surface.iterations",
+                          "foam.max_particles"})
+        EXPECT_TRUE(has(r->keys, k)) << k;
+    EXPECT_EQ(r->keys.size(), 6u);
+    // The particles are untouched by the edit; the new values are what runs.
+    EXPECT_EQ(sim->state_hash(), hash);
+    EXPECT_EQ(sim->frame(), frame);
+    EXPECT_FLOAT_EQ(sim->def().pbf.xsph, 0.1f);
+    EXPECT_FLOAT_EQ(sim->def().integrator.gravity, 5.0f);
+    EXPECT_EQ(sim->def().smoothing.iterations, 4);
+    EXPECT_FLOAT_EQ(sim->requested().field.threshold, 0.5f);
+    // Resolved values stay resolved (the river's budget, its source on the channel).
+    EXPECT_NE(sim->def().spawn.count, kAutoCount);
+    EXPECT_FALSE(sim->def().spawn.auto_center);
+    for (int f = 0; f < 30; ++f) sim->step(1.0f / 60.0f);
+    EXPECT_EQ(sim->frame(), frame + 30);
+    EXPECT_GE(sim->particles().active_count(), active);  // the source keeps emitting
+    EXPECT_EQ(sim->counters().tunneled, 0u);
+    ASSERT_TRUE(sim->foam());
+    EXPECT_EQ(sim->foam()->def().max_particles, 500);
+    EXPECT_LE(sim->foam()->particles().size(), 500u);
+}
+
+// The same scene stepped twice, one copy edited after 20 frames: a key the solver reads
+// changes the particles' path within a few frames; a field or surface key the mesh.
+TEST(Apply, EachEditTakesEffect) {
+    const SceneDef base = default_scene();
+    struct Edit {
+        const char* key;
+        void (*set)(SceneDef&);
+        bool surface_only;
+    };
+    const Edit edits[] = {
+        {"forces.gravity", [](SceneDef& d) { d.integrator.gravity = 20.0f; }, false},
+        {"pbf.xsph", [](SceneDef& d) { d.pbf.xsph = 0.5f; }, false},
+        {"pbf.iterations", [](SceneDef& d) { d.pbf.iterations = 1; }, false},
+        {"pbf.kernel_radius", [](SceneDef& d) { d.pbf.kernel_radius = 1.3f; }, false},
+        {"pbf.vorticity", [](SceneDef& d) { d.pbf.vorticity = 2.0f; }, false},
+        {"collision.damping", [](SceneDef& d) { d.collision.damping = 0.2f; }, false},
+        {"collision.friction_speed", [](SceneDef& d) { d.collision.friction_speed = 0.5f; }, false},
+        {"integrator.substeps", [](SceneDef& d) { d.integrator.substeps = 4; }, false},
+        {"particles.initial_velocity", [](SceneDef& d) { d.spawn.initial_velocity = Vec3(0.0f, -8.0f, 0.0f); }, false},
+        {"field.threshold", [](SceneDef& d) { d.field.threshold = 0.6f; }, true},
+        {"field.radius", [](SceneDef& d) { d.field.radius = 1.4f; }, true},
+        {"surface.iterations", [](SceneDef& d) { d.smoothing.iterations = 1; }, true},
+    };
+    for (const Edit& e : edits) {
+        SCOPED_TRACE(e.key);
+        auto a = make(base, 20), b = make(base, 20);
+        ASSERT_TRUE(a && b);
+        SceneDef next = b->requested();
+        e.set(next);
+        auto r = b->apply(next);
+        ASSERT_TRUE(r.ok()) << r.error().message;
+        ASSERT_TRUE(r->applied) << r->rebuild_key;
+        ASSERT_EQ(r->keys, std::vector<std::string>{e.key});
+        for (int f = 0; f < 5; ++f) {
+            a->step(1.0f / 60.0f);
+            b->step(1.0f / 60.0f);
+        }
+        if (e.surface_only) {
+            EXPECT_EQ(a->state_hash(), b->state_hash());  // the water is the same
+            const auto& pa = a->surface().positions;
+            const auto& pb = b->surface().positions;
+            EXPECT_TRUE(pa.size() != pb.size() || !std::equal(pa.begin(), pa.end(), pb.begin()));
+        } else {
+            EXPECT_NE(a->state_hash(), b->state_hash());
+        }
+    }
+}
+
+// Every key the default scene reads, changed alone: applied in place (and then what
+// runs), or a rebuild asked for with nothing changed.
+TEST(Apply, EveryKeyIsAppliedOrAsksForARebuild) {
+    auto sim = make(default_scene(), 10);
+    ASSERT_TRUE(sim);
+    int applied = 0, rebuilds = 0;
+    for (const SceneKey& k : scene_keys()) {
+        if (!k.readers(sim->requested()) || k.type != KeyType::Float) continue;
+        if (k.words.current && k.words.current(sim->requested()) >= 0) continue;  // "auto": rebuild, below
+        SceneDef next = sim->requested();
+        float* v = std::get<float*>(k.field(next));
+        *v = *v > 0.0f ? *v * 1.1f : 0.01f;
+        if (!validate(next)) continue;  // out of its range or another key's
+        SCOPED_TRACE(std::string(k.name));
+        const SceneDef before = sim->def();
+        const uint64_t hash = sim->state_hash();
+        auto r = sim->apply(next);
+        ASSERT_TRUE(r.ok()) << r.error().message;
+        ASSERT_EQ(r->keys, std::vector<std::string>{std::string(k.name)});
+        EXPECT_EQ(sim->state_hash(), hash);
+        if (r->applied) {
+            ++applied;
+            EXPECT_EQ(key_value_toml(k, sim->def()), key_value_toml(k, next));
+            sim->step(1.0f / 60.0f);
+        } else {
+            ++rebuilds;
+            EXPECT_EQ(r->rebuild_key, k.name);
+            EXPECT_EQ(key_value_toml(k, sim->def()), key_value_toml(k, before));
+        }
+    }
+    EXPECT_GT(applied, 30);
+    EXPECT_GE(rebuilds, 1);  // terrain.height_scale at least
+}
+
+TEST(Apply, TerrainBudgetAndAutoValuesAskForANewSimulation) {
+    auto sim = make(default_scene(), 10);
+    ASSERT_TRUE(sim);
+    const uint64_t hash = sim->state_hash();
+    const auto expect_rebuild = [&](void (*set)(SceneDef&), const char* key) {
+        SCOPED_TRACE(key);
+        SceneDef next = sim->requested();
+        set(next);
+        auto r = sim->apply(next);
+        ASSERT_TRUE(r.ok()) << r.error().message;
+        EXPECT_FALSE(r->applied);
+        EXPECT_EQ(r->rebuild_key, key);
+        EXPECT_EQ(sim->state_hash(), hash);
+    };
+    expect_rebuild([](SceneDef& d) { d.terrain.height_scale = 30.0f; }, "terrain.height_scale");
+    expect_rebuild([](SceneDef& d) { d.spawn.count = 5000; }, "particles.count");  // was "auto"
+    expect_rebuild([](SceneDef& d) { d.spawn.flow_rate = 40.0f; }, "particles.flow_rate");
+    expect_rebuild([](SceneDef& d) { d.solver = SolverKind::Springs; }, "solver");
+    expect_rebuild([](SceneDef& d) { d.seed = 9; }, "seed");
+    // An invalid scene is an error that changes nothing.
+    SceneDef bad = sim->requested();
+    bad.pbf.xsph = 7.0f;
+    auto r = sim->apply(bad);
+    ASSERT_FALSE(r.ok());
+    EXPECT_NE(r.error().message.find("pbf.xsph"), std::string::npos) << r.error().message;
+    EXPECT_FLOAT_EQ(sim->def().pbf.xsph, default_scene().pbf.xsph);
+}
+
+}  // namespace
+}  // namespace mr
