@@ -171,6 +171,12 @@ int view(const ViewOptions& o) {
             int max_steps = 4;          // per display frame; beyond that the sim runs slow
             int pour_count = 20;
             float pour_height = 1.0f;
+            // Sculpting (Simulation::sculpt): tool 0 pours and orbits; 1-4 are brushes that
+            // left-drag applies every frame. Each drag is one undo step (Ctrl+Z).
+            int tool = 0;
+            float brush_radius = 3.0f, brush_strength = 0.1f, flatten_target = 0.0f;
+            std::vector<std::vector<TerrainEdit>> undo;  // one entry per drag, newest last
+            bool sculpting = false;
             double accumulator = 0.0;
             uint64_t steps_total = 0, steps_dropped = 0;
             int steps_this_frame = 0;
@@ -186,19 +192,23 @@ int view(const ViewOptions& o) {
             // Applies `next` to the running Simulation (Simulation::apply: the water keeps
             // flowing), or rebuilds it where the edit needs that (terrain and heightmap
             // only if they changed).
-            auto apply = [&](const SceneDef& next) -> bool {
+            auto apply = [&](const SceneDef& next, bool live_edit = true) -> bool {
                 if (auto v = validate(next); !v) {
                     error = v.error().message;
                     return false;
                 }
-                if (auto live = sim->apply(next); !live) {
-                    error = live.error().message;
-                    return false;
-                } else if (live->applied) {
-                    renderer.set_scene(*sim, false);
-                    def = next;
-                    error.clear();
-                    return true;
+                if (live_edit) {
+                    auto live = sim->apply(next);
+                    if (!live) {
+                        error = live.error().message;
+                        return false;
+                    }
+                    if (live->applied) {
+                        renderer.set_scene(*sim, false);
+                        def = next;
+                        error.clear();
+                        return true;
+                    }
                 }
                 if (recording.on()) status = recording.stop();  // a new simulation: the recording ends
                 const bool terrain_changed = terrain_key(next) != terrain_key(def);
@@ -218,12 +228,22 @@ int view(const ViewOptions& o) {
                 }
                 if (terrain_changed) map = std::move(next_map);
                 sim = std::move(s.value());
+                undo.clear();  // the terrain is built again from its heightmap
                 renderer.set_scene(*sim, terrain_changed);
                 if (terrain_changed) camera = render::frame_terrain(sim->terrain());
                 def = next;
                 error.clear();
                 accumulator = 0.0;
                 return true;
+            };
+
+            // Undoes the newest brush drag (its strokes newest first: the terrain bit for bit).
+            auto undo_stroke = [&] {
+                if (undo.empty()) return;
+                for (auto e = undo.back().rbegin(); e != undo.back().rend(); ++e) sim->restore(*e);
+                undo.pop_back();
+                renderer.set_scene(*sim, true);
+                status = fmt::format("undid a stroke ({} left)", undo.size());
             };
 
             // Exports the step just taken (Record); an error ends the recording, on screen.
@@ -299,10 +319,38 @@ int view(const ViewOptions& o) {
                         press_y = my;
                     } else if (left && left_down) {
                         if (std::abs(mx - press_x) + std::abs(my - press_y) > 4.0) dragged = true;
-                        if (dragged) camera.orbit(-0.3f * dx, 0.3f * dy);
+                        if (dragged && tool == 0) camera.orbit(-0.3f * dx, 0.3f * dy);
                     } else if (!left) {
                         left_down = false;
                     }
+                    // A brush: every frame the left button is held, one stroke where the cursor
+                    // meets the terrain (flatten: to the height where the drag began).
+                    if (tool != 0 && left && win_w > 0 && win_h > 0) {
+                        if (auto hit = render::pick_terrain(camera, float(mx), float(my), win_w, win_h, sim->terrain(),
+                                                            sim->bvh())) {
+                            if (!sculpting) {
+                                sculpting = true;
+                                undo.emplace_back();
+                                flatten_target = hit->y;
+                            }
+                            constexpr BrushMode kModes[] = {BrushMode::Raise, BrushMode::Raise, BrushMode::Lower,
+                                                            BrushMode::Smooth, BrushMode::Flatten};
+                            const Brush b{.x = hit->x, .z = hit->z, .radius = brush_radius, .strength = brush_strength,
+                                          .mode = kModes[tool], .target = flatten_target};
+                            if (auto e = sim->sculpt(b); !e) {
+                                error = e.error().message;
+                            } else if (!e->empty()) {
+                                undo.back().push_back(std::move(e.value()));
+                                renderer.set_scene(*sim, true);
+                            }
+                        }
+                    }
+                    if (!left && sculpting) {
+                        sculpting = false;
+                        if (!undo.empty() && undo.back().empty()) undo.pop_back();
+                        if (undo.size() > 200) undo.erase(undo.begin());  // the oldest strokes can no longer be undone
+                    }
+                    if (tool != 0) input.clicks.clear();  // a brush does not pour
                     for (const auto& click : input.clicks) {
                         if (win_w <= 0 || win_h <= 0) break;
                         if (auto hit = render::pick_terrain(camera, static_cast<float>(click[0]), static_cast<float>(click[1]),
@@ -332,7 +380,12 @@ int view(const ViewOptions& o) {
                                 paused = true;
                                 step_once = true;
                                 break;
-                            case GLFW_KEY_R: apply(def); break;
+                            case GLFW_KEY_R: apply(def, false); break;
+                            case GLFW_KEY_Z:
+                                if (glfwGetKey(window, GLFW_KEY_LEFT_CONTROL) == GLFW_PRESS ||
+                                    glfwGetKey(window, GLFW_KEY_RIGHT_CONTROL) == GLFW_PRESS)
+                                    undo_stroke();
+                                break;
                             case GLFW_KEY_F12:
                             case GLFW_KEY_P: want_screenshot = true; break;
                             case GLFW_KEY_E: toggle_recording = true; break;
@@ -380,7 +433,7 @@ int view(const ViewOptions& o) {
                     step_once = true;
                 }
                 ImGui::SameLine();
-                if (ImGui::Button("Reset (R)")) apply(def);
+                if (ImGui::Button("Reset (R)")) apply(def, false);
                 ImGui::SameLine();
                 if (ImGui::Button("Shot (P)")) want_screenshot = true;
                 if (ImGui::Button(recording.on() ? "Stop recording (E)" : "Record (E)")) toggle_recording = true;
@@ -394,7 +447,22 @@ int view(const ViewOptions& o) {
                 ImGui::DragInt("max steps/frame", &max_steps, 0.1f, 1, 64, "%d", ImGuiSliderFlags_AlwaysClamp);
                 ImGui::DragInt("pour count", &pour_count, 0.5f, 1, 10000, "%d", ImGuiSliderFlags_AlwaysClamp);
                 ImGui::DragFloat("pour height (m)", &pour_height, 0.05f, 0.0f, 50.0f, "%.2f", ImGuiSliderFlags_AlwaysClamp);
-                ImGui::TextDisabled("click terrain: pour | drag: orbit | right drag: pan | wheel: zoom");
+                ImGui::Combo("tool (left button)", &tool, "pour / orbit\0raise\0lower\0smooth\0flatten\0");
+                if (tool != 0) {
+                    ImGui::DragFloat("brush radius (m)", &brush_radius, 0.05f, 0.1f, 200.0f, "%.2f", ImGuiSliderFlags_AlwaysClamp);
+                    const bool metres = tool == 1 || tool == 2;
+                    ImGui::DragFloat(metres ? "brush m per frame" : "brush share per frame", &brush_strength, 0.002f, 0.0f,
+                                     metres ? 10.0f : 1.0f, "%.3f", ImGuiSliderFlags_AlwaysClamp);
+                }
+                if (ImGui::Button("Undo stroke (Ctrl+Z)")) undo_stroke();
+                ImGui::SameLine();
+                if (ImGui::Button("Save terrain")) {
+                    auto saved = save_terrain_and_scene(*sim, def, ".");
+                    (saved ? status : error) = saved ? saved.value() : saved.error().message;
+                }
+                ImGui::SameLine();
+                ImGui::TextDisabled("%zu strokes", undo.size());
+                ImGui::TextDisabled("click terrain: pour (tool pour) | drag: orbit or brush | right drag: pan | wheel: zoom");
                 ImGui::TextDisabled("drop a PNG heightmap on the window to load it");
                 if (ImGui::CollapsingHeader("View", ImGuiTreeNodeFlags_DefaultOpen)) {
                     ImGui::Checkbox("terrain", &settings.terrain);

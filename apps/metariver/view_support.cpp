@@ -3,6 +3,7 @@
 
 #include <metariver/io.h>
 #include <metariver/render.h>
+#include <metariver/scene_keys.h>
 
 // libepoxy's GL header first; GLFW must not pull in its own.
 #include <epoxy/gl.h>
@@ -79,6 +80,31 @@ std::string terrain_key(const SceneDef& d) {
     return fmt::format("{}|{}|{}|{}|{}|{}|{}|{}|{}|{}", to_string(d.source.kind), d.source.heightmap, d.source.width,
                        d.source.height, d.source.seed, d.terrain.area_scale, d.terrain.auto_area_scale, d.terrain.height_scale,
                        d.terrain.paper_row_orientation, d.collision.leaf_triangles);
+}
+
+Result<std::string> save_terrain_and_scene(const Simulation& sim, const SceneDef& def, const std::string& dir) {
+    std::error_code ec;
+    fs::path png, toml;
+    for (int i = 0; i < 100000; ++i) {
+        png = fs::path(dir) / fmt::format("metariver_terrain_{:03}.png", i);
+        toml = fs::path(dir) / fmt::format("metariver_scene_{:03}.toml", i);
+        if (!fs::exists(png, ec) && !fs::exists(toml, ec)) break;
+    }
+    auto saved = write_terrain_heightmap(png.string(), sim.terrain(), def.terrain.paper_row_orientation);
+    if (!saved) return saved.error();
+    SceneDef next = def;
+    next.source.kind = TerrainSource::File;
+    next.source.heightmap = fs::absolute(png, ec).string();
+    next.terrain.area_scale = saved->area_scale;
+    next.terrain.auto_area_scale = false;
+    next.terrain.height_scale = saved->metres_max - saved->metres_min;
+    next.terrain.condition = TerrainCondition::None;
+    if (auto w = write_file_atomic(toml.string(), scene_to_toml(next)); !w) {
+        fs::remove(png, ec);
+        fs::remove(saved->sidecar, ec);
+        return w.error();
+    }
+    return fmt::format("saved {} (+ .json) and {}", png.string(), toml.string());
 }
 
 std::string next_screenshot_path(const std::string& dir) {

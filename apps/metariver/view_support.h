@@ -53,4 +53,10 @@ std::string next_screenshot_path(const std::string& dir);
 /// Reads the window's back buffer (scene and UI) and writes it as a PNG.
 Status screenshot(const std::string& path, int width, int height);
 
+/// Saves the running terrain (sculpted, carved) as DIR/metariver_terrain_NNN.png with its
+/// sidecar (write_terrain_heightmap) and the scene that loads it back as
+/// DIR/metariver_scene_NNN.toml (the heightmap at its saved scale, condition "none": the
+/// channel is in the heights already). Returns what it wrote, one line.
+Result<std::string> save_terrain_and_scene(const Simulation& sim, const SceneDef& def, const std::string& dir);
+
 }  // namespace mr::app

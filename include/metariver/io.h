@@ -36,4 +36,22 @@ struct Percentiles {
 };
 Percentiles percentiles(std::vector<double> samples);
 
+/// A 16-bit grey PNG of `samples` (row-major, width per row), deflate-compressed.
+Result<std::string> encode_png_gray16(std::span<const uint16_t> samples, int width, int height);
+
+/// What write_terrain_heightmap wrote.
+struct TerrainSaved {
+    std::string png, sidecar;   ///< the paths written
+    float metres_min = 0.0f;    ///< the height of PNG value 0
+    float metres_max = 0.0f;    ///< the height of PNG value 65535
+    float area_scale = 1.0f;    ///< metres between samples
+};
+/// Saves a terrain's current heights (sculpted, carved) as a 16-bit grey PNG spanning
+/// its lowest to its highest sample, in image row order (`paper_row_orientation` as the
+/// scene that built it), and beside it PATH.json with metres_min, metres_max,
+/// sample_spacing_m, width and height: `--heightmap PATH --real-scale` loads it back at
+/// its scale (heights shifted by -metres_min). Both files are written atomically; on an
+/// error neither is left.
+Result<TerrainSaved> write_terrain_heightmap(const std::string& png_path, const Terrain& t, bool paper_row_orientation);
+
 }  // namespace mr

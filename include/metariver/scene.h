@@ -347,6 +347,17 @@ public:
     /// Simulation: then nothing is changed (ApplyResult::applied false). An invalid
     /// scene is an error and changes nothing.
     Result<ApplyResult> apply(const SceneDef& next);
+    /// Sculpts the terrain under the running water (one brush stroke, Terrain::sculpt):
+    /// the tree's boxes, the drainage network, the main channel and the source's lattice
+    /// follow, and particles the ground rose over are lifted onto it (counted in
+    /// terrain_lifts(), not as tunneled). Error for the Bullet solver (its world holds
+    /// its own copy of the terrain) or a bad brush; nothing changed then. The renderer
+    /// shows it after Renderer::set_scene(sim, true).
+    Result<TerrainEdit> sculpt(const Brush& brush);
+    /// Undoes a stroke of sculpt() (newest first), with the same updates.
+    void restore(const TerrainEdit& edit);
+    /// Particles sculpt() or restore() lifted because the ground rose over them.
+    uint64_t terrain_lifts() const { return terrain_lifts_; }
     /// The scene as given to create(), "auto" values unresolved (def() has them resolved).
     const SceneDef& requested() const { return requested_; }
     /// Interaction: pour `count` particles at `center` (the source moves there).
@@ -424,6 +435,7 @@ private:
     SurfaceMesh surface_;
     FrameTimings timings_;
     uint64_t field_overflows_ = 0;
+    uint64_t terrain_lifts_ = 0;
     std::string field_overflow_message_;
     ChannelMap channel_;
     std::vector<std::pair<int, int>> main_path_;
@@ -435,6 +447,7 @@ private:
     void prefill_channel();
     float prefill_share() const;
     void configure_field();
+    void after_terrain_edit(const TerrainEdit& edit);
 };
 
 }  // namespace mr

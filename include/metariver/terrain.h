@@ -145,6 +145,33 @@ struct TerrainDef {
 /// (min(columns, rows) - 1)).
 float resolved_area_scale(const TerrainDef& def, int columns, int rows);
 
+/// A sculpting brush (Terrain::sculpt, Simulation::sculpt): what it does to the heights
+/// within `radius` of its centre, weighted by (1 - (d / radius)^2)^2 (1 at the centre, 0
+/// at the rim with a flat tangent, so repeated strokes leave no ridge).
+enum class BrushMode {
+    Raise,    ///< height += strength x weight (metres)
+    Lower,    ///< height -= strength x weight (metres)
+    Smooth,   ///< towards the mean of the 3 x 3 samples around, strength x weight of the way
+    Flatten,  ///< towards `target`, strength x weight of the way
+};
+struct Brush {
+    float x = 0.0f, z = 0.0f;  ///< centre, metres (world x and z)
+    float radius = 3.0f;       ///< metres, > 0 and finite
+    /// Raise / lower: metres at the centre per stroke, >= 0; smooth / flatten: the share of
+    /// the way at the centre, [0, 1].
+    float strength = 0.5f;
+    BrushMode mode = BrushMode::Raise;
+    float target = 0.0f;  ///< flatten: the height, metres
+};
+/// The samples one stroke changed and their heights before it (for undo): rows i0..i1
+/// and columns j0..j1 (inclusive), `before` row by row. Empty (i1 < i0) when the brush
+/// touched no sample.
+struct TerrainEdit {
+    int i0 = 0, j0 = 0, i1 = -1, j1 = -1;
+    std::vector<float> before;
+    bool empty() const { return i1 < i0 || j1 < j0; }
+};
+
 /// The terrain mesh exactly as the paper's figure 2: one vertex per sample, vertex
 /// index c = i*W + j for grid row i (z) and column j (x) at (j*s, h*height_scale, i*s);
 /// two triangles per cell, (c, c+W, c+1) and (c+1, c+W, c+W+1), both wound so their
@@ -199,6 +226,14 @@ public:
     /// then counts every change against the heights as given. Cells outside the grid
     /// are ignored; an empty path changes nothing.
     void carve_channel(std::span<const std::pair<int, int>> path, const CarveDef& def);
+    /// One brush stroke on the heights (a bad brush: non-finite or non-positive radius,
+    /// strength out of range: an error naming the field, nothing changed). The bounds
+    /// follow (the paper's box: the mesh grown by 1 m up and down); the tree's boxes do
+    /// not: Bvh::refit_heights. Returns what it changed, for restore().
+    Result<TerrainEdit> sculpt(const Brush& brush);
+    /// Puts back the heights an edit changed (undo; edits undone newest first restore
+    /// the terrain bit for bit).
+    void restore(const TerrainEdit& edit);
 
 private:
     /// Heights of the four corners of the cell under (x, z) (clamped into the rectangle):
@@ -218,6 +253,7 @@ private:
     std::vector<float> given_heights_;  ///< the heights before conditioning (when conditioned)
 
     void update_condition_report();
+    void recompute_bounds();
 };
 
 /// A ray/segment hit on a triangle.
@@ -299,6 +335,9 @@ public:
     /// Robust query: every leaf whose box the segment from -> to crosses, watertight
     /// test, nearest hit.
     std::optional<RayHit> intersect_segment(const Terrain& terrain, const Vec3& from, const Vec3& to) const;
+    /// After the terrain's heights changed (sculpt, restore): every box's y range is the
+    /// terrain's bounds again, as build() makes them (the x and z ranges do not change).
+    void refit_heights(const Terrain& terrain);
 
 private:
     std::vector<BvhNode> nodes_;

@@ -503,6 +503,51 @@ Result<ApplyResult> Simulation::apply(const SceneDef& next) {
     return r;
 }
 
+Result<TerrainEdit> Simulation::sculpt(const Brush& brush) {
+    if (!dynamic_cast<ParticleSolver*>(solver_.get()))
+        return Error{"sculpt: solver = \"bullet\" holds its own copy of the terrain; sculpt with pbf or springs"};
+    auto e = terrain_.sculpt(brush);
+    if (!e) return e.error();
+    after_terrain_edit(e.value());
+    return e;
+}
+
+void Simulation::restore(const TerrainEdit& edit) {
+    if (!dynamic_cast<ParticleSolver*>(solver_.get())) return;
+    terrain_.restore(edit);
+    after_terrain_edit(edit);
+}
+
+void Simulation::after_terrain_edit(const TerrainEdit& e) {
+    if (e.empty()) return;
+    bvh_.refit_heights(terrain_);
+    channel_ = ChannelMap::build(terrain_);
+    main_path_ = main_channel_path(terrain_, channel_, def_.spawn, def_.spawn.center);
+    coverage_ = ChannelCoverage(terrain_, main_path_);
+    auto& ps = static_cast<ParticleSolver&>(*solver_);
+    // The triangles of the cells around the changed samples moved: particles over them
+    // that are now under the ground (plus the collision's clearance) go up onto it, with
+    // no downward speed, and start their next step there (not a crossing to count).
+    const float s = terrain_.area_scale();
+    const Vec3 o = terrain_.vertices().front();
+    const float xa = o.x + float(e.j0 - 1) * s, xb = o.x + float(e.j1 + 1) * s;
+    const float za = o.z + float(e.i0 - 1) * s, zb = o.z + float(e.i1 + 1) * s;
+    const float clearance = def_.collision.radius + def_.collision.offset;
+    Particles& p = ps.particles_mut();
+    for (size_t i = 0; i < p.size(); ++i) {
+        if (!p.active[i]) continue;
+        Vec3& x = p.position[i];
+        if (x.x < xa || x.x > xb || x.z < za || x.z > zb || !terrain_.contains_xz(x.x, x.z)) continue;
+        const float g = terrain_.height_mesh(x.x, x.z) + clearance;
+        if (x.y >= g) continue;
+        x.y = g;
+        p.last_position[i] = x;
+        p.velocity[i].y = std::max(p.velocity[i].y, 0.0f);
+        ++terrain_lifts_;
+    }
+    ps.set_spawn_center(def_.spawn.center);  // the source's lattice over the new ground
+}
+
 void Simulation::step(float frame_dt) {
     auto t0 = Clock::now();
     solver_->step_frame(frame_dt);

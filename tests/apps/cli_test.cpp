@@ -1,5 +1,8 @@
 // End-to-end tests of the metariver binary: good runs and every kind of bad input
 // (exit code 2, one line naming the file/option/key, nothing written).
+#include <metariver/io.h>
+#include <metariver/terrain.h>
+
 #include <gtest/gtest.h>
 #include "cli_fixture.h"
 #include "png_test_util.h"
@@ -396,6 +399,21 @@ TEST_F(CliScale, OptionsSetTheScales) {
         write("s.toml", "[terrain]\nheightmap = \"map.png\"\narea_scale = 3.0\nheight_scale = 9.0\ncondition = \"none\"\n");
     expect_extent(extent("--scene " + scene.string()), box_of(3.0, 9.0));
     expect_extent(extent("--scene " + scene.string() + " --area-scale 1.5"), box_of(1.5, 9.0));
+}
+
+// A sculpted terrain saved by the viewer's "Save terrain" (write_terrain_heightmap: a
+// 16-bit PNG and its sidecar) loads back through --real-scale at its scale.
+TEST_F(CliScale, ASavedTerrainLoadsBackAtItsScale) {
+    mr::Heightmap m = mr::flat_heightmap(21, 13, 0.25f);
+    auto t = mr::Terrain::build(m, mr::TerrainDef{.area_scale = 2.0f, .height_scale = 8.0f});
+    ASSERT_TRUE(t.ok());
+    ASSERT_TRUE(t->sculpt({.x = 20.0f, .z = 12.0f, .radius = 5.0f, .strength = 6.0f}).ok());
+    auto saved = mr::write_terrain_heightmap((dir_ / "saved.png").string(), t.value(), true);
+    ASSERT_TRUE(saved.ok()) << saved.error().message;
+    EXPECT_FLOAT_EQ(saved->metres_min, 2.0f);
+    EXPECT_FLOAT_EQ(saved->metres_max, 8.0f);
+    map_ = dir_ / "saved.png";
+    expect_extent(extent("--real-scale"), {20.0 * 2.0, 6.0, 12.0 * 2.0});
 }
 
 TEST_F(CliScale, RealScaleReadsTheSidecar) {

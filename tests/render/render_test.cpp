@@ -408,6 +408,43 @@ size_t pixels_differing(const std::vector<uint8_t>& a, const std::vector<uint8_t
     return n;
 }
 
+// Sculpting (issue 14): a hill raised under the running scene shows after set_scene(sim,
+// true) re-uploads the terrain, and undo draws the same image as before it.
+TEST(Renderer, ASculptedHillShowsAndUndoDrawsTheSameImage) {
+    REQUIRE_GL();
+    auto sim = Simulation::create(small_valley());
+    ASSERT_TRUE(sim.ok()) << sim.error().message;
+    Simulation& s = *sim.value();
+    for (int i = 0; i < 30; ++i) s.step(1.0f / 60.0f);
+    auto r = render::Renderer::create();
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    render::Renderer& renderer = *r.value();
+    renderer.set_scene(s);
+    render::Camera cam = render::frame_terrain(s.terrain());
+    render::fit_clip_planes(cam, s.terrain());
+    const int w = 320, h = 200;
+    std::vector<uint8_t> before, hill, undone;
+    renderer.draw(cam, w, h, {});
+    renderer.read_rgb(before);
+    const Vec3 c = s.terrain().bounds().center();
+    auto e = s.sculpt({.x = c.x, .z = c.z + 8.0f, .radius = 6.0f, .strength = 8.0f});
+    ASSERT_TRUE(e.ok()) << e.error().message;
+    renderer.set_scene(s, true);
+    renderer.draw(cam, w, h, {});
+    renderer.read_rgb(hill);
+    const size_t changed = pixels_differing(before, hill, 8);
+    std::printf("sculpted hill: %zu of %d pixels changed\n", changed, w * h);
+    EXPECT_GT(changed, 500u);
+    const std::string out = ::testing::TempDir() + "sculpted_hill.png";
+    EXPECT_TRUE(render::write_png(out, hill, w, h, 3).ok());
+    std::printf("wrote %s\n", out.c_str());
+    s.restore(e.value());
+    renderer.set_scene(s, true);
+    renderer.draw(cam, w, h, {});
+    renderer.read_rgb(undone);
+    EXPECT_EQ(pixels_differing(before, undone, 0), 0u);
+}
+
 /// Draws `sim` at two flow-clock times, flow detail on and off, close up.
 struct TwoTimes {
     std::vector<uint8_t> on0, on1, off0, off1;

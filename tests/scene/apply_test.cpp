@@ -173,5 +173,43 @@ TEST(Apply, TerrainBudgetAndAutoValuesAskForANewSimulation) {
     EXPECT_FLOAT_EQ(sim->def().pbf.xsph, default_scene().pbf.xsph);
 }
 
+// Sculpting under running water (issue 14): a stroke that raises the river's bed lifts
+// the water it rose over onto the new ground (counted), nothing goes through it after,
+// and undo gives the terrain back.
+TEST(Sculpt, RaisingTheBedUnderTheRiverLiftsTheWaterAndNothingTunnels) {
+    auto sim = make(default_scene(), 120);
+    ASSERT_TRUE(sim);
+    const auto path = sim->main_channel();
+    ASSERT_GT(path.size(), 10u);
+    const auto [ci, cj] = path[path.size() / 3];
+    const float s = sim->terrain().area_scale();
+    const Vec3 o = sim->terrain().vertices().front();
+    const std::vector<Vec3> before(sim->terrain().vertices().begin(), sim->terrain().vertices().end());
+    auto e = sim->sculpt({.x = o.x + float(cj) * s, .z = o.z + float(ci) * s, .radius = 4.0f, .strength = 2.5f});
+    ASSERT_TRUE(e.ok()) << e.error().message;
+    ASSERT_FALSE(e->empty());
+    EXPECT_GT(sim->terrain_lifts(), 0u);  // water sat on the bed that rose
+    const auto above_ground = [&] {
+        const Particles& p = sim->particles();
+        size_t below = 0;
+        for (size_t i = 0; i < p.size(); ++i)
+            if (p.active[i] && sim->terrain().contains_xz(p.position[i].x, p.position[i].z) &&
+                p.position[i].y < sim->terrain().height_mesh(p.position[i].x, p.position[i].z) - 1e-4f)
+                ++below;
+        return below;
+    };
+    EXPECT_EQ(above_ground(), 0u);
+    for (int f = 0; f < 120; ++f) sim->step(1.0f / 60.0f);
+    EXPECT_EQ(sim->counters().tunneled, 0u);
+    EXPECT_EQ(above_ground(), 0u);
+    sim->restore(e.value());
+    for (size_t k = 0; k < before.size(); ++k) ASSERT_EQ(sim->terrain().vertices()[k].y, before[k].y) << k;
+    for (int f = 0; f < 60; ++f) sim->step(1.0f / 60.0f);
+    EXPECT_EQ(sim->counters().tunneled, 0u);
+    // A bad brush is an error that changes nothing.
+    EXPECT_FALSE(sim->sculpt({.radius = -1.0f}).ok());
+    for (size_t k = 0; k < before.size(); ++k) ASSERT_EQ(sim->terrain().vertices()[k].y, before[k].y) << k;
+}
+
 }  // namespace
 }  // namespace mr

@@ -323,5 +323,79 @@ TEST(Bvh, VerticalRayHitsTheMeshHeight) {
     }
 }
 
+// Sculpting (issue 14): a stroke changes the samples inside its radius only, by the
+// documented amount; undo gives the terrain back bit for bit; the refitted tree answers
+// segment queries as brute force does, also above the old highest point.
+TEST(Sculpt, ABrushChangesItsDiscByTheDocumentedAmount) {
+    Terrain t = random_terrain(40, 30, 5, 1.0f, 5.0f);
+    const std::vector<Vec3> v0(t.vertices().begin(), t.vertices().end());
+    const Brush raise{.x = 20.0f, .z = 12.0f, .radius = 4.0f, .strength = 2.0f, .mode = BrushMode::Raise};
+    auto e = t.sculpt(raise);
+    ASSERT_TRUE(e.ok()) << e.error().message;
+    EXPECT_EQ(e->i0, 8);
+    EXPECT_EQ(e->i1, 16);
+    EXPECT_EQ(e->j0, 16);
+    EXPECT_EQ(e->j1, 24);
+    for (size_t k = 0; k < v0.size(); ++k) {
+        const Vec3& a = v0[k];
+        const float d2 = ((a.x - 20.0f) * (a.x - 20.0f) + (a.z - 12.0f) * (a.z - 12.0f)) / 16.0f;
+        const float want = d2 < 1.0f ? a.y + 2.0f * (1.0f - d2) * (1.0f - d2) : a.y;
+        ASSERT_FLOAT_EQ(t.vertices()[k].y, want) << k;
+    }
+    EXPECT_FLOAT_EQ(t.sample(12, 20), v0[12 * 40 + 20].y + 2.0f);  // the centre: the full strength
+    EXPECT_GE(t.bounds().max.y, t.sample(12, 20) + 1.0f);
+    // Flatten all the way at the centre; smooth lowers a spike's height.
+    auto f = t.sculpt({.x = 5.0f, .z = 5.0f, .radius = 2.0f, .strength = 1.0f, .mode = BrushMode::Flatten, .target = 3.0f});
+    ASSERT_TRUE(f.ok());
+    EXPECT_FLOAT_EQ(t.sample(5, 5), 3.0f);
+    // Smoothing lowers the spread of the heights under the brush.
+    const auto spread = [&] {
+        double s1 = 0.0, s2 = 0.0;
+        for (int i = 10; i <= 14; ++i)
+            for (int j = 18; j <= 22; ++j) s1 += t.sample(i, j), s2 += double(t.sample(i, j)) * t.sample(i, j);
+        return s2 / 25.0 - (s1 / 25.0) * (s1 / 25.0);
+    };
+    const double before_smooth = spread();
+    ASSERT_TRUE(t.sculpt({.x = 20.0f, .z = 12.0f, .radius = 3.0f, .strength = 1.0f, .mode = BrushMode::Smooth}).ok());
+    EXPECT_LT(spread(), 0.7 * before_smooth);
+    // Undo, newest first: bit for bit (the smooth stroke lies inside the raise's edit).
+    t.restore(f.value());
+    t.restore(e.value());
+    // The smooth stroke changed samples near (12, 20) that e restored; everything else is back.
+    for (size_t k = 0; k < v0.size(); ++k) ASSERT_EQ(t.vertices()[k].y, v0[k].y) << k;
+    // A brush off the map changes nothing; bad brushes name the field.
+    auto off = t.sculpt({.x = -50.0f, .z = 5.0f, .radius = 2.0f});
+    ASSERT_TRUE(off.ok());
+    EXPECT_TRUE(off->empty());
+    EXPECT_FALSE(t.sculpt({.radius = 0.0f}).ok());
+    EXPECT_NE(t.sculpt({.radius = NAN}).error().message.find("brush: radius"), std::string::npos);
+    EXPECT_NE(t.sculpt({.strength = 2.0f, .mode = BrushMode::Smooth}).error().message.find("brush: strength"),
+              std::string::npos);
+    for (size_t k = 0; k < v0.size(); ++k) ASSERT_EQ(t.vertices()[k].y, v0[k].y) << k;
+}
+
+TEST(Sculpt, TheRefittedTreeMatchesBruteForce) {
+    for (const auto& [name, t0] : test_terrains()) {
+        SCOPED_TRACE(name);
+        Terrain t = t0;
+        Bvh b = build_bvh(t, 8);
+        const Vec3 c = t.bounds().center();
+        // A hill far above the old highest point and a pit below the lowest.
+        ASSERT_TRUE(t.sculpt({.x = c.x, .z = c.z, .radius = 3.0f, .strength = 20.0f}).ok());
+        ASSERT_TRUE(t.sculpt({.x = t.bounds().min.x + 1.0f, .z = t.bounds().min.z + 1.0f, .radius = 2.0f,
+                              .strength = 15.0f, .mode = BrushMode::Lower})
+                        .ok());
+        b.refit_heights(t);
+        Lcg rng(3);
+        for (int k = 0; k < 300; ++k) {
+            const auto [from, to] = random_segment(t, rng);
+            const auto got = b.intersect_segment(t, from, to);
+            const auto want = brute_nearest(t, from, to);
+            ASSERT_EQ(got.has_value(), want.has_value()) << "segment " << k;
+            if (got) EXPECT_NEAR(got->t, want->first, 1e-5f);
+        }
+    }
+}
+
 }  // namespace
 }  // namespace mr
