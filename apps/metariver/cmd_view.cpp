@@ -11,6 +11,7 @@
 #include "export_options.h"
 #include "scene_panel.h"
 #include "view_support.h"
+#include "view_tools.h"
 
 #include <metariver/export.h>
 #include <metariver/io.h>
@@ -171,12 +172,7 @@ int view(const ViewOptions& o) {
             int max_steps = 4;          // per display frame; beyond that the sim runs slow
             int pour_count = 20;
             float pour_height = 1.0f;
-            // Sculpting (Simulation::sculpt): tool 0 pours and orbits; 1-4 are brushes that
-            // left-drag applies every frame. Each drag is one undo step (Ctrl+Z).
-            int tool = 0;
-            float brush_radius = 3.0f, brush_strength = 0.1f, flatten_target = 0.0f;
-            std::vector<std::vector<TerrainEdit>> undo;  // one entry per drag, newest last
-            bool sculpting = false;
+            view::Tools tools;  // the left button as a terrain brush or a hand on the water
             double accumulator = 0.0;
             uint64_t steps_total = 0, steps_dropped = 0;
             int steps_this_frame = 0;
@@ -228,7 +224,7 @@ int view(const ViewOptions& o) {
                 }
                 if (terrain_changed) map = std::move(next_map);
                 sim = std::move(s.value());
-                undo.clear();  // the terrain is built again from its heightmap
+                tools.forget();  // the terrain is built again from its heightmap
                 renderer.set_scene(*sim, terrain_changed);
                 if (terrain_changed) camera = render::frame_terrain(sim->terrain());
                 def = next;
@@ -237,13 +233,10 @@ int view(const ViewOptions& o) {
                 return true;
             };
 
-            // Undoes the newest brush drag (its strokes newest first: the terrain bit for bit).
             auto undo_stroke = [&] {
-                if (undo.empty()) return;
-                for (auto e = undo.back().rbegin(); e != undo.back().rend(); ++e) sim->restore(*e);
-                undo.pop_back();
+                if (!tools.undo(*sim)) return;
                 renderer.set_scene(*sim, true);
-                status = fmt::format("undid a stroke ({} left)", undo.size());
+                status = fmt::format("undid a stroke ({} left)", tools.undo_steps());
             };
 
             // Exports the step just taken (Record); an error ends the recording, on screen.
@@ -319,38 +312,16 @@ int view(const ViewOptions& o) {
                         press_y = my;
                     } else if (left && left_down) {
                         if (std::abs(mx - press_x) + std::abs(my - press_y) > 4.0) dragged = true;
-                        if (dragged && tool == 0) camera.orbit(-0.3f * dx, 0.3f * dy);
+                        if (dragged && !tools.active()) camera.orbit(-0.3f * dx, 0.3f * dy);
                     } else if (!left) {
                         left_down = false;
                     }
-                    // A brush: every frame the left button is held, one stroke where the cursor
-                    // meets the terrain (flatten: to the height where the drag began).
-                    if (tool != 0 && left && win_w > 0 && win_h > 0) {
-                        if (auto hit = render::pick_terrain(camera, float(mx), float(my), win_w, win_h, sim->terrain(),
-                                                            sim->bvh())) {
-                            if (!sculpting) {
-                                sculpting = true;
-                                undo.emplace_back();
-                                flatten_target = hit->y;
-                            }
-                            constexpr BrushMode kModes[] = {BrushMode::Raise, BrushMode::Raise, BrushMode::Lower,
-                                                            BrushMode::Smooth, BrushMode::Flatten};
-                            const Brush b{.x = hit->x, .z = hit->z, .radius = brush_radius, .strength = brush_strength,
-                                          .mode = kModes[tool], .target = flatten_target};
-                            if (auto e = sim->sculpt(b); !e) {
-                                error = e.error().message;
-                            } else if (!e->empty()) {
-                                undo.back().push_back(std::move(e.value()));
-                                renderer.set_scene(*sim, true);
-                            }
-                        }
-                    }
-                    if (!left && sculpting) {
-                        sculpting = false;
-                        if (!undo.empty() && undo.back().empty()) undo.pop_back();
-                        if (undo.size() > 200) undo.erase(undo.begin());  // the oldest strokes can no longer be undone
-                    }
-                    if (tool != 0) input.clicks.clear();  // a brush does not pour
+                    // A tool: every frame the left button is held, where the cursor meets the terrain.
+                    std::optional<Vec3> hit;
+                    if (tools.active() && left && win_w > 0 && win_h > 0)
+                        hit = render::pick_terrain(camera, float(mx), float(my), win_w, win_h, sim->terrain(), sim->bvh());
+                    if (tools.frame(*sim, hit, left, elapsed, error)) renderer.set_scene(*sim, true);
+                    if (tools.active()) input.clicks.clear();  // a tool does not pour
                     for (const auto& click : input.clicks) {
                         if (win_w <= 0 || win_h <= 0) break;
                         if (auto hit = render::pick_terrain(camera, static_cast<float>(click[0]), static_cast<float>(click[1]),
@@ -447,13 +418,7 @@ int view(const ViewOptions& o) {
                 ImGui::DragInt("max steps/frame", &max_steps, 0.1f, 1, 64, "%d", ImGuiSliderFlags_AlwaysClamp);
                 ImGui::DragInt("pour count", &pour_count, 0.5f, 1, 10000, "%d", ImGuiSliderFlags_AlwaysClamp);
                 ImGui::DragFloat("pour height (m)", &pour_height, 0.05f, 0.0f, 50.0f, "%.2f", ImGuiSliderFlags_AlwaysClamp);
-                ImGui::Combo("tool (left button)", &tool, "pour / orbit\0raise\0lower\0smooth\0flatten\0");
-                if (tool != 0) {
-                    ImGui::DragFloat("brush radius (m)", &brush_radius, 0.05f, 0.1f, 200.0f, "%.2f", ImGuiSliderFlags_AlwaysClamp);
-                    const bool metres = tool == 1 || tool == 2;
-                    ImGui::DragFloat(metres ? "brush m per frame" : "brush share per frame", &brush_strength, 0.002f, 0.0f,
-                                     metres ? 10.0f : 1.0f, "%.3f", ImGuiSliderFlags_AlwaysClamp);
-                }
+                tools.ui();
                 if (ImGui::Button("Undo stroke (Ctrl+Z)")) undo_stroke();
                 ImGui::SameLine();
                 if (ImGui::Button("Save terrain")) {
@@ -461,7 +426,7 @@ int view(const ViewOptions& o) {
                     (saved ? status : error) = saved ? saved.value() : saved.error().message;
                 }
                 ImGui::SameLine();
-                ImGui::TextDisabled("%zu strokes", undo.size());
+                ImGui::TextDisabled("%zu strokes", tools.undo_steps());
                 ImGui::TextDisabled("click terrain: pour (tool pour) | drag: orbit or brush | right drag: pan | wheel: zoom");
                 ImGui::TextDisabled("drop a PNG heightmap on the window to load it");
                 if (ImGui::CollapsingHeader("View", ImGuiTreeNodeFlags_DefaultOpen)) {

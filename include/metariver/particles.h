@@ -270,6 +270,10 @@ public:
     uint64_t frame() const override { return frame_; }
 
     void set_spawn_center(const Vec3& center) override;
+    /// Interaction: adds `velocity` x (1 - (d / radius)^2)^2 to every active particle
+    /// within `radius` of `center` (d: the 3D distance) and wakes it if it slept.
+    /// Returns how many it pushed.
+    size_t push(const Vec3& center, float radius, const Vec3& velocity);
     /// Live edits (Simulation::apply): the parameters a running solver reads, replaced
     /// in place; the particles, their ids and the frame count are kept. The source's
     /// lattice and the PBF rest density are recomputed from the new values. The budget

@@ -362,6 +362,11 @@ public:
     const SceneDef& requested() const { return requested_; }
     /// Interaction: pour `count` particles at `center` (the source moves there).
     void pour(const Vec3& center, int count) { solver_->pour(center, count); }
+    /// Interaction: pushes the water within `radius` metres of `center` with `velocity`
+    /// (m/s at the centre, falling to 0 at the rim: ParticleSolver::push), waking any
+    /// that slept. Error for the Bullet solver, or a radius that is not finite and > 0,
+    /// or a velocity that is not finite. Returns how many particles it pushed.
+    Result<size_t> push(const Vec3& center, float radius, const Vec3& velocity);
 
     const SceneDef& def() const { return def_; }
     const Terrain& terrain() const { return terrain_; }

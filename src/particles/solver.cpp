@@ -144,6 +144,22 @@ void ParticleSolver::set_spawn_center(const Vec3& center) {
     if (lattice_) build_lattice();
 }
 
+size_t ParticleSolver::push(const Vec3& center, float radius, const Vec3& velocity) {
+    if (!(radius > 0.0f) || !std::isfinite(radius)) return 0;
+    const float r2 = radius * radius;
+    size_t pushed = 0;
+    for (size_t i = 0; i < particles_.size(); ++i) {
+        if (!particles_.active[i]) continue;
+        const Vec3 d = particles_.position[i] - center;
+        const float q = glm::dot(d, d) / r2;
+        if (q >= 1.0f) continue;
+        particles_.velocity[i] += velocity * ((1.0f - q) * (1.0f - q));
+        slow_steps_[i] = 0;  // awake: its next step is not undone
+        ++pushed;
+    }
+    return pushed;
+}
+
 void ParticleSolver::pour(const Vec3& center, int count) {
     set_spawn_center(center);
     const size_t n = particles_.size();

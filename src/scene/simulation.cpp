@@ -503,6 +503,16 @@ Result<ApplyResult> Simulation::apply(const SceneDef& next) {
     return r;
 }
 
+Result<size_t> Simulation::push(const Vec3& center, float radius, const Vec3& velocity) {
+    auto* ps = dynamic_cast<ParticleSolver*>(solver_.get());
+    if (!ps) return Error{"push: solver = \"bullet\" moves its own bodies; push with pbf or springs"};
+    if (!std::isfinite(radius) || !(radius > 0.0f))
+        return Error{fmt::format("push: radius: must be finite and > 0 metres (got {})", radius)};
+    if (!std::isfinite(center.x + center.y + center.z) || !std::isfinite(velocity.x + velocity.y + velocity.z))
+        return Error{"push: centre and velocity: must be finite"};
+    return ps->push(center, radius, velocity);
+}
+
 Result<TerrainEdit> Simulation::sculpt(const Brush& brush) {
     if (!dynamic_cast<ParticleSolver*>(solver_.get()))
         return Error{"sculpt: solver = \"bullet\" holds its own copy of the terrain; sculpt with pbf or springs"};

@@ -5,6 +5,7 @@
 #include <metariver/scene_keys.h>
 
 #include <gtest/gtest.h>
+#include <glm/geometric.hpp>
 
 #include <algorithm>
 #include <memory>
@@ -209,6 +210,60 @@ TEST(Sculpt, RaisingTheBedUnderTheRiverLiftsTheWaterAndNothingTunnels) {
     // A bad brush is an error that changes nothing.
     EXPECT_FALSE(sim->sculpt({.radius = -1.0f}).ok());
     for (size_t k = 0; k < before.size(); ++k) ASSERT_EQ(sim->terrain().vertices()[k].y, before[k].y) << k;
+}
+
+// Pushing water (issue 14): a pool at rest moves where it is pushed, in the push's
+// direction, and nowhere else.
+TEST(Push, APoolAtRestMovesWhereItIsPushed) {
+    auto d = parse_scene_toml(R"(solver = "pbf"
+[terrain]
+source = "bowl"
+width = 33
+height = 33
+height_scale = 7.0
+[particles]
+count = 700
+spawn_center = [16.0, 4.0, 16.0]
+spawn_half_extent = [3.0, 1.0, 3.0]
+spawn_interval = 0
+flow_rate = 0.0
+source_shape = "box"
+[sink]
+kind = "none"
+)",
+                              "pool.toml", default_scene());
+    ASSERT_TRUE(d.ok()) << d.error().message;
+    auto sim = make(d.value(), 420);  // 7 s: at rest
+    ASSERT_TRUE(sim);
+    auto speeds0 = sim->active_speeds();
+    std::sort(speeds0.begin(), speeds0.end());
+    ASSERT_LT(speeds0[speeds0.size() * 95 / 100], 0.1) << "the pool must be at rest first";
+    // Push the water near the pool's middle along +x at 3 m/s.
+    const Particles& p = sim->particles();
+    Vec3 c(0.0f);
+    size_t n = 0;
+    for (size_t i = 0; i < p.size(); ++i)
+        if (p.active[i]) c += p.position[i], ++n;
+    c /= float(n);
+    auto pushed = sim->push(c, 2.0f, Vec3(3.0f, 0.0f, 0.0f));
+    ASSERT_TRUE(pushed.ok()) << pushed.error().message;
+    EXPECT_GT(pushed.value(), 10u);
+    EXPECT_LT(pushed.value(), n);
+    for (int f = 0; f < 3; ++f) sim->step(1.0f / 60.0f);
+    double near_vx = 0.0, far_speed = 0.0;
+    size_t near = 0, far = 0;
+    for (size_t i = 0; i < p.size(); ++i) {
+        if (!p.active[i]) continue;
+        const float dist = glm::length(p.position[i] - c);
+        if (dist < 1.0f) near_vx += p.velocity[i].x, ++near;
+        if (dist > 5.0f) far_speed = std::max(far_speed, double(glm::length(p.velocity[i]))), ++far;
+    }
+    ASSERT_GT(near, 0u);
+    EXPECT_GT(near_vx / double(near), 0.3);  // moving along the push
+    ASSERT_GT(far, 0u);
+    EXPECT_LT(far_speed, 0.5);  // the far side of the pool has not felt it yet
+    EXPECT_FALSE(sim->push(c, 0.0f, Vec3(1.0f)).ok());
+    EXPECT_FALSE(sim->push(c, 1.0f, Vec3(NAN)).ok());
 }
 
 }  // namespace

@@ -1,0 +1,76 @@
+#include "view_tools.h"
+
+#include <imgui.h>
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+
+namespace mr::view {
+
+namespace {
+constexpr size_t kMostUndo = 200;       ///< drags kept for undo; the oldest go first
+constexpr float kMostPushSpeed = 10.0f;  ///< m/s a push gives the water at most
+}  // namespace
+
+bool Tools::frame(Simulation& sim, const std::optional<Vec3>& hit, bool left, double frame_s, std::string& error) {
+    bool changed = false;
+    if (!active() || !left) {
+        if (dragging_ && !undo_.empty() && undo_.back().empty()) undo_.pop_back();
+        if (undo_.size() > kMostUndo) undo_.erase(undo_.begin());
+        dragging_ = false;
+        last_hit_.reset();
+        return false;
+    }
+    if (!hit) return false;
+    if (!dragging_) {
+        dragging_ = true;
+        target_ = hit->y;
+        if (tool_ != Push) undo_.emplace_back();
+    }
+    if (tool_ == Push) {
+        // The water under the cursor takes the cursor's velocity over the ground.
+        if (last_hit_ && frame_s > 0.0) {
+            Vec3 v = (*hit - *last_hit_) * float(push_gain_ / frame_s);
+            v.y = 0.0f;
+            const float speed = glm::length(v);
+            if (speed > kMostPushSpeed) v *= kMostPushSpeed / speed;
+            if (auto p = sim.push(*hit, radius_, v); !p) error = p.error().message;
+        }
+        last_hit_ = hit;
+        return false;
+    }
+    constexpr BrushMode kModes[] = {BrushMode::Raise, BrushMode::Raise, BrushMode::Lower, BrushMode::Smooth,
+                                    BrushMode::Flatten};
+    const Brush b{.x = hit->x, .z = hit->z, .radius = radius_, .strength = strength_, .mode = kModes[tool_],
+                  .target = target_};
+    if (auto e = sim.sculpt(b); !e) {
+        error = e.error().message;
+    } else if (!e->empty()) {
+        undo_.back().push_back(std::move(e.value()));
+        changed = true;
+    }
+    return changed;
+}
+
+bool Tools::undo(Simulation& sim) {
+    if (undo_.empty()) return false;
+    for (auto e = undo_.back().rbegin(); e != undo_.back().rend(); ++e) sim.restore(*e);
+    undo_.pop_back();
+    return true;
+}
+
+void Tools::ui() {
+    ImGui::Combo("tool (left button)", &tool_, "pour / orbit\0raise\0lower\0smooth\0flatten\0push water\0");
+    if (!active()) return;
+    ImGui::DragFloat("tool radius (m)", &radius_, 0.05f, 0.1f, 200.0f, "%.2f", ImGuiSliderFlags_AlwaysClamp);
+    if (tool_ == Push) {
+        ImGui::DragFloat("push gain", &push_gain_, 0.01f, 0.0f, 5.0f, "%.2f", ImGuiSliderFlags_AlwaysClamp);
+        return;
+    }
+    const bool metres = tool_ == Raise || tool_ == Lower;
+    ImGui::DragFloat(metres ? "brush m per frame" : "brush share per frame", &strength_, 0.002f, 0.0f,
+                     metres ? 10.0f : 1.0f, "%.3f", ImGuiSliderFlags_AlwaysClamp);
+}
+
+}  // namespace mr::view
