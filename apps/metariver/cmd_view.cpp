@@ -320,7 +320,10 @@ int view(const ViewOptions& o) {
                     std::optional<Vec3> hit;
                     if (tools.active() && left && win_w > 0 && win_h > 0)
                         hit = render::pick_terrain(camera, float(mx), float(my), win_w, win_h, sim->terrain(), sim->bvh());
-                    if (tools.frame(*sim, hit, left, elapsed, error)) renderer.set_scene(*sim, true);
+                    std::optional<SceneDef> tool_edit;
+                    if (tools.frame(*sim, def, hit, left, elapsed, error, tool_edit)) renderer.set_scene(*sim, true);
+                    if (tool_edit && apply(*tool_edit)) edit = def;
+                    if (tools.source_moved()) edit.spawn = def.spawn;  // the panel shows the new centre
                     if (tools.active()) input.clicks.clear();  // a tool does not pour
                     for (const auto& click : input.clicks) {
                         if (win_w <= 0 || win_h <= 0) break;

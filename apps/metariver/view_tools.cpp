@@ -13,8 +13,10 @@ constexpr size_t kMostUndo = 200;       ///< drags kept for undo; the oldest go 
 constexpr float kMostPushSpeed = 10.0f;  ///< m/s a push gives the water at most
 }  // namespace
 
-bool Tools::frame(Simulation& sim, const std::optional<Vec3>& hit, bool left, double frame_s, std::string& error) {
+bool Tools::frame(Simulation& sim, SceneDef& def, const std::optional<Vec3>& hit, bool left, double frame_s,
+                  std::string& error, std::optional<SceneDef>& edit) {
     bool changed = false;
+    source_moved_ = false;
     if (!active() || !left) {
         if (dragging_ && !undo_.empty() && undo_.back().empty()) undo_.pop_back();
         if (undo_.size() > kMostUndo) undo_.erase(undo_.begin());
@@ -23,6 +25,25 @@ bool Tools::frame(Simulation& sim, const std::optional<Vec3>& hit, bool left, do
         return false;
     }
     if (!hit) return false;
+    if (tool_ == MoveSource || tool_ == PlaceSink) {  // once per press
+        if (dragging_) return false;
+        dragging_ = true;
+        if (tool_ == MoveSource) {
+            const Vec3 c = *hit + Vec3(0.0f, def.spawn.half_extent.y + def.spawn.auto_height, 0.0f);
+            if (auto m = sim.move_source(c); !m) {
+                error = m.error().message;
+            } else {
+                def.spawn.center = c;
+                def.spawn.auto_center = def.spawn.auto_channel = false;
+                source_moved_ = true;
+            }
+        } else {
+            SceneDef next = def;
+            next.sink = SinkDef{.kind = SinkKind::Box, .min = *hit - Vec3(radius_), .max = *hit + Vec3(radius_)};
+            edit = next;
+        }
+        return false;
+    }
     if (!dragging_) {
         dragging_ = true;
         target_ = hit->y;
@@ -61,9 +82,11 @@ bool Tools::undo(Simulation& sim) {
 }
 
 void Tools::ui() {
-    ImGui::Combo("tool (left button)", &tool_, "pour / orbit\0raise\0lower\0smooth\0flatten\0push water\0");
-    if (!active()) return;
+    ImGui::Combo("tool (left button)", &tool_,
+                 "pour / orbit\0raise\0lower\0smooth\0flatten\0push water\0move source\0place sink box\0");
+    if (!active() || tool_ == MoveSource) return;
     ImGui::DragFloat("tool radius (m)", &radius_, 0.05f, 0.1f, 200.0f, "%.2f", ImGuiSliderFlags_AlwaysClamp);
+    if (tool_ == PlaceSink) return;  // the radius is the box's half size
     if (tool_ == Push) {
         ImGui::DragFloat("push gain", &push_gain_, 0.01f, 0.0f, 5.0f, "%.2f", ImGuiSliderFlags_AlwaysClamp);
         return;

@@ -1,7 +1,8 @@
 // The viewer's hands-on tools (issue 14): the left button as a terrain brush (raise,
-// lower, smooth, flatten: Simulation::sculpt) with undo per drag, or as a hand that
-// pushes the water (Simulation::push). The window code feeds it the cursor's terrain
-// hit each frame; the panel's controls are its ui().
+// lower, smooth, flatten: Simulation::sculpt) with undo per drag, a hand that pushes
+// the water (Simulation::push), or a click that moves the source (Simulation::move_source)
+// or places the sink box (a live scene edit). The window code feeds it the cursor's
+// terrain hit each frame; the panel's controls are its ui().
 #pragma once
 
 #include <metariver/scene.h>
@@ -14,21 +15,25 @@ namespace mr::view {
 
 class Tools {
 public:
-    enum Tool { Pour = 0, Raise, Lower, Smooth, Flatten, Push };
+    enum Tool { Pour = 0, Raise, Lower, Smooth, Flatten, Push, MoveSource, PlaceSink };
 
     /// True when the left button belongs to a tool (not to pouring and orbiting).
     bool active() const { return tool_ != Pour; }
     /// One display frame: `hit` where the cursor's ray meets the terrain (none: off the
     /// terrain), `left` whether the button is held, `frame_s` the display frame's
     /// seconds. Returns true when the terrain changed (upload it again); an error goes
-    /// to `error`.
-    bool frame(Simulation& sim, const std::optional<Vec3>& hit, bool left, double frame_s, std::string& error);
+    /// to `error`. `def` is the viewer's scene: moving the source writes the new centre
+    /// into it; placing the sink fills `edit` with the scene to apply.
+    bool frame(Simulation& sim, SceneDef& def, const std::optional<Vec3>& hit, bool left, double frame_s,
+               std::string& error, std::optional<SceneDef>& edit);
     /// Undoes the newest brush drag (its strokes newest first: bit for bit). Returns
     /// whether there was one.
     bool undo(Simulation& sim);
     /// The Simulation was rebuilt: its terrain is the heightmap's again.
     void forget() { undo_.clear(); }
     size_t undo_steps() const { return undo_.size(); }
+    /// Whether the last frame() moved the source (the caller's copies of the scene follow).
+    bool source_moved() const { return source_moved_; }
     /// The panel's controls (Dear ImGui; inside the caller's window).
     void ui();
 
@@ -39,6 +44,7 @@ private:
     float push_gain_ = 1.0f; ///< push: water velocity per cursor velocity
     float target_ = 0.0f;    ///< flatten: the height where the drag began
     bool dragging_ = false;
+    bool source_moved_ = false;
     std::optional<Vec3> last_hit_;
     std::vector<std::vector<TerrainEdit>> undo_;  ///< one entry per drag, newest last
 };

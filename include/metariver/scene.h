@@ -362,6 +362,11 @@ public:
     const SceneDef& requested() const { return requested_; }
     /// Interaction: pour `count` particles at `center` (the source moves there).
     void pour(const Vec3& center, int count) { solver_->pour(center, count); }
+    /// Interaction: moves the source to `center` (its volume's centre; the automatic
+    /// placement is off from then on: requested() says the centre too), the main channel
+    /// and its coverage measured from there. Error (nothing moved) when the source's
+    /// footprint would leave the terrain's rectangle, naming particles.spawn_center.
+    Status move_source(const Vec3& center);
     /// Interaction: pushes the water within `radius` metres of `center` with `velocity`
     /// (m/s at the centre, falling to 0 at the rim: ParticleSolver::push), waking any
     /// that slept. Error for the Bullet solver, or a radius that is not finite and > 0,

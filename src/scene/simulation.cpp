@@ -503,6 +503,21 @@ Result<ApplyResult> Simulation::apply(const SceneDef& next) {
     return r;
 }
 
+Status Simulation::move_source(const Vec3& center) {
+    SceneDef moved = def_;
+    moved.spawn.center = center;
+    moved.spawn.auto_center = moved.spawn.auto_channel = false;
+    if (!std::isfinite(center.x + center.y + center.z)) return Error{"particles.spawn_center: must be finite"};
+    if (auto v = validate_on_terrain(moved, terrain_); !v) return v.error();
+    def_.spawn = moved.spawn;
+    requested_.spawn.center = center;
+    requested_.spawn.auto_center = requested_.spawn.auto_channel = false;
+    solver_->set_spawn_center(center);
+    main_path_ = main_channel_path(terrain_, channel_, def_.spawn, center);
+    coverage_ = ChannelCoverage(terrain_, main_path_);
+    return Ok{};
+}
+
 Result<size_t> Simulation::push(const Vec3& center, float radius, const Vec3& velocity) {
     auto* ps = dynamic_cast<ParticleSolver*>(solver_.get());
     if (!ps) return Error{"push: solver = \"bullet\" moves its own bodies; push with pbf or springs"};

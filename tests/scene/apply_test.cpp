@@ -266,5 +266,41 @@ kind = "none"
     EXPECT_FALSE(sim->push(c, 1.0f, Vec3(NAN)).ok());
 }
 
+// Moving the source by hand (issue 14): new water is born at the new place, the scene
+// it reports says so, and a centre off the terrain is refused.
+TEST(MoveSource, NewWaterIsBornWhereTheSourceWasMoved) {
+    auto sim = make(default_scene(), 60);
+    ASSERT_TRUE(sim);
+    const Vec3 old = sim->def().spawn.center;
+    const Vec3 c = sim->terrain().bounds().center();
+    const Vec3 to(c.x, sim->terrain().height_mesh(c.x, c.z) + 2.0f, c.z);
+    ASSERT_GT(glm::length(to - old), 10.0f);
+    const uint64_t moved_at = sim->frame();
+    ASSERT_TRUE(sim->move_source(to).ok());
+    EXPECT_EQ(sim->def().spawn.center, to);
+    EXPECT_EQ(sim->requested().spawn.center, to);
+    EXPECT_FALSE(sim->requested().spawn.auto_center);
+    for (int f = 0; f < 4; ++f) sim->step(1.0f / 60.0f);
+    const Particles& p = sim->particles();
+    size_t born = 0;
+    for (size_t i = 0; i < p.size(); ++i) {
+        if (!p.active[i] || p.birth_frame[i] <= moved_at) continue;
+        ++born;
+        EXPECT_LT(glm::length(Vec3(p.position[i].x - to.x, 0.0f, p.position[i].z - to.z)),
+                  sim->def().spawn.half_extent.x + 1.0f);
+    }
+    EXPECT_GT(born, 0u);
+    // The scene it reports is the one it runs: applying it changes nothing.
+    auto same = sim->apply(sim->requested());
+    ASSERT_TRUE(same.ok());
+    EXPECT_TRUE(same->applied);
+    EXPECT_TRUE(same->keys.empty());
+    // Off the terrain: an error naming the key, the source where it was.
+    auto off = sim->move_source(Vec3(-500.0f, 0.0f, 0.0f));
+    ASSERT_FALSE(off.ok());
+    EXPECT_NE(off.error().message.find("particles.spawn_center"), std::string::npos) << off.error().message;
+    EXPECT_EQ(sim->def().spawn.center, to);
+}
+
 }  // namespace
 }  // namespace mr
