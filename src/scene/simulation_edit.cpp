@@ -1,0 +1,152 @@
+// Live changes to a running Simulation (issue 14): apply() for edited scenes, sculpt()
+// and restore() for the terrain, push() and move_source() for the water and its source.
+#include <metariver/scene.h>
+#include <metariver/scene_keys.h>
+
+#include "simulation_internal.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <type_traits>
+#include <variant>
+
+namespace mr {
+
+namespace {
+/// A key whose change needs a new Simulation (Simulation::apply): what the terrain, the
+/// tree, the particle arrays, the random stream or the carve were built from.
+bool needs_rebuild(const SceneKey& k, const SceneDef& d) {
+    const std::string_view n = k.name, sec = k.section();
+    if (sec == "terrain" || sec == "bullet") return true;
+    if (d.solver == SolverKind::Bullet && sec != "field" && sec != "surface" && sec != "render" && !n.empty() &&
+        n != "name")
+        return true;  // the Bullet world is built once from its defs
+    return n == "solver" || n == "seed" || n == "particles.count" || n == "particles.prefill" ||
+           n == "particles.auto_height" || n == "pbf.spacing" || n == "collision.bvh_leaf_triangles";
+}
+
+/// Copies the value of key `k` from `from` into `to` (the same field of another SceneDef).
+void copy_key(const SceneKey& k, const SceneDef& from, SceneDef& to) {
+    SceneDef& src = const_cast<SceneDef&>(from);  // FieldRef is mutable; only read here
+    const FieldRef a = k.field(src), b = k.field(to);
+    std::visit(
+        [&](const auto& pa) {
+            using P = std::decay_t<decltype(pa)>;
+            const P& pb = std::get<P>(b);
+            if constexpr (std::is_same_v<P, EnumRef>) pb.set(pb.field, pa.get(pa.field));
+            else *pb = *pa;
+        },
+        a);
+}
+}  // namespace
+
+Result<ApplyResult> Simulation::apply(const SceneDef& next) {
+    if (auto v = validate(next); !v) return v.error();
+    ApplyResult r;
+    SceneDef edited = def_;
+    for (const SceneKey& k : scene_keys()) {
+        if (key_value_toml(k, requested_) == key_value_toml(k, next)) continue;
+        r.keys.emplace_back(k.name);
+        const bool word = k.words.current && (k.words.current(requested_) >= 0 || k.words.current(next) >= 0);
+        if (r.rebuild_key.empty() && (word || needs_rebuild(k, requested_))) r.rebuild_key = std::string(k.name);
+        if (r.rebuild_key.empty()) copy_key(k, next, edited);
+    }
+    if (!r.rebuild_key.empty()) return r;
+    if (auto f = detail::field_box_fits(edited.field, terrain_); !f) return f.error();
+    if (auto v = validate_on_terrain(edited, terrain_); !v) return v.error();
+    if (auto* ps = dynamic_cast<ParticleSolver*>(solver_.get())) {
+        const std::optional<PbfDef> pbf = edited.solver == SolverKind::Pbf ? std::optional<PbfDef>(edited.pbf) : std::nullopt;
+        if (!ps->set_params(edited.spawn, edited.springs, edited.collision, edited.integrator, pbf, edited.sink)) {
+            r.rebuild_key = "particles.count";  // not reached: the budget's key asks for a rebuild above
+            return r;
+        }
+    }
+    const bool foam_changed = std::any_of(r.keys.begin(), r.keys.end(), [](const std::string& k) {
+        return k.starts_with("foam.") || k == "forces.gravity" || k == "pbf.kernel_radius";
+    });
+    def_ = edited;
+    requested_ = next;
+    configure_field();
+    if (foam_changed) {
+        foam_.reset();
+        if (def_.solver == SolverKind::Pbf && def_.foam.enabled)
+            foam_.emplace(def_.foam, def_.pbf.kernel_radius, def_.integrator.gravity);
+    }
+    r.applied = true;
+    return r;
+}
+
+Status Simulation::move_source(const Vec3& center) {
+    SceneDef moved = def_;
+    moved.spawn.center = center;
+    moved.spawn.auto_center = moved.spawn.auto_channel = false;
+    if (!std::isfinite(center.x + center.y + center.z)) return Error{"particles.spawn_center: must be finite"};
+    if (auto v = validate_on_terrain(moved, terrain_); !v) return v.error();
+    def_.spawn = moved.spawn;
+    requested_.spawn.center = center;
+    requested_.spawn.auto_center = requested_.spawn.auto_channel = false;
+    solver_->set_spawn_center(center);
+    main_path_ = detail::main_channel_path(terrain_, channel_, def_.spawn, center);
+    coverage_ = ChannelCoverage(terrain_, main_path_);
+    return Ok{};
+}
+
+Result<size_t> Simulation::push(const Vec3& center, float radius, const Vec3& velocity) {
+    auto* ps = dynamic_cast<ParticleSolver*>(solver_.get());
+    if (!ps) return Error{"push: solver = \"bullet\" moves its own bodies; push with pbf or springs"};
+    if (!std::isfinite(radius) || !(radius > 0.0f))
+        return Error{fmt::format("push: radius: must be finite and > 0 metres (got {})", radius)};
+    if (!std::isfinite(center.x + center.y + center.z) || !std::isfinite(velocity.x + velocity.y + velocity.z))
+        return Error{"push: centre and velocity: must be finite"};
+    return ps->push(center, radius, velocity);
+}
+
+Result<TerrainEdit> Simulation::sculpt(const Brush& brush) {
+    if (!dynamic_cast<ParticleSolver*>(solver_.get()))
+        return Error{"sculpt: solver = \"bullet\" holds its own copy of the terrain; sculpt with pbf or springs"};
+    auto e = terrain_.sculpt(brush);
+    if (!e) return e.error();
+    after_terrain_edit(e.value());
+    return e;
+}
+
+void Simulation::restore(const TerrainEdit& edit) {
+    if (!dynamic_cast<ParticleSolver*>(solver_.get())) return;
+    terrain_.restore(edit);
+    after_terrain_edit(edit);
+}
+
+void Simulation::after_terrain_edit(const TerrainEdit& e) {
+    if (e.empty()) return;
+    bvh_.refit_heights(terrain_);
+    channel_ = ChannelMap::build(terrain_);
+    main_path_ = detail::main_channel_path(terrain_, channel_, def_.spawn, def_.spawn.center);
+    coverage_ = ChannelCoverage(terrain_, main_path_);
+    auto& ps = static_cast<ParticleSolver&>(*solver_);
+    // The triangles of the cells around the changed samples moved: particles over them
+    // that are now under the ground (plus the collision's clearance) go up onto it, with
+    // no downward speed, and start their next step there (not a crossing to count).
+    const float s = terrain_.area_scale();
+    const Vec3 o = terrain_.vertices().front();
+    const float xa = o.x + float(e.j0 - 1) * s, xb = o.x + float(e.j1 + 1) * s;
+    const float za = o.z + float(e.i0 - 1) * s, zb = o.z + float(e.i1 + 1) * s;
+    const float clearance = def_.collision.radius + def_.collision.offset;
+    Particles& p = ps.particles_mut();
+    for (size_t i = 0; i < p.size(); ++i) {
+        if (!p.active[i]) continue;
+        Vec3& x = p.position[i];
+        if (x.x < xa || x.x > xb || x.z < za || x.z > zb || !terrain_.contains_xz(x.x, x.z)) continue;
+        const float g = terrain_.height_mesh(x.x, x.z) + clearance;
+        if (x.y >= g) continue;
+        x.y = g;
+        p.last_position[i] = x;
+        p.velocity[i].y = std::max(p.velocity[i].y, 0.0f);
+        ++terrain_lifts_;
+    }
+    ps.set_spawn_center(def_.spawn.center);  // the source's lattice over the new ground
+}
+
+}  // namespace mr

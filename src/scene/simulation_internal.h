@@ -1,0 +1,19 @@
+// Helpers simulation.cpp and simulation_edit.cpp share (not part of the library's API).
+#pragma once
+
+#include <metariver/scene.h>
+
+#include <utility>
+#include <vector>
+
+namespace mr::detail {
+
+/// The main channel from the source: from the main head for the automatic channel
+/// source, else from the channel cell nearest the source's centre, to where it leaves.
+std::vector<std::pair<int, int>> main_channel_path(const Terrain& t, const ChannelMap& m, const SpawnDef& asked,
+                                                   const Vec3& center);
+/// field.bounds = "terrain": an error when the fixed field box's samples per axis would
+/// not fit (kMaxFieldAxisSamples).
+Status field_box_fits(const FieldDef& f, const Terrain& t);
+
+}  // namespace mr::detail
