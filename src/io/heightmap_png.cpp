@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <string>
 
 extern "C" unsigned char* stbi_zlib_compress(unsigned char* data, int data_len, int* out_len, int quality);
@@ -81,12 +82,12 @@ Result<TerrainSaved> write_terrain_heightmap(const std::string& png_path, const 
     }
     auto png = encode_png_gray16(px, W, H);
     if (!png) return Error{fmt::format("{}: {}", png_path, png.error().message)};
-    TerrainSaved s{.png = png_path, .sidecar = png_path, .metres_min = lo, .metres_max = lo + range,
-                   .area_scale = t.area_scale()};
-    const size_t dot = s.sidecar.rfind('.');
-    s.sidecar = (dot == std::string::npos || s.sidecar.find('/', dot) != std::string::npos ? s.sidecar
-                                                                                          : s.sidecar.substr(0, dot)) +
-                ".json";
+    // The sidecar `--real-scale` reads: the same path with ".json" (sidecar_path in the app).
+    const TerrainSaved s{.png = png_path,
+                         .sidecar = std::filesystem::path(png_path).replace_extension(".json").string(),
+                         .metres_min = lo,
+                         .metres_max = lo + range,
+                         .area_scale = t.area_scale()};
     const std::string json = fmt::format(
         "{{\n \"source\": \"metariver: a terrain saved from a simulation\",\n \"width\": {},\n \"height\": {},\n"
         " \"metres_min\": {},\n \"metres_max\": {},\n \"sample_spacing_m\": {}\n}}\n",

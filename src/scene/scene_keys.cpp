@@ -221,9 +221,9 @@ const SceneKey kKeys[] = {
     // [pbf]
     {.name = "pbf.spacing", .type = K::Float, .unit = "m", .range = closed(1e-3, 1e3), .words = kSpacingWords, .readers = kPbfOrCarve,
      .help = "Rest spacing (below 1 mm the kernel constants overflow); a carved channel's depth and width. \"auto\": a "
-             "self-sized river's spacing from its terrain (docs/river.md, \"Spacing\"): 0.5 m per metre of area_scale, at "
-             "most the shorter side / 32, coarser while the budget would thin the river; the kernel, collision and field "
-             "lengths and the source scale with it.", .field = MR_FIELD(pbf.spacing)},
+             "self-sized river's spacing from its terrain (docs/river.md, \"Spacing and scale\"): 0.5 m per metre of "
+             "area_scale, at most the shorter side / 32; the kernel, collision and field lengths and the source scale with "
+             "it.", .field = MR_FIELD(pbf.spacing)},
     {.name = "pbf.kernel_radius", .type = K::Float, .unit = "m", .range = {.lo = 0, .hi = 4e3, .lo_open = true, .text = "(pbf.spacing, 4 pbf.spacing]"},
      .readers = kPbf, .help = "Smoothing length h.", .field = MR_FIELD(pbf.kernel_radius)},
     {.name = "pbf.iterations", .type = K::Int, .range = closed(1, 100), .readers = kPbf,

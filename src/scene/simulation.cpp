@@ -391,12 +391,13 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, cons
                                     ? 1.0f
                                     : (terrain->sample(path.front().first, path.front().second) -
                                        terrain->sample(path.back().first, path.back().second)) / length;
-            if (def.pbf.auto_spacing && def.solver == SolverKind::Pbf) {
+            // (auto_size: a PBF river.) The river's spacing for this terrain, when "auto".
+            const float d = def.pbf.auto_spacing ? auto_spacing(def, terrain.value()) : def.pbf.spacing;
+            resolved.pbf.auto_spacing = false;
+            if (d != def.pbf.spacing) {
                 // The river's lengths at the spacing this terrain asks for; the source is
-                // placed again at its scaled size (the channel's path does not depend on it).
-                const float d = auto_spacing(def, terrain.value());
+                // placed again at its scaled size, and the path from where it now sits.
                 scale_river_lengths(resolved, d);
-                resolved.pbf.auto_spacing = false;
                 spawn = resolved.spawn;
                 resolve_source(terrain.value(), m, spawn);
                 path = detail::main_channel_path(terrain.value(), m, resolved.spawn, spawn.center);

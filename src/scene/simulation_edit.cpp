@@ -21,8 +21,7 @@ namespace {
 bool needs_rebuild(const SceneKey& k, const SceneDef& d) {
     const std::string_view n = k.name, sec = k.section();
     if (sec == "terrain" || sec == "bullet") return true;
-    if (d.solver == SolverKind::Bullet && sec != "field" && sec != "surface" && sec != "render" && !n.empty() &&
-        n != "name")
+    if (d.solver == SolverKind::Bullet && sec != "field" && sec != "surface" && sec != "render" && n != "name")
         return true;  // the Bullet world is built once from its defs
     return n == "solver" || n == "seed" || n == "particles.count" || n == "particles.prefill" ||
            n == "particles.auto_height" || n == "pbf.spacing" || n == "collision.bvh_leaf_triangles";

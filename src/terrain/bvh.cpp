@@ -231,4 +231,11 @@ std::optional<RayHit> Bvh::intersect_segment(const Terrain& terrain, const Vec3&
     return make_hit(terrain, from, dir, best_t, best_tri);
 }
 
+void Bvh::refit_heights(const Terrain& terrain) {
+    for (BvhNode& n : nodes_) {
+        n.box.min.y = terrain.bounds().min.y;
+        n.box.max.y = terrain.bounds().max.y;
+    }
+}
+
 }  // namespace mr

@@ -202,19 +202,14 @@ void Terrain::update_condition_report() {
     condition_.max_change_m = 0.0f;
     condition_.volume_m3 = 0.0;
     const double cell_area = double(area_scale_) * double(area_scale_);
-    Aabb b;
     for (size_t k = 0; k < vertices_.size(); ++k) {
         const double d = double(vertices_[k].y) - double(given_heights_[k]);
         if (d > 0.0) ++condition_.cells_raised;
         if (d < 0.0) ++condition_.cells_lowered;
         condition_.max_change_m = std::max(condition_.max_change_m, float(std::abs(d)));
         condition_.volume_m3 += std::abs(d) * cell_area;
-        b.grow(vertices_[k]);
     }
-    // The paper's terrain box: the mesh bounds grown by 1 m up and down.
-    b.min.y -= 1.0f;
-    b.max.y += 1.0f;
-    bounds_ = b;
+    recompute_bounds();
 }
 
 }  // namespace mr

@@ -67,20 +67,4 @@ void Terrain::restore(const TerrainEdit& e) {
     recompute_bounds();
 }
 
-void Terrain::recompute_bounds() {
-    // As build() makes them: the mesh's box grown by 1 m up and down.
-    Aabb b;
-    for (const Vec3& v : vertices_) b.grow(v);
-    b.min.y -= 1.0f;
-    b.max.y += 1.0f;
-    bounds_ = b;
-}
-
-void Bvh::refit_heights(const Terrain& terrain) {
-    for (BvhNode& n : nodes_) {
-        n.box.min.y = terrain.bounds().min.y;
-        n.box.max.y = terrain.bounds().max.y;
-    }
-}
-
 }  // namespace mr

@@ -43,6 +43,15 @@ float resolved_area_scale(const TerrainDef& def, int columns, int rows) {
     return std::max(def.area_scale, kAutoMinSide / static_cast<float>(shorter));
 }
 
+void Terrain::recompute_bounds() {
+    // The paper's terrain box: the mesh's bounds grown by 1 m up and down.
+    Aabb b;
+    for (const Vec3& v : vertices_) b.grow(v);
+    b.min.y -= 1.0f;
+    b.max.y += 1.0f;
+    bounds_ = b;
+}
+
 Result<Terrain> Terrain::build(const Heightmap& map, const TerrainDef& def) {
     if (map.width < 2 || map.height < 2) {
         return Error{fmt::format("heightmap: must be at least 2 x 2 samples (got {} x {})", map.width, map.height)};
@@ -89,7 +98,6 @@ Result<Terrain> Terrain::build(const Heightmap& map, const TerrainDef& def) {
             const Vec3 p(static_cast<float>(j) * as, map.at(r, j) * def.height_scale,
                          static_cast<float>(i) * as);
             t.vertices_[static_cast<size_t>(i) * W + j] = p;
-            t.bounds_.grow(p);
         }
     }
     if (def.condition == TerrainCondition::Fill || def.condition == TerrainCondition::Breach ||
@@ -101,11 +109,7 @@ Result<Terrain> Terrain::build(const Heightmap& map, const TerrainDef& def) {
         const TerrainCondition mode = def.condition == TerrainCondition::Carve ? TerrainCondition::Breach : def.condition;
         t.condition_ = condition_heights(h, W, H, as, mode);
         t.condition_.mode = def.condition;
-        t.bounds_ = Aabb{};
-        for (size_t k = 0; k < n; ++k) {
-            t.vertices_[k].y = h[k];
-            t.bounds_.grow(t.vertices_[k]);
-        }
+        for (size_t k = 0; k < n; ++k) t.vertices_[k].y = h[k];
     }
     t.indices_.reserve(static_cast<size_t>(W - 1) * (H - 1) * 6);
     for (int i = 0; i + 1 < H; ++i) {
@@ -115,9 +119,7 @@ Result<Terrain> Terrain::build(const Heightmap& map, const TerrainDef& def) {
             t.indices_.insert(t.indices_.end(), {c, c + w, c + 1, c + 1, c + w, c + w + 1});
         }
     }
-    // The paper's terrain box: the mesh bounds grown by 1 m up and down.
-    t.bounds_.min.y -= 1.0f;
-    t.bounds_.max.y += 1.0f;
+    t.recompute_bounds();
     return t;
 }
 

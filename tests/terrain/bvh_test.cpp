@@ -392,7 +392,9 @@ TEST(Sculpt, TheRefittedTreeMatchesBruteForce) {
             const auto got = b.intersect_segment(t, from, to);
             const auto want = brute_nearest(t, from, to);
             ASSERT_EQ(got.has_value(), want.has_value()) << "segment " << k;
-            if (got) EXPECT_NEAR(got->t, want->first, 1e-5f);
+            if (got) {
+                EXPECT_NEAR(got->t, want->first, 1e-5f);
+            }
         }
     }
 }
