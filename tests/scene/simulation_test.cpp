@@ -110,6 +110,34 @@ TEST(Simulation, SurfaceCanBeTurnedOff) {
     EXPECT_EQ(sim.value()->surface().triangle_count(), 0u);
 }
 
+// A field over the sparse field's cap (kMaxSparseFieldSamples) is counted and said, not
+// silently dropped: water spread over 600 m at 64 samples per metre (the springs
+// solver, whose source places particles at random in its box).
+TEST(Simulation, AFieldOverTheCapIsCountedWithItsReason) {
+    SceneDef d = default_scene();
+    d.solver = SolverKind::Springs;
+    d.source = {.kind = TerrainSource::Flat, .heightmap = {}, .width = 601, .height = 601, .seed = 1};
+    d.terrain.condition = TerrainCondition::None;
+    d.spawn.count = 50;
+    d.spawn.flow_rate = 0.0f;
+    d.spawn.interval = 0;
+    d.spawn.auto_center = false;
+    d.spawn.shape = SourceShape::Box;
+    d.spawn.center = Vec3(300.0f, 2.0f, 300.0f);
+    d.spawn.half_extent = Vec3(290.0f, 0.5f, 290.0f);
+    d.sink.kind = SinkKind::None;
+    d.field.resolution = 64.0f;
+    auto sim = Simulation::create(d);
+    ASSERT_TRUE(sim.ok()) << sim.error().message;
+    EXPECT_EQ(sim.value()->field_overflows(), 0u);
+    EXPECT_TRUE(sim.value()->field_overflow_message().empty());
+    sim.value()->step(1.0f / 60.0f);
+    EXPECT_EQ(sim.value()->field_overflows(), 1u);
+    EXPECT_NE(sim.value()->field_overflow_message().find("cap"), std::string::npos)
+        << sim.value()->field_overflow_message();
+    EXPECT_EQ(sim.value()->surface().triangle_count(), 0u);
+}
+
 TEST(Simulation, BadScenesAreErrorsNotCrashes) {
     SceneDef d = preset("paper-nile").value();  // needs a file
     auto r = Simulation::create(d);
