@@ -276,7 +276,7 @@ int render(const RenderOptions& o) {
 
     const float dt = static_cast<float>(o.dt);
     for (long long i = 0; i < o.warmup; ++i) sim->step(dt);
-    renderer.set_scene(*sim);
+    renderer.set_scene(sim->view());
 
     const bool show_progress = progress_wanted(o.progress, o.frames);
     const int digits = std::max(5, static_cast<int>(std::to_string(o.frames - 1).size()));
@@ -293,7 +293,7 @@ int render(const RenderOptions& o) {
         t0 = Clock::now();
         camera.yaw_deg = yaw0 + static_cast<float>(o.orbit_deg * static_cast<double>(f) / static_cast<double>(o.frames));
         render::fit_clip_planes(camera, sim->terrain());
-        renderer.update(*sim);
+        renderer.update(sim->view());
         settings.time_s = static_cast<float>(double(o.warmup + (f + 1) * o.steps) * o.dt);
         renderer.draw(camera, width, height, settings);
         renderer.read_rgb(rgb);  // waits for the GPU: the time covers the whole frame

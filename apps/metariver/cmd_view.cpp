@@ -154,7 +154,7 @@ int view(const ViewOptions& o) {
                     fmt::print(stderr, "metariver view: --texture {}: {} (drawing without it)\n", o.texture,
                                s.error().message);
             }
-            renderer.set_scene(*sim);
+            renderer.set_scene(sim->view());
             render::Camera camera = render::frame_terrain(sim->terrain());
             render::RenderSettings settings;
             settings.particles = o.particles;
@@ -200,7 +200,7 @@ int view(const ViewOptions& o) {
                         return false;
                     }
                     if (live->applied) {
-                        renderer.set_scene(*sim, false);
+                        renderer.set_scene(sim->view(), false);
                         def = next;
                         error.clear();
                         return true;
@@ -225,7 +225,7 @@ int view(const ViewOptions& o) {
                 if (terrain_changed) map = std::move(next_map);
                 sim = std::move(s.value());
                 tools.forget();  // the terrain is built again from its heightmap
-                renderer.set_scene(*sim, terrain_changed);
+                renderer.set_scene(sim->view(), terrain_changed);
                 if (terrain_changed) camera = render::frame_terrain(sim->terrain());
                 def = next;
                 error.clear();
@@ -235,7 +235,7 @@ int view(const ViewOptions& o) {
 
             auto undo_stroke = [&] {
                 if (!tools.undo(*sim)) return;
-                renderer.set_scene(*sim, true);
+                renderer.set_scene(sim->view(), true);
                 status = fmt::format("undid a stroke ({} left)", tools.undo_steps());
             };
 
@@ -321,7 +321,7 @@ int view(const ViewOptions& o) {
                     if (tools.active() && left && win_w > 0 && win_h > 0)
                         hit = render::pick_terrain(camera, float(mx), float(my), win_w, win_h, sim->terrain(), sim->bvh());
                     std::optional<SceneDef> tool_edit;
-                    if (tools.frame(*sim, def, hit, left, elapsed, error, tool_edit)) renderer.set_scene(*sim, true);
+                    if (tools.frame(*sim, def, hit, left, elapsed, error, tool_edit)) renderer.set_scene(sim->view(), true);
                     if (tool_edit && apply(*tool_edit)) edit = def;
                     if (tools.source_moved()) edit.spawn = def.spawn;  // the panel shows the new centre
                     if (tools.active()) input.clicks.clear();  // a tool does not pour
@@ -500,7 +500,7 @@ int view(const ViewOptions& o) {
 
                 // ---- draw ----
                 render::fit_clip_planes(camera, sim->terrain());
-                renderer.update(*sim);
+                renderer.update(sim->view());
                 if (fb_w > 0 && fb_h > 0) {
                     settings.time_s = static_cast<float>(static_cast<double>(sim->frame()) * sim_dt);
                     renderer.draw(camera, fb_w, fb_h, settings);

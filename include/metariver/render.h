@@ -3,7 +3,7 @@
 //
 // This header carries no OpenGL type: the renderer keeps its GL objects behind a
 // pointer, so apps and tests include it without the GL headers. The renderer reads
-// the Simulation's plain views (terrain, tree, particles, surface); it never changes them.
+// a SceneView (scene_view.h: terrain, tree, particles, surface, foam); it never changes them.
 //
 // Water shading: Schlick's Fresnel term (F0 = 0.02, water) mixes a reflection of the
 // analytic sky with the refracted terrain colour behind the water, absorbed with
@@ -16,7 +16,7 @@
 #pragma once
 
 #include <metariver/core.h>
-#include <metariver/scene.h>
+#include <metariver/scene_view.h>
 
 #include <cstdint>
 #include <memory>
@@ -128,10 +128,6 @@ struct RenderStats {
 struct SurfaceVelocityWorkspace {
     NeighborGrid grid;
 };
-/// Neighbourhood radius, metres, for the surface velocities of a scene: the compact
-/// field's support (every surface vertex has a particle within it), 2 x the metaball
-/// radius for the paper's kernels.
-float flow_radius(const SceneDef& def);
 /// The fluid's velocity at each vertex, m/s: the poly6-weighted (Shepard-normalised)
 /// average of the velocities of the active particles within `radius` metres, zero where
 /// there is none. `out` is resized to vertices.size(). Parallel over vertices, the same
@@ -159,10 +155,11 @@ public:
     /// tree's boxes, then the water and particles of `sim`. Pass terrain_changed = false
     /// for a rebuilt Simulation over the same terrain and tree (only the water and
     /// particles are sent then).
-    void set_scene(const Simulation& sim, bool terrain_changed = true);
+    /// `view` must be complete() (Simulation::view() is); an incomplete one draws nothing new.
+    void set_scene(const SceneView& view, bool terrain_changed = true);
     /// Uploads what changed since the last call: the water surface and particles, only
-    /// when the simulation advanced a frame (or is a different Simulation).
-    void update(const Simulation& sim);
+    /// when the view's owner advanced a frame (or is a different owner).
+    void update(const SceneView& view);
     /// An RGBA8 image draped over the terrain's x/z rectangle (image row 0 at the far
     /// end, as the heightmap); an empty span removes it.
     /// An error (nothing uploaded) when the buffer is not width x height x 4 bytes or a

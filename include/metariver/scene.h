@@ -9,6 +9,7 @@
 #include <metariver/foam.h>
 #include <metariver/sparse_field.h>
 #include <metariver/particles.h>
+#include <metariver/scene_view.h>
 #include <metariver/surface.h>
 #include <metariver/terrain.h>
 
@@ -132,6 +133,10 @@ bool is_river(const SceneDef& def);
 /// on a gentle bed: docs/river.md, "A least slope of 2 % and no sleeping river"),
 /// kSleepThreshold otherwise (still water comes to rest).
 float resolved_sleep_threshold(const SceneDef& def);
+/// Neighbourhood radius, metres, for the velocities of a scene's surface vertices
+/// (SceneView::flow_radius): the compact field's support (every surface vertex has a
+/// particle within it), 2 x the metaball radius for the paper's kernels.
+float flow_radius(const SceneDef& def);
 /// The carved channel's cross-section for a scene (condition Carve): a flat bed
 /// max(3 samples, 4 pbf.spacing) wide, walls max(1.5 samples, 2 pbf.spacing) wide on
 /// each side, the bed 2 pbf.spacing deep (carve_spacing instead when it is set).
@@ -394,6 +399,9 @@ public:
     /// The diffuse particles ([foam]); null when foam is off or the solver is not PBF.
     const FoamSystem* foam() const { return foam_ ? &*foam_ : nullptr; }
     uint64_t frame() const { return solver_->frame(); }
+    /// The latest frame as plain views (what the renderer reads): valid until the next
+    /// step, edit or destruction of this Simulation.
+    SceneView view() const;
     /// Frames whose field could not be built (its grid over kMaxFieldSamples, or the
     /// sparse field's kMaxSparseFieldSamples): no surface that frame.
     uint64_t field_overflows() const { return field_overflows_; }

@@ -84,7 +84,7 @@ struct Renderer::Impl {
     std::vector<uint32_t> level_first, level_count;  // boxes per tree depth
     uint32_t leaves_first = 0, leaves_count = 0;
 
-    const Simulation* last_sim = nullptr;
+    const void* last_owner = nullptr;
     uint64_t last_frame = ~uint64_t{0};
     std::vector<Vec3> scratch_positions;  // reused for the active particles
     std::vector<glm::vec4> scratch_foam;  // reused: diffuse position, kind
@@ -335,29 +335,29 @@ struct Renderer::Impl {
         stats.bytes_uploaded += boxes.size() * sizeof(BoxInstance);
     }
 
-    void upload_dynamic(const Simulation& sim) {
+    void upload_dynamic(const SceneView& view) {
         stats.last_upload_bytes = 0;
-        const SurfaceMesh& m = sim.surface();
+        const SurfaceMesh& m = *view.surface;
         water_pos.upload(m.positions.data(), m.positions.size() * sizeof(Vec3), stats);
         water_normal.upload(m.normals.data(), m.normals.size() * sizeof(Vec3), stats);
         water_idx.upload(m.indices.data(), m.indices.size() * sizeof(uint32_t), stats);
         stats.water_triangles = m.triangle_count();
         const auto t0 = std::chrono::steady_clock::now();
-        surface_velocities(m.positions, sim.particles(), flow_radius(sim.def()), flow_ws, scratch_velocity);
+        surface_velocities(m.positions, *view.particles, view.flow_radius, flow_ws, scratch_velocity);
         stats.flow_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
         water_vel.upload(scratch_velocity.data(), scratch_velocity.size() * sizeof(Vec3), stats);
-        sim.particles().gather_active_positions(scratch_positions);
+        view.particles->gather_active_positions(scratch_positions);
         particle_pos.upload(scratch_positions.data(), scratch_positions.size() * sizeof(Vec3), stats);
         stats.particles = scratch_positions.size();
         scratch_foam.clear();
-        if (const FoamSystem* f = sim.foam()) {
-            const DiffuseParticles& d = f->particles();
+        if (view.foam) {
+            const DiffuseParticles& d = *view.foam;
             for (size_t i = 0; i < d.size(); ++i) scratch_foam.emplace_back(d.position[i], float(d.kind[i]));
         }
         foam_buf.upload(scratch_foam.data(), scratch_foam.size() * sizeof(glm::vec4), stats);
         stats.foam_particles = scratch_foam.size();
-        last_sim = &sim;
-        last_frame = sim.frame();
+        last_owner = view.owner;
+        last_frame = view.frame;
     }
 };
 
@@ -387,19 +387,21 @@ Result<std::unique_ptr<Renderer>> Renderer::create() {
     return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
 }
 
-void Renderer::set_scene(const Simulation& sim, bool terrain_changed) {
+void Renderer::set_scene(const SceneView& view, bool terrain_changed) {
+    if (!view.complete()) return;
     if (terrain_changed || impl_->terrain_index_count == 0)
-        impl_->upload_terrain(sim.terrain(), sim.bvh(), sim.def().terrain.paper_row_orientation);
-    impl_->upload_dynamic(sim);
+        impl_->upload_terrain(*view.terrain, *view.bvh, view.paper_rows);
+    impl_->upload_dynamic(view);
 }
 
-void Renderer::update(const Simulation& sim) {
+void Renderer::update(const SceneView& view) {
     Impl& r = *impl_;
-    if (&sim == r.last_sim && sim.frame() == r.last_frame) {
+    if (!view.complete()) return;
+    if (view.owner == r.last_owner && view.frame == r.last_frame) {
         r.stats.last_upload_bytes = 0;  // nothing moved: nothing to send
         return;
     }
-    r.upload_dynamic(sim);
+    r.upload_dynamic(view);
 }
 
 Status Renderer::set_terrain_texture(std::span<const uint8_t> rgba, int width, int height) {

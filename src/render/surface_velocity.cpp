@@ -27,14 +27,6 @@ inline Vec3 normalised(const Vec3& sum, float weight) { return weight > 0.0f ? s
 
 }  // namespace
 
-float flow_radius(const SceneDef& def) {
-    // A compact field is > threshold > 0 only within its support of some particle: every
-    // vertex of the extracted surface has a particle within field.radius (smoothing moves
-    // vertices by a fraction of a cell). The paper's kernels reach everywhere; their
-    // surface lies within about one metaball radius of the balls, so twice that is used.
-    return def.field.kernel == FieldKernel::Poly6 ? def.field.radius : 2.0f * def.field.radius;
-}
-
 void surface_velocities(std::span<const Vec3> vertices, const Particles& particles, float radius,
                         SurfaceVelocityWorkspace& ws, std::vector<Vec3>& out) {
     out.resize(vertices.size());

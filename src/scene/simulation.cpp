@@ -250,6 +250,27 @@ TerrainCondition resolved_condition(const SceneDef& def) {
     return is_river(def) ? TerrainCondition::Carve : TerrainCondition::None;
 }
 
+float flow_radius(const SceneDef& def) {
+    // A compact field is > threshold > 0 only within its support of some particle: every
+    // vertex of the extracted surface has a particle within field.radius (smoothing moves
+    // vertices by a fraction of a cell). The paper's kernels reach everywhere; their
+    // surface lies within about one metaball radius of the balls, so twice that is used.
+    return def.field.kernel == FieldKernel::Poly6 ? def.field.radius : 2.0f * def.field.radius;
+}
+
+SceneView Simulation::view() const {
+    const FoamSystem* f = foam();
+    return SceneView{.terrain = &terrain_,
+                     .bvh = &bvh_,
+                     .paper_rows = def_.terrain.paper_row_orientation,
+                     .particles = &solver_->particles(),
+                     .surface = &surface_,
+                     .foam = f ? &f->particles() : nullptr,
+                     .flow_radius = flow_radius(def_),
+                     .owner = this,
+                     .frame = frame()};
+}
+
 float resolved_sleep_threshold(const SceneDef& def) {
     if (!def.pbf.auto_sleep()) return def.pbf.sleep_threshold;
     return is_river(def) ? 0.0f : kSleepThreshold;

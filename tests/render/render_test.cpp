@@ -95,7 +95,7 @@ Rendered render_scene(const SceneDef& def, int frames, int width, int height, co
         EXPECT_TRUE(render::parse_camera(*camera, cam).ok());
     }
     render::fit_clip_planes(cam, sim.value()->terrain());
-    renderer.value()->set_scene(*sim.value());
+    renderer.value()->set_scene(sim.value()->view());
     renderer.value()->draw(cam, width, height, settings);
     renderer.value()->read_rgb(out.rgb);
     out.width = width;
@@ -202,7 +202,7 @@ TEST(Renderer, NoGlObjectsPerFrameAndUploadsOnlyWhatChanged) {
     ASSERT_TRUE(r.ok()) << r.error().message;
     render::Renderer& renderer = *r.value();
     for (int i = 0; i < 30; ++i) sim.value()->step(1.0f / 60.0f);
-    renderer.set_scene(*sim.value());
+    renderer.set_scene(sim.value()->view());
     const render::Camera cam = render::frame_terrain(sim.value()->terrain());
     render::RenderSettings s;
     s.particles = true;
@@ -211,13 +211,20 @@ TEST(Renderer, NoGlObjectsPerFrameAndUploadsOnlyWhatChanged) {
     const uint64_t objects = renderer.stats().gl_objects_created;
     for (int i = 0; i < 20; ++i) {
         sim.value()->step(1.0f / 60.0f);
-        renderer.update(*sim.value());
+        renderer.update(sim.value()->view());
         EXPECT_GT(renderer.stats().last_upload_bytes, 0u) << "the water moved: it must be sent";
         renderer.draw(cam, 96, 64, s);
     }
     EXPECT_EQ(renderer.stats().gl_objects_created, objects) << "draw()/update() must reuse GL objects";
     // Nothing moved: nothing is sent.
-    renderer.update(*sim.value());
+    renderer.update(sim.value()->view());
+    EXPECT_EQ(renderer.stats().last_upload_bytes, 0u);
+    // An incomplete view (no particles) is refused, not read: the last upload stands.
+    SceneView partial = sim.value()->view();
+    partial.particles = nullptr;
+    partial.frame += 1;
+    renderer.update(partial);
+    renderer.set_scene(SceneView{});
     EXPECT_EQ(renderer.stats().last_upload_bytes, 0u);
     // A resize re-specifies the textures, still without new objects.
     renderer.draw(cam, 128, 80, s);
@@ -370,7 +377,7 @@ TEST(Renderer, FoamAppearsWhiteOnTheWaterAndCanBeTurnedOff) {
     auto r = render::Renderer::create();
     ASSERT_TRUE(r.ok()) << r.error().message;
     render::Renderer& renderer = *r.value();
-    renderer.set_scene(s);
+    renderer.set_scene(s.view());
     EXPECT_EQ(renderer.stats().foam_particles, fs.total());
     render::Camera cam = render::frame_terrain(s.terrain());
     cam.distance *= 0.6f;
@@ -419,7 +426,7 @@ TEST(Renderer, ASculptedHillShowsAndUndoDrawsTheSameImage) {
     auto r = render::Renderer::create();
     ASSERT_TRUE(r.ok()) << r.error().message;
     render::Renderer& renderer = *r.value();
-    renderer.set_scene(s);
+    renderer.set_scene(s.view());
     render::Camera cam = render::frame_terrain(s.terrain());
     render::fit_clip_planes(cam, s.terrain());
     const int w = 320, h = 200;
@@ -429,7 +436,7 @@ TEST(Renderer, ASculptedHillShowsAndUndoDrawsTheSameImage) {
     const Vec3 c = s.terrain().bounds().center();
     auto e = s.sculpt({.x = c.x, .z = c.z + 8.0f, .radius = 6.0f, .strength = 8.0f});
     ASSERT_TRUE(e.ok()) << e.error().message;
-    renderer.set_scene(s, true);
+    renderer.set_scene(s.view(), true);
     renderer.draw(cam, w, h, {});
     renderer.read_rgb(hill);
     const size_t changed = pixels_differing(before, hill, 8);
@@ -439,7 +446,7 @@ TEST(Renderer, ASculptedHillShowsAndUndoDrawsTheSameImage) {
     EXPECT_TRUE(render::write_png(out, hill, w, h, 3).ok());
     std::printf("wrote %s\n", out.c_str());
     s.restore(e.value());
-    renderer.set_scene(s, true);
+    renderer.set_scene(s.view(), true);
     renderer.draw(cam, w, h, {});
     renderer.read_rgb(undone);
     EXPECT_EQ(pixels_differing(before, undone, 0), 0u);
@@ -455,7 +462,7 @@ TwoTimes draw_at_two_times(const Simulation& s, float t0, float t1) {
     TwoTimes out;
     if (!r.ok()) return out;
     render::Renderer& renderer = *r.value();
-    renderer.set_scene(s);
+    renderer.set_scene(s.view());
     render::Camera cam = render::frame_terrain(s.terrain());
     cam.distance *= 0.6f;
     render::fit_clip_planes(cam, s.terrain());

@@ -3,6 +3,7 @@
 // average's partition of unity, zero far from the water, and thread-count determinism.
 // No OpenGL needed.
 #include <metariver/render.h>
+#include <metariver/scene.h>
 
 #include "bowl_drop.h"
 
@@ -88,7 +89,7 @@ TEST(SurfaceVelocity, RealSurfaceMatchesTwinAndIsTheSameForAnyThreadCount) {
     for (int i = 0; i < 30; ++i) sim.value()->step(1.0f / 60.0f);
     const SurfaceMesh& m = sim.value()->surface();
     ASSERT_GT(m.positions.size(), 1000u);
-    const float radius = render::flow_radius(d);
+    const float radius = flow_radius(d);
     EXPECT_EQ(radius, d.field.radius) << "poly6 field: its support";
     std::vector<Vec3> one, two, slow;
     render::SurfaceVelocityWorkspace ws;

@@ -25,6 +25,29 @@ std::unique_ptr<Simulation> make(const SceneDef& d, int frames) {
 
 bool has(const std::vector<std::string>& v, const std::string& s) { return std::find(v.begin(), v.end(), s) != v.end(); }
 
+// SceneView (issue 14): the plain views a renderer reads point at the Simulation's own
+// data of the latest frame, and the frame they name advances with it.
+TEST(View, TheViewIsTheLatestFrame) {
+    auto sim = Simulation::create(default_scene());
+    ASSERT_TRUE(sim.ok()) << sim.error().message;
+    Simulation& s = *sim.value();
+    for (int i = 0; i < 30; ++i) s.step(1.0f / 60.0f);
+    const SceneView v = s.view();
+    ASSERT_TRUE(v.complete());
+    EXPECT_EQ(v.terrain, &s.terrain());
+    EXPECT_EQ(v.bvh, &s.bvh());
+    EXPECT_EQ(v.particles, &s.particles());
+    EXPECT_EQ(v.surface, &s.surface());
+    ASSERT_NE(s.foam(), nullptr);
+    EXPECT_EQ(v.foam, &s.foam()->particles());
+    EXPECT_EQ(v.owner, &s);
+    EXPECT_EQ(v.frame, s.frame());
+    EXPECT_GT(v.surface->triangle_count(), 0u);
+    EXPECT_EQ(v.flow_radius, s.def().field.radius) << "poly6: the field's support";
+    s.step(1.0f / 60.0f);
+    EXPECT_EQ(s.view().frame, v.frame + 1);
+}
+
 TEST(Apply, AnEditKeepsTheWaterFlowing) {
     auto sim = make(default_scene(), 90);
     ASSERT_TRUE(sim);

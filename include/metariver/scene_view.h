@@ -1,0 +1,36 @@
+// metariver scene view: what a reader of a running scene's frame needs (the renderer,
+// tools), as plain read-only views: the terrain and its tree, the particles, the water
+// surface, the diffuse particles. Readers take a SceneView, not the Simulation, so the
+// layers below the app do not depend on the one that runs them (issue 14).
+// Simulation::view() makes one; any producer of these types can.
+#pragma once
+
+#include <metariver/foam.h>
+#include <metariver/particles.h>
+#include <metariver/surface.h>
+#include <metariver/terrain.h>
+
+#include <cstdint>
+
+namespace mr {
+
+struct SceneView {
+    const Terrain* terrain = nullptr;        ///< required
+    const Bvh* bvh = nullptr;                ///< required: the tree over the terrain (debug boxes)
+    bool paper_rows = false;                 ///< terrain.paper_row_orientation: how an image drapes
+    const Particles* particles = nullptr;    ///< required
+    const SurfaceMesh* surface = nullptr;    ///< required; empty when the scene has no surface
+    const DiffuseParticles* foam = nullptr;  ///< null: no diffuse particles
+    /// Metres: the particles' neighbourhood for the surface's velocities (flow_radius in
+    /// scene.h); 0 gives every vertex velocity 0.
+    float flow_radius = 0.0f;
+    /// Who made the view and at which of its frames: a reader that saw the same owner
+    /// at the same frame has nothing new to read.
+    const void* owner = nullptr;
+    uint64_t frame = 0;
+
+    /// The required views are set.
+    bool complete() const { return terrain && bvh && particles && surface; }
+};
+
+}  // namespace mr
