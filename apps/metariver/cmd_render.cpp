@@ -147,9 +147,9 @@ int render(const RenderOptions& o) {
         if (auto s = render::parse_camera(o.camera, probe); !s)
             return fail(kExitBadInput, s.error().message + ", or top");
     }
-    std::optional<render::Image> texture;
+    std::optional<Image> texture;
     if (!o.texture.empty()) {
-        auto img = render::load_image(o.texture, 4);
+        auto img = load_image(o.texture, 4);
         if (!img) return fail(kExitBadInput, "--texture " + img.error().message);
         texture = std::move(img.value());
     }
@@ -308,7 +308,7 @@ int render(const RenderOptions& o) {
             }
         } else {
             const std::string path = (fs::path(o.out) / fmt::format("frame_{:0{}}.png", f, digits)).string();
-            if (auto s = render::write_png(path, rgb, width, height, 3); !s) {
+            if (auto s = write_png(path, rgb, width, height, 3); !s) {
                 cleanup();
                 if (show_progress) end_progress();
                 return fail(kExitFailure, s.error().message);

@@ -86,9 +86,9 @@ int view(const ViewOptions& o) {
     std::error_code ec;
     if (!fs::is_directory(o.screenshot_dir, ec))
         return fail(kExitBadInput, fmt::format("--screenshot-dir {}: not a folder", o.screenshot_dir));
-    std::optional<render::Image> texture;
+    std::optional<Image> texture;
     if (!o.texture.empty()) {
-        auto img = render::load_image(o.texture, 4);
+        auto img = load_image(o.texture, 4);
         if (!img) return fail(kExitBadInput, "--texture " + img.error().message);
         texture = std::move(img.value());
     }

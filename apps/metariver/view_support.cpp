@@ -127,7 +127,7 @@ Status screenshot(const std::string& path, int width, int height) {
     for (int y = 0; y < height / 2; ++y)
         std::swap_ranges(rgb.begin() + static_cast<long>(y * row), rgb.begin() + static_cast<long>((y + 1) * row),
                          rgb.begin() + static_cast<long>((height - 1 - y) * row));
-    return render::write_png(path, rgb, width, height, 3);
+    return write_png(path, rgb, width, height, 3);
 }
 
 }  // namespace mr::app

@@ -36,6 +36,34 @@ struct Percentiles {
 };
 Percentiles percentiles(std::vector<double> samples);
 
+// Images (src/io/image.cpp): PNG encoding (stb_image_write) for frames and screenshots,
+// PNG/JPEG loading for terrain textures and golden images.
+/// Encodes RGB8 (channels 3) or RGBA8 (4) pixels, top row first, as PNG bytes.
+std::vector<uint8_t> encode_png(std::span<const uint8_t> pixels, int width, int height, int channels);
+/// Writes a PNG atomically (temporary sibling, then rename).
+Status write_png(const std::string& path, std::span<const uint8_t> pixels, int width, int height,
+                 int channels);
+/// A decoded PNG/JPEG (terrain textures, golden images), top row first.
+struct Image {
+    int width = 0;
+    int height = 0;
+    int channels = 0;
+    std::vector<uint8_t> pixels;
+};
+/// Largest side and pixel count load_image accepts: 16384 is the largest texture side
+/// of common GL drivers (llvmpipe's included); 2^28 pixels are 1 GiB as RGBA8.
+inline constexpr int kMaxImageSide = 16384;
+inline constexpr int64_t kMaxImagePixels = int64_t{1} << 28;
+/// Only regular files of at most 512 MiB; see load_image_memory.
+Result<Image> load_image(const std::string& path, int channels);
+/// Decodes a PNG or JPEG (other formats are refused) to `channels` (1 to 4) per pixel.
+/// The size is read from the header first: more than kMaxImageSide a side or
+/// `max_pixels` in all is an error before anything is decoded. `name` names the image
+/// in messages.
+Result<Image> load_image_memory(std::span<const uint8_t> bytes, const std::string& name, int channels,
+                                int64_t max_pixels = kMaxImagePixels);
+
+
 /// A 16-bit grey PNG of `samples` (row-major, width per row), deflate-compressed.
 Result<std::string> encode_png_gray16(std::span<const uint16_t> samples, int width, int height);
 

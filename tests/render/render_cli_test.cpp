@@ -89,10 +89,10 @@ TEST_F(RenderCli, PngSequenceHasCountAndSizeAndFramesDiffer) {
     const CliResult r = run("render --frames 4 --size 80x48 --steps 6 --warmup 240 --out " + out.string());
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_NE(r.out.find("wrote 4 PNG frames"), std::string::npos) << r.out;
-    std::vector<mr::render::Image> frames;
+    std::vector<mr::Image> frames;
     for (int i = 0; i < 4; ++i) {
         const fs::path p = out / ("frame_0000" + std::to_string(i) + ".png");
-        auto img = mr::render::load_image(p.string(), 3);
+        auto img = mr::load_image(p.string(), 3);
         ASSERT_TRUE(img.ok()) << img.error().message;
         EXPECT_EQ(img->width, 80);
         EXPECT_EQ(img->height, 48);

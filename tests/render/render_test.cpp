@@ -110,15 +110,15 @@ void expect_matches_golden(const std::string& name, const Rendered& img, int max
     const fs::path golden = fs::path(METARIVER_SOURCE_DIR) / "tests/render/golden" / (name + ".png");
     const fs::path out_dir = fs::path(METARIVER_TEST_OUTPUT_DIR);
     if (const char* u = std::getenv("METARIVER_UPDATE_GOLDEN"); u && std::string(u) == "1") {
-        ASSERT_TRUE(render::write_png(golden.string(), img.rgb, img.width, img.height, 3).ok());
+        ASSERT_TRUE(write_png(golden.string(), img.rgb, img.width, img.height, 3).ok());
         GTEST_SKIP() << "re-recorded " << golden;
     }
-    auto ref = render::load_image(golden.string(), 3);
+    auto ref = load_image(golden.string(), 3);
     ASSERT_TRUE(ref.ok()) << ref.error().message << " (record it with METARIVER_UPDATE_GOLDEN=1)";
     if (ref->width != img.width || ref->height != img.height) {
         fs::create_directories(out_dir);
         const fs::path actual = out_dir / (name + ".actual.png");
-        (void)render::write_png(actual.string(), img.rgb, img.width, img.height, 3);
+        (void)write_png(actual.string(), img.rgb, img.width, img.height, 3);
         FAIL() << name << ": size " << img.width << "x" << img.height << ", golden " << ref->width << "x"
                << ref->height << "\n  golden: " << golden << "\n  actual: " << actual;
     }
@@ -136,8 +136,8 @@ void expect_matches_golden(const std::string& name, const Rendered& img, int max
     if (!ok) {
         fs::create_directories(out_dir);
         const fs::path actual = out_dir / (name + ".actual.png"), diff_path = out_dir / (name + ".diff.png");
-        (void)render::write_png(actual.string(), img.rgb, img.width, img.height, 3);
-        (void)render::write_png(diff_path.string(), diff, img.width, img.height, 3);
+        (void)write_png(actual.string(), img.rgb, img.width, img.height, 3);
+        (void)write_png(diff_path.string(), diff, img.width, img.height, 3);
         ADD_FAILURE() << name << ": max difference " << max_diff << " (allowed " << max_tolerance << "), mean "
                       << mean << " (allowed " << mean_tolerance << ")\n  golden: " << golden
                       << "\n  actual: " << actual << "\n  diff:   " << diff_path;
@@ -443,7 +443,7 @@ TEST(Renderer, ASculptedHillShowsAndUndoDrawsTheSameImage) {
     std::printf("sculpted hill: %zu of %d pixels changed\n", changed, w * h);
     EXPECT_GT(changed, 500u);
     const std::string out = ::testing::TempDir() + "sculpted_hill.png";
-    EXPECT_TRUE(render::write_png(out, hill, w, h, 3).ok());
+    EXPECT_TRUE(write_png(out, hill, w, h, 3).ok());
     std::printf("wrote %s\n", out.c_str());
     s.restore(e.value());
     renderer.set_scene(s.view(), true);

@@ -1,7 +1,7 @@
 // The image loader behind --texture and the golden images (issue 13): PNG and JPEG
 // only, the size read from the header and checked before anything is decoded, and the
 // same PNG writer/reader round trip the frames use.
-#include <metariver/render.h>
+#include <metariver/io.h>
 
 #include <gtest/gtest.h>
 
@@ -15,13 +15,13 @@
 
 namespace {
 
-using mr::render::load_image;
-using mr::render::load_image_memory;
+using mr::load_image;
+using mr::load_image_memory;
 
 std::vector<uint8_t> gradient_png(int w, int h) {
     std::vector<uint8_t> rgb(static_cast<size_t>(w) * h * 3);
     for (size_t k = 0; k < rgb.size(); ++k) rgb[k] = static_cast<uint8_t>(k * 7);
-    return mr::render::encode_png(rgb, w, h, 3);
+    return mr::encode_png(rgb, w, h, 3);
 }
 
 /// The PNG with its IHDR width replaced (and the CRC made to match): the size check must

@@ -1,7 +1,6 @@
 // PNG encoding (stb_image_write) and image loading (stb_image) for frames, screenshots,
 // terrain textures and golden images.
 #include <metariver/io.h>
-#include <metariver/render.h>
 #include <metariver/terrain.h>
 
 #include <fmt/format.h>
@@ -18,7 +17,7 @@
 #include <memory>
 #include <string_view>
 
-namespace mr::render {
+namespace mr {
 
 namespace {
 
@@ -146,4 +145,4 @@ Result<Image> load_image(const std::string& path, int channels) {
     return load_image_memory(bytes, path, channels);
 }
 
-}  // namespace mr::render
+}  // namespace mr
