@@ -235,7 +235,7 @@ int view(const ViewOptions& o) {
 
             auto undo_stroke = [&] {
                 if (!tools.undo(*sim)) return;
-                renderer.set_scene(sim->view(), true);
+                renderer.update_terrain(sim->view(), tools.changed());
                 status = fmt::format("undid a stroke ({} left)", tools.undo_steps());
             };
 
@@ -321,7 +321,8 @@ int view(const ViewOptions& o) {
                     if (tools.active() && left && win_w > 0 && win_h > 0)
                         hit = render::pick_terrain(camera, float(mx), float(my), win_w, win_h, sim->terrain(), sim->bvh());
                     std::optional<SceneDef> tool_edit;
-                    if (tools.frame(*sim, def, hit, left, elapsed, error, tool_edit)) renderer.set_scene(sim->view(), true);
+                    if (tools.frame(*sim, def, hit, left, elapsed, error, tool_edit))
+                        renderer.update_terrain(sim->view(), tools.changed());  // only the rows it touched
                     if (tool_edit && apply(*tool_edit)) edit = def;
                     if (tools.source_moved()) edit.spawn = def.spawn;  // the panel shows the new centre
                     if (tools.active()) input.clicks.clear();  // a tool does not pour

@@ -68,6 +68,7 @@ bool Tools::frame(Simulation& sim, SceneDef& def, const std::optional<Vec3>& hit
     if (auto e = sim.sculpt(b); !e) {
         error = e.error().message;
     } else if (!e->empty()) {
+        changed_ = TerrainEdit{.i0 = e->i0, .j0 = e->j0, .i1 = e->i1, .j1 = e->j1, .before = {}};
         undo_.back().push_back(std::move(e.value()));
         changed = true;
     }
@@ -76,7 +77,18 @@ bool Tools::frame(Simulation& sim, SceneDef& def, const std::optional<Vec3>& hit
 
 bool Tools::undo(Simulation& sim) {
     if (undo_.empty()) return false;
-    for (auto e = undo_.back().rbegin(); e != undo_.back().rend(); ++e) sim.restore(*e);
+    changed_ = TerrainEdit{};
+    for (auto e = undo_.back().rbegin(); e != undo_.back().rend(); ++e) {
+        sim.restore(*e);
+        if (changed_.empty()) {
+            changed_ = TerrainEdit{.i0 = e->i0, .j0 = e->j0, .i1 = e->i1, .j1 = e->j1, .before = {}};
+        } else {
+            changed_.i0 = std::min(changed_.i0, e->i0);
+            changed_.j0 = std::min(changed_.j0, e->j0);
+            changed_.i1 = std::max(changed_.i1, e->i1);
+            changed_.j1 = std::max(changed_.j1, e->j1);
+        }
+    }
     undo_.pop_back();
     return true;
 }

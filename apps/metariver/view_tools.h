@@ -29,6 +29,9 @@ public:
     /// Undoes the newest brush drag (its strokes newest first: bit for bit). Returns
     /// whether there was one.
     bool undo(Simulation& sim);
+    /// The samples the latest frame() or undo() that changed the terrain touched (the
+    /// renderer uploads the rows around them: Renderer::update_terrain).
+    const TerrainEdit& changed() const { return changed_; }
     /// The Simulation was rebuilt: its terrain is the heightmap's again.
     void forget() { undo_.clear(); }
     size_t undo_steps() const { return undo_.size(); }
@@ -47,6 +50,7 @@ private:
     bool source_moved_ = false;
     std::optional<Vec3> last_hit_;
     std::vector<std::vector<TerrainEdit>> undo_;  ///< one entry per drag, newest last
+    TerrainEdit changed_;                         ///< changed(): the rectangle only, no heights
 };
 
 }  // namespace mr::view

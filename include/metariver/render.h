@@ -117,6 +117,7 @@ struct RenderStats {
     uint64_t buffer_reallocations = 0;  ///< times a dynamic buffer had to grow
     uint64_t bytes_uploaded = 0;      ///< total bytes sent by update() and set_scene()
     uint64_t last_upload_bytes = 0;   ///< bytes sent by the latest update()
+    uint64_t last_terrain_upload_bytes = 0;  ///< bytes sent by the latest terrain upload (set_scene or update_terrain)
     size_t water_triangles = 0;
     size_t terrain_triangles = 0;
     size_t particles = 0;
@@ -158,6 +159,13 @@ public:
     /// particles are sent then).
     /// `view` must be complete() (Simulation::view() is); an incomplete one draws nothing new.
     void set_scene(const SceneView& view, bool terrain_changed = true);
+    /// After a sculpt stroke or its undo (Simulation::sculpt / restore) changed the heights
+    /// of the samples in `changed` (its i0..i1, j0..j1): uploads only the terrain vertex
+    /// rows around them, the skirts when they reach a border, and the tree boxes the refit
+    /// moved; the same buffers as set_scene(view, true) would send, bit for bit. Falls
+    /// back to the whole terrain when the view is of another terrain (another size) or its
+    /// lowest point moved (the skirts' bottom).
+    void update_terrain(const SceneView& view, const TerrainEdit& changed);
     /// Uploads what changed since the last call: the water surface and particles, only
     /// when the view's owner advanced a frame (or is a different owner).
     void update(const SceneView& view);

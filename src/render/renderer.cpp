@@ -15,6 +15,7 @@
 
 #include "flow_texture.h"
 #include "gl_objects.h"
+#include "terrain_geometry.h"
 #include "shaders.h"
 
 #include <epoxy/gl.h>
@@ -51,19 +52,6 @@ static_assert(kFlowDetailMinSpeed == static_cast<float>(MR_FLOW_MIN_SPEED) &&
               "the water shader's flow speeds (shaders.h) are render.h's");
 
 /// Terrain vertex: position, normal, and 1 on the skirt (the cut at the edge).
-struct TerrainVertex {
-    Vec3 pos;
-    Vec3 normal;
-    float skirt;
-};
-
-/// One AABB tree box for the debug view.
-struct BoxInstance {
-    Vec3 min;
-    Vec3 max;
-    float depth;
-};
-
 }  // namespace
 
 struct Renderer::Impl {
@@ -77,12 +65,9 @@ struct Renderer::Impl {
     Target scene, final;
 
     size_t terrain_index_count = 0;
-    Aabb terrain_bounds;
-    glm::vec4 terrain_rect{0.0f, 0.0f, 1.0f, 1.0f};  // x0, z0, x1, z1: texture u, v = 0 .. 1
+    TerrainGeometry geo;      // what terrain_vbo / terrain_ibo hold (bounds, texture rect)
+    TreeBoxes tree, tree_next;  // what box_vbo holds; the next refit's, compared with it
     bool has_texture = false;
-    int tree_depth = 0;
-    std::vector<uint32_t> level_first, level_count;  // boxes per tree depth
-    uint32_t leaves_first = 0, leaves_count = 0;
 
     const void* last_owner = nullptr;
     uint64_t last_frame = ~uint64_t{0};
@@ -242,97 +227,75 @@ struct Renderer::Impl {
     }
 
     void upload_terrain(const Terrain& t, const Bvh& bvh, bool paper_rows) {
-        const auto verts = t.vertices();
-        const auto idx = t.indices();
-        // Smooth vertex normals: area-weighted sums of the faces around each vertex.
-        std::vector<TerrainVertex> tv(verts.size());
-        for (size_t i = 0; i < verts.size(); ++i) tv[i] = {verts[i], Vec3(0.0f), 0.0f};
-        for (size_t k = 0; k + 2 < idx.size(); k += 3) {
-            const Vec3 &a = verts[idx[k]], &b = verts[idx[k + 1]], &c = verts[idx[k + 2]];
-            Vec3 n = glm::cross(b - a, c - a);
-            if (n.y < 0.0f) n = -n;
-            tv[idx[k]].normal += n;
-            tv[idx[k + 1]].normal += n;
-            tv[idx[k + 2]].normal += n;
-        }
-        for (auto& v : tv) {
-            const float len = glm::length(v.normal);
-            v.normal = len > 0.0f ? v.normal / len : Vec3(0.0f, 1.0f, 0.0f);
-        }
-        std::vector<uint32_t> ti(idx.begin(), idx.end());
-        // Skirts: a wall from each border edge down to the bottom of the terrain's box.
-        const int W = t.columns(), H = t.rows();
-        const float bottom = t.bounds().min.y;
-        auto wall = [&](int i0, int j0, int i1, int j1, Vec3 outward) {
-            const Vec3 a = verts[static_cast<size_t>(i0) * W + j0], b = verts[static_cast<size_t>(i1) * W + j1];
-            const auto base = static_cast<uint32_t>(tv.size());
-            tv.push_back({a, outward, 1.0f});
-            tv.push_back({b, outward, 1.0f});
-            tv.push_back({Vec3(a.x, bottom, a.z), outward, 1.0f});
-            tv.push_back({Vec3(b.x, bottom, b.z), outward, 1.0f});
-            ti.insert(ti.end(), {base, base + 2, base + 1, base + 1, base + 2, base + 3});
-        };
-        for (int j = 0; j + 1 < W; ++j) {
-            wall(0, j, 0, j + 1, Vec3(0, 0, -1));
-            wall(H - 1, j, H - 1, j + 1, Vec3(0, 0, 1));
-        }
-        for (int i = 0; i + 1 < H; ++i) {
-            wall(i, 0, i + 1, 0, Vec3(-1, 0, 0));
-            wall(i, W - 1, i + 1, W - 1, Vec3(1, 0, 0));
-        }
-        glNamedBufferData(terrain_vbo, static_cast<GLsizeiptr>(tv.size() * sizeof(TerrainVertex)), tv.data(), GL_STATIC_DRAW);
-        glNamedBufferData(terrain_ibo, static_cast<GLsizeiptr>(ti.size() * sizeof(uint32_t)), ti.data(), GL_STATIC_DRAW);
-        stats.bytes_uploaded += tv.size() * sizeof(TerrainVertex) + ti.size() * sizeof(uint32_t);
-        terrain_index_count = ti.size();
+        build_terrain_geometry(t, paper_rows, geo);
+        glNamedBufferData(terrain_vbo, static_cast<GLsizeiptr>(geo.vertices.size() * sizeof(TerrainVertex)),
+                          geo.vertices.data(), GL_STATIC_DRAW);
+        glNamedBufferData(terrain_ibo, static_cast<GLsizeiptr>(geo.indices.size() * sizeof(uint32_t)), geo.indices.data(),
+                          GL_STATIC_DRAW);
+        stats.bytes_uploaded += geo.vertices.size() * sizeof(TerrainVertex) + geo.indices.size() * sizeof(uint32_t);
+        terrain_index_count = geo.indices.size();
         stats.terrain_triangles = t.triangle_count();
-        // Heights for colouring: the mesh's own range (bounds() is grown by 1 m).
-        terrain_bounds = Aabb{};
-        for (const Vec3& v : verts) terrain_bounds.grow(v);
-        // Texture row 0 is the heightmap's row 0: at the far end (high z) in the paper's
-        // orientation, at z = 0 otherwise.
-        const float xmax = static_cast<float>(W - 1) * t.area_scale(), zmax = static_cast<float>(H - 1) * t.area_scale();
-        terrain_rect = paper_rows ? glm::vec4(0.0f, zmax, xmax, 0.0f) : glm::vec4(0.0f, 0.0f, xmax, zmax);
-
         // Tree boxes grouped by depth, then the leaves, for drawing one level at a time.
-        const auto nodes = bvh.nodes();
-        std::vector<int> depth(nodes.size(), 0);
-        tree_depth = 0;
-        for (size_t n = 0; n < nodes.size(); ++n) {  // parents come before children
-            if (nodes[n].count == 0) {
-                depth[nodes[n].left] = depth[n] + 1;
-                depth[nodes[n].right] = depth[n] + 1;
+        build_tree_boxes(bvh, tree);
+        glNamedBufferData(box_vbo, static_cast<GLsizeiptr>(tree.boxes.size() * sizeof(BoxInstance)), tree.boxes.data(),
+                          GL_STATIC_DRAW);
+        stats.bytes_uploaded += tree.boxes.size() * sizeof(BoxInstance);
+        stats.last_terrain_upload_bytes = geo.vertices.size() * sizeof(TerrainVertex) +
+                                          geo.indices.size() * sizeof(uint32_t) + tree.boxes.size() * sizeof(BoxInstance);
+    }
+
+    /// After a sculpt stroke: the vertex rows around the changed samples, the skirts when
+    /// they reach a border, and the spans of each tree level whose boxes the refit moved.
+    void update_terrain(const Terrain& t, const Bvh& bvh, bool paper_rows, const TerrainEdit& changed) {
+        TerrainEdit rows;
+        if (terrain_index_count == 0 || !update_terrain_geometry(t, changed, geo, rows)) {
+            upload_terrain(t, bvh, paper_rows);
+            return;
+        }
+        uint64_t bytes = 0;
+        const auto send = [&](GLuint buffer, size_t offset, const void* data, size_t size) {
+            glNamedBufferSubData(buffer, static_cast<GLintptr>(offset), static_cast<GLsizeiptr>(size), data);
+            bytes += size;
+        };
+        if (!rows.empty()) {
+            const size_t n = size_t(rows.j1 - rows.j0 + 1);
+            for (int i = rows.i0; i <= rows.i1; ++i) {
+                const size_t v = size_t(i) * size_t(geo.columns) + size_t(rows.j0);
+                send(terrain_vbo, v * sizeof(TerrainVertex), &geo.vertices[v], n * sizeof(TerrainVertex));
+            }
+            if (touches_border(geo, rows)) {
+                const size_t first = geo.grid_vertices();
+                send(terrain_vbo, first * sizeof(TerrainVertex), &geo.vertices[first],
+                     (geo.vertices.size() - first) * sizeof(TerrainVertex));
             }
         }
-        // The build order may place children first; settle depths by repeated passes.
-        for (bool changed = true; changed;) {
-            changed = false;
-            for (size_t n = 0; n < nodes.size(); ++n) {
-                if (nodes[n].count != 0) continue;
-                for (uint32_t c : {nodes[n].left, nodes[n].right}) {
-                    if (depth[c] != depth[n] + 1) {
-                        depth[c] = depth[n] + 1;
-                        changed = true;
-                    }
+        build_tree_boxes(bvh, tree_next);
+        if (tree_next.boxes.size() != tree.boxes.size() || tree_next.level_first != tree.level_first) {
+            std::swap(tree, tree_next);  // a different tree: all of it
+            glNamedBufferData(box_vbo, static_cast<GLsizeiptr>(tree.boxes.size() * sizeof(BoxInstance)),
+                              tree.boxes.data(), GL_STATIC_DRAW);
+            bytes += tree.boxes.size() * sizeof(BoxInstance);
+        } else {
+            // Per level (and the leaves): the span from the first to the last box that moved.
+            const auto same = [](const BoxInstance& a, const BoxInstance& b) {
+                return a.min == b.min && a.max == b.max && a.depth == b.depth;
+            };
+            std::vector<uint32_t> starts = tree.level_first;
+            starts.push_back(tree.leaves_first);
+            starts.push_back(uint32_t(tree.boxes.size()));
+            for (size_t s = 0; s + 1 < starts.size(); ++s) {
+                size_t lo = starts[s], hi = starts[s + 1];
+                while (lo < hi && same(tree.boxes[lo], tree_next.boxes[lo])) ++lo;
+                while (hi > lo && same(tree.boxes[hi - 1], tree_next.boxes[hi - 1])) --hi;
+                if (lo < hi) {
+                    std::copy(tree_next.boxes.begin() + std::ptrdiff_t(lo), tree_next.boxes.begin() + std::ptrdiff_t(hi),
+                              tree.boxes.begin() + std::ptrdiff_t(lo));
+                    send(box_vbo, lo * sizeof(BoxInstance), &tree.boxes[lo], (hi - lo) * sizeof(BoxInstance));
                 }
             }
         }
-        for (int d : depth) tree_depth = std::max(tree_depth, d);
-        std::vector<BoxInstance> boxes;
-        boxes.reserve(nodes.size() * 2);
-        level_first.assign(static_cast<size_t>(tree_depth) + 1, 0);
-        level_count.assign(static_cast<size_t>(tree_depth) + 1, 0);
-        for (int d = 0; d <= tree_depth; ++d) {
-            level_first[static_cast<size_t>(d)] = static_cast<uint32_t>(boxes.size());
-            for (size_t n = 0; n < nodes.size(); ++n)
-                if (depth[n] == d) boxes.push_back({nodes[n].box.min, nodes[n].box.max, static_cast<float>(d)});
-            level_count[static_cast<size_t>(d)] = static_cast<uint32_t>(boxes.size()) - level_first[static_cast<size_t>(d)];
-        }
-        leaves_first = static_cast<uint32_t>(boxes.size());
-        for (size_t n = 0; n < nodes.size(); ++n)
-            if (nodes[n].count > 0) boxes.push_back({nodes[n].box.min, nodes[n].box.max, static_cast<float>(depth[n])});
-        leaves_count = static_cast<uint32_t>(boxes.size()) - leaves_first;
-        glNamedBufferData(box_vbo, static_cast<GLsizeiptr>(boxes.size() * sizeof(BoxInstance)), boxes.data(), GL_STATIC_DRAW);
-        stats.bytes_uploaded += boxes.size() * sizeof(BoxInstance);
+        stats.bytes_uploaded += bytes;
+        stats.last_terrain_upload_bytes = bytes;
     }
 
     void upload_dynamic(const SceneView& view) {
@@ -394,6 +357,11 @@ void Renderer::set_scene(const SceneView& view, bool terrain_changed) {
     impl_->upload_dynamic(view);
 }
 
+void Renderer::update_terrain(const SceneView& view, const TerrainEdit& changed) {
+    if (!view.complete()) return;
+    impl_->update_terrain(*view.terrain, *view.bvh, view.paper_rows, changed);
+}
+
 void Renderer::update(const SceneView& view) {
     Impl& r = *impl_;
     if (!view.complete()) return;
@@ -446,14 +414,14 @@ void Renderer::draw(const Camera& camera, int width, int height, const RenderSet
     u.viewport = glm::vec4(static_cast<float>(width), static_cast<float>(height), camera.near_m, camera.far_m);
     u.water = glm::vec4(s.water_color, s.water_absorption);
     u.params = glm::vec4(s.water_refraction, s.fog ? 1.0f : 0.0f, s.particle_radius, proj[1][1]);
-    const float fog_distance = 2.5f * glm::length(r.terrain_bounds.empty() ? Vec3(100.0f) : r.terrain_bounds.extent());
-    u.terrain = glm::vec4(r.terrain_bounds.empty() ? 0.0f : r.terrain_bounds.min.y,
-                          r.terrain_bounds.empty() ? 1.0f : r.terrain_bounds.max.y,
+    const float fog_distance = 2.5f * glm::length(r.geo.bounds.empty() ? Vec3(100.0f) : r.geo.bounds.extent());
+    u.terrain = glm::vec4(r.geo.bounds.empty() ? 0.0f : r.geo.bounds.min.y,
+                          r.geo.bounds.empty() ? 1.0f : r.geo.bounds.max.y,
                           (s.terrain_texture && r.has_texture) ? 1.0f : 0.0f, fog_distance);
-    u.rect = r.terrain_rect;
+    u.rect = r.geo.rect;
     // The flow clock wraps every 1000 s (a multiple of the shader's phase period), so
     // float precision holds in long runs.
-    u.mode = glm::vec4(s.shading == WaterShading::Gouraud ? 1.0f : 0.0f, static_cast<float>(r.tree_depth),
+    u.mode = glm::vec4(s.shading == WaterShading::Gouraud ? 1.0f : 0.0f, static_cast<float>(r.tree.depth),
                        std::fmod(s.time_s, 1000.0f), s.flow_detail ? 1.0f : 0.0f);
     glNamedBufferSubData(r.ubo, 0, sizeof(u), &u);
     glBindBufferBase(GL_UNIFORM_BUFFER, 0, r.ubo);
@@ -491,12 +459,12 @@ void Renderer::draw(const Camera& camera, int width, int height, const RenderSet
         glDrawArrays(GL_POINTS, 0, static_cast<GLsizei>(r.stats.particles));
     }
     r.stats.bvh_boxes = 0;
-    if (s.bvh && !r.level_first.empty()) {
-        uint32_t first = r.leaves_first, count = r.leaves_count;
+    if (s.bvh && !r.tree.level_first.empty()) {
+        uint32_t first = r.tree.leaves_first, count = r.tree.leaves_count;
         if (s.bvh_level >= 0) {
-            const auto lvl = static_cast<size_t>(std::min(s.bvh_level, r.tree_depth));
-            first = r.level_first[lvl];
-            count = r.level_count[lvl];
+            const auto lvl = static_cast<size_t>(std::min(s.bvh_level, r.tree.depth));
+            first = r.tree.level_first[lvl];
+            count = r.tree.level_count[lvl];
         }
         glUseProgram(r.prog_boxes);
         glBindVertexArray(r.vao_boxes);

@@ -452,6 +452,56 @@ TEST(Renderer, ASculptedHillShowsAndUndoDrawsTheSameImage) {
     EXPECT_EQ(pixels_differing(before, undone, 0), 0u);
 }
 
+// Incremental terrain upload (issue 14): after a stroke, update_terrain sends only the
+// rows around it and the boxes the refit moved, and draws exactly what a whole upload
+// draws: a stroke inside, one over a corner (the skirts), the tree boxes drawn, undo.
+TEST(Renderer, AnIncrementalTerrainUploadDrawsWhatAWholeOneDraws) {
+    REQUIRE_GL();
+    auto sim = Simulation::create(small_valley());
+    ASSERT_TRUE(sim.ok()) << sim.error().message;
+    Simulation& s = *sim.value();
+    for (int i = 0; i < 10; ++i) s.step(1.0f / 60.0f);
+    auto ra = render::Renderer::create(), rb = render::Renderer::create();
+    ASSERT_TRUE(ra.ok() && rb.ok());
+    render::Renderer &inc = *ra.value(), &whole = *rb.value();
+    inc.set_scene(s.view());
+    const uint64_t full_bytes = inc.stats().last_terrain_upload_bytes;
+    render::Camera cam = render::frame_terrain(s.terrain());
+    render::fit_clip_planes(cam, s.terrain());
+    render::RenderSettings settings;
+    settings.bvh = true;  // the boxes the refit moved show too
+    const int w = 256, h = 160;
+    const auto draw = [&](render::Renderer& r) {
+        std::vector<uint8_t> rgb;
+        r.draw(cam, w, h, settings);
+        r.read_rgb(rgb);
+        return rgb;
+    };
+    const std::vector<uint8_t> before = draw(inc);
+    std::vector<TerrainEdit> edits;
+    const Vec3 c = s.terrain().bounds().center(), lo = s.terrain().bounds().min;
+    for (const Brush& brush : {Brush{.x = c.x, .z = c.z + 6.0f, .radius = 4.0f, .strength = 3.0f},
+                               Brush{.x = lo.x + 1.0f, .z = lo.z + 1.0f, .radius = 5.0f, .strength = 2.0f}}) {
+        auto e = s.sculpt(brush);
+        ASSERT_TRUE(e.ok()) << e.error().message;
+        ASSERT_FALSE(e->empty());
+        inc.update_terrain(s.view(), e.value());
+        const uint64_t sent = inc.stats().last_terrain_upload_bytes;
+        std::printf("stroke at (%.1f, %.1f): %llu of %llu bytes sent\n", brush.x, brush.z, (unsigned long long)sent,
+                    (unsigned long long)full_bytes);
+        EXPECT_GT(sent, 0u);
+        EXPECT_LT(sent * 4, full_bytes) << "an incremental upload sent a quarter of the terrain or more";
+        whole.set_scene(s.view(), true);
+        EXPECT_EQ(pixels_differing(draw(inc), draw(whole), 0), 0u) << "incremental and whole uploads draw differently";
+        edits.push_back(std::move(e.value()));
+    }
+    for (auto e = edits.rbegin(); e != edits.rend(); ++e) {
+        s.restore(*e);
+        inc.update_terrain(s.view(), *e);
+    }
+    EXPECT_EQ(pixels_differing(before, draw(inc), 0), 0u) << "undo did not draw the terrain as before";
+}
+
 /// Draws `sim` at two flow-clock times, flow detail on and off, close up.
 struct TwoTimes {
     std::vector<uint8_t> on0, on1, off0, off1;
