@@ -145,7 +145,7 @@ ScenarioResult bench_w2(int n) {
     CollisionDef collision{.mode = CollisionMode::Robust, .damping = 0.5f, .offset = 0.0f, .leaf_triangles = 8,
                            .radius = kW2Radius, .query = CollisionQuery::Heightfield};
     IntegratorDef integrator{.gravity = 9.82f, .fixed_dt = 1.0f / 60.0f, .substeps = 2};
-    ParticleSolver solver(terrain.value(), bvh.value(), spawn, springs, collision, integrator, 12345u);
+    SpringSolver solver(terrain.value(), bvh.value(), spawn, springs, collision, integrator, 12345u);
     solver.place(spheres);
     double fall_ms = 0.0;
     for (int step = 1; step <= 600; ++step) {
@@ -225,8 +225,8 @@ ScenarioResult bench_w3(int nx, int warmup, int steps) {
     SpawnDef spawn{.count = n, .center = Vec3(side / 2, 2, side / 2), .half_extent = Vec3(0.0f), .interval = 0};
     PbfDef pbf{.spacing = d, .kernel_radius = 2.0f * d, .iterations = 3};
     const float dt = 1.0f / 120.0f;
-    ParticleSolver solver(terrain.value(), bvh.value(), spawn, SpringDef{}, CollisionDef{.mode = CollisionMode::None},
-                          IntegratorDef{.gravity = 0.0f, .fixed_dt = dt, .substeps = 1}, 1u, pbf, SinkDef{});
+    PbfSolver solver(terrain.value(), bvh.value(), spawn, pbf, CollisionDef{.mode = CollisionMode::None},
+                          IntegratorDef{.gravity = 0.0f, .fixed_dt = dt, .substeps = 1}, 1u, SinkDef{});
     solver.place(block);
     float density_max = 0.0f;
     for (int s = -warmup; s < steps; ++s) {

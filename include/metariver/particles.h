@@ -17,6 +17,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace mr {
@@ -247,22 +248,21 @@ public:
     virtual std::span<const Vec3> last_exits() const { return {}; }
 };
 
-/// Owns the stepping of one particle set over one terrain: spawning, forces,
-/// integration, collision and respawn. Deterministic for a seed.
-class ParticleSolver final : public Solver {
+/// The parts the own solvers share: one particle set over one terrain, its spawning and
+/// the lattice source (the emitters), the sink, terrain collision and respawn, and the
+/// neighbour grid with its cell ordering. The force model is the derived type's:
+/// SpringSolver (the paper's springs, section 2.3) or PbfSolver (Position Based Fluids).
+/// Deterministic for a seed; not copyable (the terrain and tree are referenced).
+class ParticleSolver : public Solver {
 public:
-    ParticleSolver(const Terrain& terrain, const Bvh& bvh, SpawnDef spawn, SpringDef springs,
-                   CollisionDef collision, IntegratorDef integrator, uint32_t seed);
-    /// The same with the PBF fluid model (`pbf` set: solver = "pbf"; springs unused) and a sink.
-    ParticleSolver(const Terrain& terrain, const Bvh& bvh, SpawnDef spawn, SpringDef springs,
-                   CollisionDef collision, IntegratorDef integrator, uint32_t seed, std::optional<PbfDef> pbf,
-                   SinkDef sink);
+    ParticleSolver(const ParticleSolver&) = delete;
+    ParticleSolver& operator=(const ParticleSolver&) = delete;
 
     /// Advances one rendered frame: activates a particle when due, then runs
     /// `substeps` steps of dt/substeps (dt = fixed_dt when set, else frame_dt).
     void step_frame(float frame_dt) override;
     /// One integration step of dt seconds (forces, integrate, collide, respawn).
-    void step(float dt);
+    virtual void step(float dt) = 0;
 
     const Particles& particles() const override { return particles_; }
     Particles& particles_mut() { return particles_; }
@@ -274,13 +274,6 @@ public:
     /// within `radius` of `center` (d: the 3D distance) and wakes it if it slept.
     /// Returns how many it pushed.
     size_t push(const Vec3& center, float radius, const Vec3& velocity);
-    /// Live edits (Simulation::apply): the parameters a running solver reads, replaced
-    /// in place; the particles, their ids and the frame count are kept. The source's
-    /// lattice and the PBF rest density are recomputed from the new values. The budget
-    /// (spawn.count) and the solver kind (pbf set or not) must not change: false, and
-    /// nothing changed, when they would.
-    bool set_params(const SpawnDef& spawn, const SpringDef& springs, const CollisionDef& collision,
-                    const IntegratorDef& integrator, const std::optional<PbfDef>& pbf, const SinkDef& sink);
     void pour(const Vec3& center, int count) override;
     std::vector<std::string> warnings() const override;
     /// step_frame clears the list; every step() (substep) appends its exits.
@@ -304,26 +297,26 @@ public:
 
     /// The neighbour grid of the latest step (grid spring mode, PBF).
     const NeighborGrid& grid() const { return grid_; }
-    /// PBF number density of every particle through the grid (after sort_by_cell) and
-    /// by brute force over all active pairs: the twin tests compare them.
-    void pbf_densities(std::vector<float>& out);
-    void pbf_densities_brute_force(std::vector<float>& out) const;
-    /// PBF rest number density (lattice sum of the poly6 kernel).
-    float pbf_rest_density() const { return rest_density_; }
-    /// PBF passes through per-particle neighbour lists built once per step (true, the
-    /// default) or through the 27 cells around each particle's cell (false: the slow
-    /// twin; the same pairs in the same order, so the same result bit for bit). `skin`:
-    /// the lists' reach beyond h, as a fraction of h (a smaller skin rebuilds more often).
-    void set_pbf_neighbor_lists(bool on, float skin = kPbfListSkin) {
-        pbf_lists_on_ = on;
-        pbf_list_skin_ = skin;
-    }
-    /// The lists of the latest PBF step (their builds() counts rebuilds too).
-    const NeighborLists& pbf_neighbor_lists() const { return pbf_lists_; }
     /// Takes active particle i out (it joins the inactive pool; arrays stay a prefix).
     void deactivate(size_t i);
 
-private:
+protected:
+    /// `lattice_spacing` > 0: activations go through a lattice source at that spacing
+    /// (PbfSolver builds it once its own state is ready: build_lattice()); 0: random
+    /// points of the spawn volume.
+    ParticleSolver(const Terrain& terrain, const Bvh& bvh, SpawnDef spawn, CollisionDef collision,
+                   IntegratorDef integrator, uint32_t seed, SinkDef sink, float lattice_spacing);
+    /// Live edits: the shared parameters replaced in place (the derived set_params call
+    /// it); false, and nothing changed, when the budget (spawn.count) would change.
+    bool set_shared(const SpawnDef& spawn, const CollisionDef& collision, const IntegratorDef& integrator,
+                    const SinkDef& sink, float lattice_spacing);
+
+    /// Per-particle state of the derived model: a slot was (re)activated or woken
+    /// (reset_slot), two slots swapped, or every array reordered (new slot k = old perm[k]).
+    virtual void reset_slot(size_t /*i*/) {}
+    virtual void swap_slots(size_t /*i*/, size_t /*j*/) {}
+    virtual void permute_slots(std::span<const uint32_t> /*perm*/) {}
+
     struct StepCounts {
         uint64_t collisions = 0;
         uint64_t guarded = 0;
@@ -333,11 +326,6 @@ private:
     void collide(size_t i, float dt, StepCounts& c);
     void collide_paper(size_t i, float dt, StepCounts& c);
     void collide_robust(size_t i, float dt, StepCounts& c);
-    /// Fluid response (PBF): the swept robust query on last -> p, the particle slides
-    /// along the ground (normal motion removed, damped), heightfield guard.
-    void collide_fluid(size_t i, StepCounts& c);
-    void step_pbf(float dt);
-    void init_pbf();
     void emit(float dt);
     /// PBF: emits floor(emit_debt_) particles (at most the pool) into free lattice slots.
     void emit_lattice();
@@ -354,10 +342,6 @@ private:
     /// Counts a particle-step that ended below the mesh (`to` in the terrain-lifted
     /// frame) as tunneled, then lifts it onto the mesh (+ offset) and counts guarded.
     void count_and_guard(Vec3& to, Vec3& v, StepCounts& c) const;
-    /// Moves a predicted position (PBF iterations) out of the lifted terrain along the
-    /// triangle normal to `offset` above it (or back to `fallback` where that fails);
-    /// true when it had to.
-    bool push_out_of_terrain(Vec3& x, const Vec3& fallback) const;
     bool out_of_bounds(const Vec3& p) const;
     /// Bins active particles and reorders every array by cell (grid mode).
     void sort_by_cell(float cell);
@@ -366,7 +350,6 @@ private:
     const Terrain& terrain_;
     const Bvh& bvh_;
     SpawnDef spawn_;
-    SpringDef springs_;
     CollisionDef collision_;
     IntegratorDef integrator_;
     Lcg rng_;
@@ -378,27 +361,91 @@ private:
     NeighborGrid grid_;
     std::vector<uint8_t> respawn_flag_;
     std::vector<Vec3> exits_;  ///< last_exits(): reused, no allocation once warm
-    std::optional<PbfDef> pbf_;
     SinkDef sink_;
-    double emit_credit_ = 0.0;  ///< fractional particles the source owes
+    float lattice_spacing_ = 0.0f;  ///< > 0: the lattice source's spacing
+    double emit_credit_ = 0.0;      ///< fractional particles the source owes
     std::optional<LatticeSource> lattice_;
     std::vector<Vec3> emit_slots_;  ///< scratch of emit_lattice()
-    float rest_density_ = 1.0f;
-    float lattice_grad_sum_ = 1.0f;
-    std::vector<float> lambda_, density_;
-    std::vector<uint8_t> contact_;  ///< PBF: held by the terrain this step
-    /// PBF sleeping, per slot: consecutive slow steps (saturating; asleep at
-    /// kSleepAfterSeconds' worth).
-    std::vector<uint16_t> slow_steps_;
-    std::vector<Vec3> delta_, omega_;
-    NeighborLists pbf_lists_;
-    bool pbf_lists_on_ = true;
-    float pbf_list_skin_ = kPbfListSkin;
-    std::vector<float> pair_cache_;  ///< PBF: per list entry, W and the grad factor of the density pass
     // Reorder scratch (reused; no allocation once warm).
     std::vector<uint32_t> perm_;
     std::vector<Vec3> scratch_vec_;
     std::vector<uint32_t> scratch_id_;
+};
+
+/// The paper's particles (section 2.3): gravity plus Hooke springs between particles
+/// (eq. 3; the all-pairs loop or its grid twin), semi-implicit Euler, and collision in
+/// the paper's mode (reflect and damp in the leaf of the new position) or the robust one.
+class SpringSolver final : public ParticleSolver {
+public:
+    SpringSolver(const Terrain& terrain, const Bvh& bvh, SpawnDef spawn, SpringDef springs, CollisionDef collision,
+                 IntegratorDef integrator, uint32_t seed, SinkDef sink = {});
+    void step(float dt) override;
+    /// Live edits (Simulation::apply): false, and nothing changed, when the budget changes.
+    bool set_params(const SpawnDef& spawn, const SpringDef& springs, const CollisionDef& collision,
+                    const IntegratorDef& integrator, const SinkDef& sink);
+
+private:
+    SpringDef springs_;
+};
+
+/// Position Based Fluids (Macklin and Mueller 2013; src/particles/pbf.cpp): the density
+/// constraint over per-particle neighbour lists, the fluid's sliding collision, XSPH,
+/// vorticity confinement, sleeping; emission through the lattice source.
+class PbfSolver final : public ParticleSolver {
+public:
+    PbfSolver(const Terrain& terrain, const Bvh& bvh, SpawnDef spawn, PbfDef pbf, CollisionDef collision,
+              IntegratorDef integrator, uint32_t seed, SinkDef sink = {});
+    void step(float dt) override;
+    /// Live edits (Simulation::apply): the rest density and the source's lattice are
+    /// recomputed from the new values; false, and nothing changed, when the budget changes.
+    bool set_params(const SpawnDef& spawn, const PbfDef& pbf, const CollisionDef& collision,
+                    const IntegratorDef& integrator, const SinkDef& sink);
+    const PbfDef& def() const { return pbf_; }
+
+    /// Number density of every particle through the grid (after sort_by_cell) and by
+    /// brute force over all active pairs: the twin tests compare them.
+    void pbf_densities(std::vector<float>& out);
+    void pbf_densities_brute_force(std::vector<float>& out) const;
+    /// Rest number density (lattice sum of the poly6 kernel).
+    float pbf_rest_density() const { return rest_density_; }
+    /// Passes through per-particle neighbour lists built once per step (true, the
+    /// default) or through the 27 cells around each particle's cell (false: the slow
+    /// twin; the same pairs in the same order, so the same result bit for bit). `skin`:
+    /// the lists' reach beyond h, as a fraction of h (a smaller skin rebuilds more often).
+    void set_pbf_neighbor_lists(bool on, float skin = kPbfListSkin) {
+        pbf_lists_on_ = on;
+        pbf_list_skin_ = skin;
+    }
+    /// The lists of the latest step (their builds() counts rebuilds too).
+    const NeighborLists& pbf_neighbor_lists() const { return pbf_lists_; }
+
+private:
+    void init_pbf();
+    /// Fluid response: the swept robust query on last -> p, the particle slides along
+    /// the ground (normal motion removed, damped), heightfield guard.
+    void collide_fluid(size_t i, StepCounts& c);
+    /// Moves a predicted position (iterations) out of the lifted terrain along the
+    /// triangle normal to `offset` above it (or back to `fallback` where that fails);
+    /// true when it had to.
+    bool push_out_of_terrain(Vec3& x, const Vec3& fallback) const;
+    void reset_slot(size_t i) override { slow_steps_[i] = 0; }
+    void swap_slots(size_t i, size_t j) override { std::swap(slow_steps_[i], slow_steps_[j]); }
+    void permute_slots(std::span<const uint32_t> perm) override;
+
+    PbfDef pbf_;
+    float rest_density_ = 1.0f;
+    float lattice_grad_sum_ = 1.0f;
+    std::vector<float> lambda_, density_;
+    std::vector<uint8_t> contact_;  ///< held by the terrain this step
+    /// Sleeping, per slot: consecutive slow steps (saturating; asleep at
+    /// kSleepAfterSeconds' worth).
+    std::vector<uint16_t> slow_steps_;
+    std::vector<uint16_t> scratch_slow_;
+    std::vector<Vec3> delta_, omega_;
+    NeighborLists pbf_lists_;
+    bool pbf_lists_on_ = true;
+    float pbf_list_skin_ = kPbfListSkin;
+    std::vector<float> pair_cache_;  ///< per list entry, W and the grad factor of the density pass
 };
 
 }  // namespace mr

@@ -98,8 +98,29 @@ void for_each_binned(const NeighborGrid& grid, const NeighborLists* lists, F&& f
 
 }  // namespace
 
-void ParticleSolver::init_pbf() {
-    const PbfDef& d = *pbf_;
+PbfSolver::PbfSolver(const Terrain& terrain, const Bvh& bvh, SpawnDef spawn, PbfDef pbf, CollisionDef collision,
+                     IntegratorDef integrator, uint32_t seed, SinkDef sink)
+    : ParticleSolver(terrain, bvh, spawn, collision, integrator, seed, sink, pbf.spacing), pbf_(pbf) {
+    slow_steps_.assign(particles_.size(), 0);
+    init_pbf();
+}
+
+bool PbfSolver::set_params(const SpawnDef& spawn, const PbfDef& pbf, const CollisionDef& collision,
+                           const IntegratorDef& integrator, const SinkDef& sink) {
+    if (!set_shared(spawn, collision, integrator, sink, pbf.spacing)) return false;
+    pbf_ = pbf;
+    init_pbf();  // rest density, lattice constants and the source's lattice
+    return true;
+}
+
+void PbfSolver::permute_slots(std::span<const uint32_t> perm) {
+    scratch_slow_.resize(perm.size());
+    for (size_t k = 0; k < perm.size(); ++k) scratch_slow_[k] = slow_steps_[perm[k]];
+    slow_steps_.swap(scratch_slow_);
+}
+
+void PbfSolver::init_pbf() {
+    const PbfDef& d = pbf_;
     const Kernels k(d.kernel_radius);
     // Lattice sums: rest density and a lattice particle's sum |grad C|^2.
     const int m = int(std::ceil(d.kernel_radius / d.spacing)) + 1;
@@ -122,9 +143,9 @@ void ParticleSolver::init_pbf() {
     lattice_grad_sum_ = float(inv * inv * (g2 + double(glm::dot(gsum, gsum))));
 }
 
-void ParticleSolver::pbf_densities(std::vector<float>& out) {
-    const Kernels k(pbf_->kernel_radius);
-    sort_by_cell(pbf_->kernel_radius);
+void PbfSolver::pbf_densities(std::vector<float>& out) {
+    const Kernels k(pbf_.kernel_radius);
+    sort_by_cell(pbf_.kernel_radius);
     const Particles& p = particles_;
     out.assign(p.size(), 0.0f);
     for_each_run(grid_, [&](uint32_t i, const Ranges& rg) {
@@ -139,8 +160,8 @@ void ParticleSolver::pbf_densities(std::vector<float>& out) {
     });
 }
 
-void ParticleSolver::pbf_densities_brute_force(std::vector<float>& out) const {
-    const Kernels k(pbf_->kernel_radius);
+void PbfSolver::pbf_densities_brute_force(std::vector<float>& out) const {
+    const Kernels k(pbf_.kernel_radius);
     const Particles& p = particles_;
     out.assign(p.size(), 0.0f);
     for (size_t i = 0; i < p.size(); ++i) {
@@ -155,7 +176,7 @@ void ParticleSolver::pbf_densities_brute_force(std::vector<float>& out) const {
     }
 }
 
-void ParticleSolver::collide_fluid(size_t i, StepCounts& c) {
+void PbfSolver::collide_fluid(size_t i, StepCounts& c) {
     Particles& p = particles_;
     const Vec3 lift(0.0f, collision_.radius, 0.0f);
     Vec3 from = p.last_position[i] - lift;
@@ -201,7 +222,7 @@ void ParticleSolver::collide_fluid(size_t i, StepCounts& c) {
 // slack under the floor's plane, and accepting it there kept particles in the crease
 // bobbing by the slack every few steps, never at rest (the box basin of
 // tests/scene/sound_water_test.cpp); the floor's own push follows instead.
-bool ParticleSolver::push_out_of_terrain(Vec3& x, const Vec3& fallback) const {
+bool PbfSolver::push_out_of_terrain(Vec3& x, const Vec3& fallback) const {
     const float lift = collision_.radius + collision_.offset;
     const float slack = 0.5f * collision_.offset;
     constexpr uint32_t kNone = ~0u;
@@ -230,8 +251,8 @@ bool ParticleSolver::push_out_of_terrain(Vec3& x, const Vec3& fallback) const {
     return true;
 }
 
-void ParticleSolver::step_pbf(float dt) {
-    const PbfDef& d = *pbf_;
+void PbfSolver::step(float dt) {
+    const PbfDef& d = pbf_;
     Particles& p = particles_;
     const size_t n = p.size();
     const Kernels k(d.kernel_radius);

@@ -46,22 +46,16 @@ std::string_view to_string(CollisionQuery q) {
     return "?";
 }
 
-ParticleSolver::ParticleSolver(const Terrain& terrain, const Bvh& bvh, SpawnDef spawn, SpringDef springs,
-                               CollisionDef collision, IntegratorDef integrator, uint32_t seed)
-    : ParticleSolver(terrain, bvh, spawn, springs, collision, integrator, seed, std::nullopt, SinkDef{}) {}
-
-ParticleSolver::ParticleSolver(const Terrain& terrain, const Bvh& bvh, SpawnDef spawn, SpringDef springs,
-                               CollisionDef collision, IntegratorDef integrator, uint32_t seed,
-                               std::optional<PbfDef> pbf, SinkDef sink)
+ParticleSolver::ParticleSolver(const Terrain& terrain, const Bvh& bvh, SpawnDef spawn, CollisionDef collision,
+                               IntegratorDef integrator, uint32_t seed, SinkDef sink, float lattice_spacing)
     : terrain_(terrain),
       bvh_(bvh),
       spawn_(spawn),
-      springs_(springs),
       collision_(collision),
       integrator_(integrator),
       rng_(seed),
-      pbf_(pbf),
-      sink_(sink) {
+      sink_(sink),
+      lattice_spacing_(lattice_spacing) {
     const size_t n = static_cast<size_t>(std::max(spawn_.count, 0));
     particles_.resize(n);
     for (size_t i = 0; i < n; ++i) {
@@ -70,9 +64,11 @@ ParticleSolver::ParticleSolver(const Terrain& terrain, const Bvh& bvh, SpawnDef 
         particles_.id[i] = static_cast<uint32_t>(i);
     }
     respawn_flag_.assign(n, 0);
-    slow_steps_.assign(n, 0);
-    if (pbf_) init_pbf();
 }
+
+SpringSolver::SpringSolver(const Terrain& terrain, const Bvh& bvh, SpawnDef spawn, SpringDef springs,
+                           CollisionDef collision, IntegratorDef integrator, uint32_t seed, SinkDef sink)
+    : ParticleSolver(terrain, bvh, spawn, collision, integrator, seed, sink, 0.0f), springs_(springs) {}
 
 void ParticleSolver::spawn(size_t i) {
     const Vec3 lo = spawn_.center - spawn_.half_extent;
@@ -101,7 +97,7 @@ void ParticleSolver::spawn(size_t i) {
     particles_.velocity[i] = spawn_.initial_velocity;
     particles_.active[i] = 1;
     particles_.birth_frame[i] = static_cast<uint32_t>(frame_);
-    slow_steps_[i] = 0;
+    reset_slot(i);
 }
 
 size_t ParticleSolver::slot_of_id(uint32_t id) const {
@@ -122,20 +118,25 @@ void ParticleSolver::place(std::span<const Vec3> positions, std::span<const Vec3
         particles_.velocity[i] = k < velocities.size() ? velocities[k] : spawn_.initial_velocity;
         particles_.active[i] = 1;
         particles_.birth_frame[i] = static_cast<uint32_t>(frame_);
-        slow_steps_[i] = 0;
+        reset_slot(i);
     }
 }
 
-bool ParticleSolver::set_params(const SpawnDef& spawn, const SpringDef& springs, const CollisionDef& collision,
-                                const IntegratorDef& integrator, const std::optional<PbfDef>& pbf, const SinkDef& sink) {
-    if (spawn.count != spawn_.count || pbf.has_value() != pbf_.has_value()) return false;
+bool ParticleSolver::set_shared(const SpawnDef& spawn, const CollisionDef& collision, const IntegratorDef& integrator,
+                                const SinkDef& sink, float lattice_spacing) {
+    if (spawn.count != spawn_.count) return false;
     spawn_ = spawn;
-    springs_ = springs;
     collision_ = collision;
     integrator_ = integrator;
     sink_ = sink;
-    pbf_ = pbf;
-    if (pbf_) init_pbf();  // rest density, lattice constants and the source's lattice
+    lattice_spacing_ = lattice_spacing;
+    return true;
+}
+
+bool SpringSolver::set_params(const SpawnDef& spawn, const SpringDef& springs, const CollisionDef& collision,
+                              const IntegratorDef& integrator, const SinkDef& sink) {
+    if (!set_shared(spawn, collision, integrator, sink, 0.0f)) return false;
+    springs_ = springs;
     return true;
 }
 
@@ -154,7 +155,7 @@ size_t ParticleSolver::push(const Vec3& center, float radius, const Vec3& veloci
         const float q = glm::dot(d, d) / r2;
         if (q >= 1.0f) continue;
         particles_.velocity[i] += velocity * ((1.0f - q) * (1.0f - q));
-        slow_steps_[i] = 0;  // awake: its next step is not undone
+        reset_slot(i);  // awake: its next step is not undone
         ++pushed;
     }
     return pushed;
@@ -197,7 +198,7 @@ void ParticleSolver::deactivate(size_t i) {
         std::swap(p.force[i], p.force[j]);
         std::swap(p.id[i], p.id[j]);
         std::swap(p.birth_frame[i], p.birth_frame[j]);
-        std::swap(slow_steps_[i], slow_steps_[j]);
+        swap_slots(i, j);
     }
     p.active[j] = 0;
 }
@@ -228,7 +229,7 @@ void ParticleSolver::build_lattice() {
                          .center = spawn_.center,
                          .half_extent = spawn_.half_extent,
                          .inflow = spawn_.initial_velocity,
-                         .spacing = pbf_->spacing,
+                         .spacing = lattice_spacing_,
                          .clearance = collision_.mode == CollisionMode::None ? 0.0f : collision_.radius + collision_.offset,
                          .gravity = integrator_.gravity,
                          .follow_ground = spawn_.follow_ground && spawn_.particles_per_second() > 0.0f};
@@ -243,12 +244,12 @@ std::vector<std::string> ParticleSolver::warnings() const {
         w.push_back(fmt::format("particles.spawn_center: the source volume at [{}, {}, {}] has no lattice slot above "
                                 "the terrain (spacing pbf.spacing = {} m): it cannot emit; raise the source or "
                                 "widen particles.spawn_half_extent",
-                                spawn_.center.x, spawn_.center.y, spawn_.center.z, pbf_->spacing));
+                                spawn_.center.x, spawn_.center.y, spawn_.center.z, lattice_spacing_));
     else if (rate > lattice_->max_rate())
         w.push_back(fmt::format("particles.flow_rate: {:.1f} particles per second is more than the source can deliver "
                                 "at spacing {} m and inflow speed {:.2f} m/s ({} lattice slots): capped to {:.1f}; "
                                 "widen particles.spawn_half_extent or raise particles.initial_velocity",
-                                rate, pbf_->spacing, glm::length(spawn_.initial_velocity), lattice_->slots().size(),
+                                rate, lattice_spacing_, glm::length(spawn_.initial_velocity), lattice_->slots().size(),
                                 lattice_->max_rate()));
     return w;
 }
@@ -267,7 +268,7 @@ void ParticleSolver::emit_lattice() {
         particles_.velocity[i] = spawn_.initial_velocity;
         particles_.active[i] = 1;
         particles_.birth_frame[i] = static_cast<uint32_t>(frame_);
-        slow_steps_[i] = 0;
+        reset_slot(i);
         ++counters_.emitted;
     }
     emit_credit_ -= double(emit_slots_.size());
@@ -396,19 +397,14 @@ void ParticleSolver::sort_by_cell(float cell) {
     p.id.swap(scratch_id_);
     for (size_t k = 0; k < n; ++k) scratch_id_[k] = p.birth_frame[perm_[k]];  // same scratch: no allocation
     p.birth_frame.swap(scratch_id_);
-    for (size_t k = 0; k < n; ++k) scratch_id_[k] = slow_steps_[perm_[k]];
-    for (size_t k = 0; k < n; ++k) slow_steps_[k] = static_cast<uint16_t>(scratch_id_[k]);
+    permute_slots(perm_);
     // active stays a prefix of the same length: nothing to move.
     grid_.relabel_identity();
 }
 
-void ParticleSolver::step(float dt) {
+void SpringSolver::step(float dt) {
     Particles& p = particles_;
     const size_t n = p.size();
-    if (pbf_) {
-        step_pbf(dt);
-        return;
-    }
     const bool grid_springs = springs_.mode == SpringMode::Grid;
     if (grid_springs) sort_by_cell(spring_reach(springs_));
 

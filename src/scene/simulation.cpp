@@ -157,12 +157,12 @@ Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh, std::optio
     configure_field();
     switch (def_.solver) {
         case SolverKind::Springs:
-            solver_ = std::make_unique<ParticleSolver>(terrain_, bvh_, spawn, def_.springs, def_.collision,
-                                                       def_.integrator, def_.seed, std::nullopt, def_.sink);
+            solver_ = std::make_unique<SpringSolver>(terrain_, bvh_, spawn, def_.springs, def_.collision,
+                                                     def_.integrator, def_.seed, def_.sink);
             break;
         case SolverKind::Pbf:
-            solver_ = std::make_unique<ParticleSolver>(terrain_, bvh_, spawn, def_.springs, def_.collision,
-                                                       def_.integrator, def_.seed, def_.pbf, def_.sink);
+            solver_ = std::make_unique<PbfSolver>(terrain_, bvh_, spawn, def_.pbf, def_.collision, def_.integrator,
+                                                  def_.seed, def_.sink);
             if (def_.foam.enabled) foam_.emplace(def_.foam, def_.pbf.kernel_radius, def_.integrator.gravity);
             if (def_.spawn.prefill && terrain_.condition_report().mode == TerrainCondition::Carve) prefill_channel();
             break;

@@ -56,12 +56,16 @@ Result<ApplyResult> Simulation::apply(const SceneDef& next) {
     if (!r.rebuild_key.empty()) return r;
     if (auto f = detail::field_box_fits(edited.field, terrain_); !f) return f.error();
     if (auto v = validate_on_terrain(edited, terrain_); !v) return v.error();
-    if (auto* ps = dynamic_cast<ParticleSolver*>(solver_.get())) {
-        const std::optional<PbfDef> pbf = edited.solver == SolverKind::Pbf ? std::optional<PbfDef>(edited.pbf) : std::nullopt;
-        if (!ps->set_params(edited.spawn, edited.springs, edited.collision, edited.integrator, pbf, edited.sink)) {
-            r.rebuild_key = "particles.count";  // not reached: the budget's key asks for a rebuild above
-            return r;
-        }
+    // Each solver takes the keys it reads (the budget's key asks for a rebuild above, so
+    // a refusal is not reached).
+    bool taken = true;
+    if (auto* pbf = dynamic_cast<PbfSolver*>(solver_.get()))
+        taken = pbf->set_params(edited.spawn, edited.pbf, edited.collision, edited.integrator, edited.sink);
+    else if (auto* springs = dynamic_cast<SpringSolver*>(solver_.get()))
+        taken = springs->set_params(edited.spawn, edited.springs, edited.collision, edited.integrator, edited.sink);
+    if (!taken) {
+        r.rebuild_key = "particles.count";
+        return r;
     }
     const bool foam_changed = std::any_of(r.keys.begin(), r.keys.end(), [](const std::string& k) {
         return k.starts_with("foam.") || k == "forces.gravity" || k == "pbf.kernel_radius";

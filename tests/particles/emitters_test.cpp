@@ -35,8 +35,8 @@ TEST(Emitters, FlowRateEmitsThatManyParticlesPerSecondUntilTheBudgetIsOut) {
     World w = ramp_world();
     SpawnDef spawn{.count = 100, .center = Vec3(3, 9, 8), .half_extent = Vec3(1, 0.2f, 1), .interval = 0};
     spawn.flow_rate = 30.0f;
-    ParticleSolver s(w.terrain, w.bvh, spawn, SpringDef{}, CollisionDef{.mode = CollisionMode::Robust},
-                     IntegratorDef{.fixed_dt = 1.0f / 60.0f}, 1, std::nullopt, SinkDef{});
+    SpringSolver s(w.terrain, w.bvh, spawn, SpringDef{}, CollisionDef{.mode = CollisionMode::Robust},
+                     IntegratorDef{.fixed_dt = 1.0f / 60.0f}, 1, SinkDef{});
     for (int f = 0; f < 60; ++f) s.step_frame(1.0f / 60.0f);
     EXPECT_EQ(s.counters().emitted, 30u);
     EXPECT_EQ(s.particles().active_count(), 30u);
@@ -56,9 +56,9 @@ TEST(Emitters, OutletEdgesRecycleParticlesToTheSourceAtAFixedBudget) {
     SpawnDef spawn{.count = 200, .center = Vec3(3, 9, 8), .half_extent = Vec3(1, 0.2f, 1), .interval = 0};
     spawn.flow_rate = 40.0f;
     spawn.shape = SourceShape::Disc;
-    ParticleSolver s(w.terrain, w.bvh, spawn, SpringDef{},
+    SpringSolver s(w.terrain, w.bvh, spawn, SpringDef{},
                      CollisionDef{.mode = CollisionMode::Robust, .damping = 0.0f, .offset = 0.01f},
-                     IntegratorDef{.fixed_dt = 1.0f / 60.0f}, 1, std::nullopt, SinkDef{.kind = SinkKind::Edges});
+                     IntegratorDef{.fixed_dt = 1.0f / 60.0f}, 1, SinkDef{.kind = SinkKind::Edges});
     for (int f = 0; f < 1200; ++f) {
         s.step_frame(1.0f / 60.0f);
         ASSERT_LE(s.particles().active_count(), 200u);
@@ -77,17 +77,17 @@ TEST(Emitters, OutletEdgesRecycleParticlesToTheSourceAtAFixedBudget) {
 
 /// Springless particles sliding down the ramp from a box source near its top (x = 3) at
 /// `rate` per second, 1/60 s frames of `substeps` steps.
-ParticleSolver sliding(const World& w, int count, float rate, SinkDef sink, int substeps = 1) {
+SpringSolver sliding(const World& w, int count, float rate, SinkDef sink, int substeps = 1) {
     SpawnDef spawn{.count = count, .center = Vec3(3, 9, 8), .half_extent = Vec3(1, 0.2f, 1), .interval = 0};
     spawn.flow_rate = rate;
-    return ParticleSolver(w.terrain, w.bvh, spawn, SpringDef{},
+    return SpringSolver(w.terrain, w.bvh, spawn, SpringDef{},
                           CollisionDef{.mode = CollisionMode::Robust, .damping = 0.0f, .offset = 0.01f},
-                          IntegratorDef{.fixed_dt = 1.0f / 60.0f, .substeps = substeps}, 1, std::nullopt, sink);
+                          IntegratorDef{.fixed_dt = 1.0f / 60.0f, .substeps = substeps}, 1, sink);
 }
 
 TEST(Emitters, BoxSinkTakesParticlesOut) {
     World w = ramp_world();
-    ParticleSolver s =
+    SpringSolver s =
         sliding(w, 50, 25.0f, SinkDef{.kind = SinkKind::Box, .min = Vec3(20, -10, 0), .max = Vec3(24, 20, 16)});
     for (int f = 0; f < 900; ++f) {
         s.step_frame(1.0f / 60.0f);
@@ -166,7 +166,7 @@ TEST(ChannelMap, ValleyMainPathRunsDownTheChannelToTheLargestOutlet) {
 
 TEST(Emitters, OutletEdgeExitsAreRecordedWhereTheParticlesLeftEachFrame) {
     World w = ramp_world();
-    ParticleSolver s = sliding(w, 150, 40.0f, SinkDef{.kind = SinkKind::Edges}, 2);
+    SpringSolver s = sliding(w, 150, 40.0f, SinkDef{.kind = SinkKind::Edges}, 2);
     uint64_t exits = 0;
     for (int f = 0; f < 900; ++f) {
         const uint64_t before = s.counters().sunk;
@@ -324,8 +324,8 @@ TEST(LatticeSource, AFlowRateTheSourceCannotDeliverIsAWarningAndCapped) {
                    .initial_velocity = Vec3(0, -1, 0)};
     spawn.shape = SourceShape::Disc;
     spawn.flow_rate = 2000.0f;
-    ParticleSolver s(w.terrain, w.bvh, spawn, SpringDef{}, CollisionDef{.mode = CollisionMode::Robust, .radius = 0.1f},
-                     IntegratorDef{.fixed_dt = 1.0f / 120.0f}, 1, PbfDef{}, SinkDef{});
+    PbfSolver s(w.terrain, w.bvh, spawn, PbfDef{}, CollisionDef{.mode = CollisionMode::Robust, .radius = 0.1f},
+                     IntegratorDef{.fixed_dt = 1.0f / 120.0f}, 1, SinkDef{});
     ASSERT_NE(s.lattice_source(), nullptr);
     const float cap = s.lattice_source()->max_rate();
     EXPECT_LT(cap, 2000.0f);

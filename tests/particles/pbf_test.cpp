@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <vector>
 
 namespace mr {
@@ -45,38 +46,38 @@ std::vector<Vec3> lattice(Vec3 o, int nx, int ny, int nz, float d) {
 
 PbfDef pbf_def() { return PbfDef{}; }  // spacing 0.5, h 1.0, 3 iterations
 
-ParticleSolver column_solver(const World& w, const std::vector<Vec3>& pts) {
+/// A PBF solver over `w` holding `pts` (non-copyable: returned by pointer).
+std::unique_ptr<PbfSolver> column_solver(const World& w, const std::vector<Vec3>& pts) {
     SpawnDef spawn{.count = int(pts.size()), .center = Vec3(8, 5, 8), .half_extent = Vec3(0), .interval = 0};
     spawn.flow_rate = 0.0f;
-    ParticleSolver s(w.terrain, w.bvh, spawn, SpringDef{},
+    auto s = std::make_unique<PbfSolver>(w.terrain, w.bvh, spawn, pbf_def(),
                      CollisionDef{.mode = CollisionMode::Robust, .damping = 0.02f, .offset = 0.005f, .radius = 0.1f,
                                   .query = CollisionQuery::Heightfield},
-                     IntegratorDef{.gravity = 9.82f, .fixed_dt = 1.0f / 120.0f, .substeps = 1}, 3, pbf_def(), SinkDef{});
-    s.place(pts);
+                     IntegratorDef{.gravity = 9.82f, .fixed_dt = 1.0f / 120.0f, .substeps = 1}, 3, SinkDef{});
+    s->place(pts);
     return s;
 }
 
 /// A PBF solver on `w` at 120 steps/s with robust collision (radius 0.1 m) and the
 /// given bed friction; only place() (or the spawn's own interval) activates particles.
-ParticleSolver robust_solver(const World& w, const SpawnDef& spawn, const PbfDef& def, float damping,
+PbfSolver robust_solver(const World& w, const SpawnDef& spawn, const PbfDef& def, float damping,
                              float friction_speed = 0.0f) {
-    return ParticleSolver(w.terrain, w.bvh, spawn, SpringDef{},
+    return PbfSolver(w.terrain, w.bvh, spawn, def,
                           CollisionDef{.mode = CollisionMode::Robust, .damping = damping, .offset = 0.005f, .radius = 0.1f,
                                        .friction_speed = friction_speed},
-                          IntegratorDef{.gravity = 9.82f, .fixed_dt = 1.0f / 120.0f, .substeps = 1}, 3, def, SinkDef{});
+                          IntegratorDef{.gravity = 9.82f, .fixed_dt = 1.0f / 120.0f, .substeps = 1}, 3, SinkDef{});
 }
 
 /// A 3 m/s jet from a disc source (600 particles/s, capped by the source) into a box
 /// with vorticity confinement: splashes, collisions, rebuilt neighbour lists.
-ParticleSolver jet_solver(const World& w) {
+PbfSolver jet_solver(const World& w) {
     SpawnDef spawn{.count = 1500, .center = Vec3(8, 4, 8), .half_extent = Vec3(1, 0.5f, 1), .interval = 0,
                    .initial_velocity = Vec3(0, -3, 0)};
     spawn.shape = SourceShape::Disc;
     spawn.flow_rate = 600.0f;
-    return ParticleSolver(w.terrain, w.bvh, spawn, SpringDef{},
+    return PbfSolver(w.terrain, w.bvh, spawn, PbfDef{.vorticity = 0.5f},
                           CollisionDef{.mode = CollisionMode::Robust, .damping = 0.02f, .offset = 0.005f, .radius = 0.1f},
-                          IntegratorDef{.gravity = 9.82f, .fixed_dt = 1.0f / 120.0f, .substeps = 1}, 9,
-                          PbfDef{.vorticity = 0.5f}, SinkDef{});
+                          IntegratorDef{.gravity = 9.82f, .fixed_dt = 1.0f / 120.0f, .substeps = 1}, 9, SinkDef{});
 }
 
 TEST(Pbf, GridDensityEqualsBruteForceSum) {
@@ -84,7 +85,8 @@ TEST(Pbf, GridDensityEqualsBruteForceSum) {
     std::vector<Vec3> pts = lattice(Vec3(3, 1, 3), 12, 6, 12, 0.5f);
     Lcg rng(5);
     for (Vec3& p : pts) p += Vec3(rng.uniform(-0.2f, 0.2f), rng.uniform(-0.2f, 0.2f), rng.uniform(-0.2f, 0.2f));
-    ParticleSolver s = column_solver(w, pts);
+    const auto solver = column_solver(w, pts);
+    PbfSolver& s = *solver;
     std::vector<float> grid, brute;
     s.pbf_densities(grid);  // reorders the particles by cell first
     s.pbf_densities_brute_force(brute);
@@ -100,7 +102,8 @@ TEST(Pbf, RestingColumnKeepsNearRestDensityAndStaysStill) {
     // 12 x 16 x 12 particles at the rest spacing in a 6 x 6 m box (walls 10 m high).
     World w = make_world(box_map(17, 5), TerrainDef{.area_scale = 1.0f, .height_scale = 10.0f});
     // Interior 5 .. 11 m; first layer a radius + a hair above the floor.
-    ParticleSolver s = column_solver(w, lattice(Vec3(5.25f, 0.15f, 5.25f), 12, 16, 12, 0.5f));
+    const auto solver = column_solver(w, lattice(Vec3(5.25f, 0.15f, 5.25f), 12, 16, 12, 0.5f));
+    PbfSolver& s = *solver;
     float mean = 0, mx = 0, vmax = 0;
     for (int f = 0; f < 600; ++f) {  // 5 s
         s.step_frame(1.0f / 120.0f);
@@ -132,8 +135,8 @@ TEST(Pbf, WithoutGravityOrTerrainTheConstraintsConserveMomentum) {
                    .initial_velocity = Vec3(0.3f, 0.0f, -0.2f)};
     PbfDef def = pbf_def();
     def.xsph = 0.1f;
-    ParticleSolver s(w.terrain, w.bvh, spawn, SpringDef{}, CollisionDef{.mode = CollisionMode::None},
-                     IntegratorDef{.gravity = 0.0f, .fixed_dt = 1.0f / 120.0f, .substeps = 1}, 3, def, SinkDef{});
+    PbfSolver s(w.terrain, w.bvh, spawn, def, CollisionDef{.mode = CollisionMode::None},
+                     IntegratorDef{.gravity = 0.0f, .fixed_dt = 1.0f / 120.0f, .substeps = 1}, 3, SinkDef{});
     s.place(pts);
     for (int f = 0; f < 10; ++f) s.step_frame(1.0f / 120.0f);
     Vec3 mom(0.0f);
@@ -155,7 +158,7 @@ TEST(Pbf, AParticleSlidesDownASteepFaceInsteadOfStickingToIt) {
     spawn.flow_rate = 0.0f;
     PbfDef def = pbf_def();
     def.sleep_threshold = 0.0f;
-    ParticleSolver s = robust_solver(w, spawn, def, 0.002f);
+    PbfSolver s = robust_solver(w, spawn, def, 0.002f);
     const float y0 = w.terrain.height_mesh(1.5f, 6.5f) + 0.105f;
     const std::vector<Vec3> one{Vec3(1.5f, y0, 6.5f)};
     s.place(one);
@@ -183,7 +186,7 @@ TEST(Pbf, BedFrictionLawsGiveTheirTerminalSpeedsOnASlope) {
         spawn.flow_rate = 0.0f;
         PbfDef def = pbf_def();
         def.sleep_threshold = 0.0f;
-        ParticleSolver s = robust_solver(w, spawn, def, damping, friction_speed);
+        PbfSolver s = robust_solver(w, spawn, def, damping, friction_speed);
         const std::vector<Vec3> one{Vec3(2.0f, w.terrain.height_mesh(2.0f, 4.0f) + 0.11f, 4.0f)};
         s.place(one);
         for (int f = 0; f < 7 * 120; ++f) s.step_frame(dt);
@@ -215,7 +218,7 @@ TEST(PbfSleep, AParticleAtRestInTheAirFallsWhateverTheThreshold) {
     spawn.flow_rate = 0.0f;
     PbfDef def = pbf_def();
     def.sleep_threshold = 1.0f;  // the largest accepted: free fall is slower than that for 0.1 s
-    ParticleSolver s = robust_solver(w, spawn, def, 0.02f);
+    PbfSolver s = robust_solver(w, spawn, def, 0.02f);
     const std::vector<Vec3> one{Vec3(8, 10, 8)};
     s.place(one);
     for (int f = 0; f < 60; ++f) s.step_frame(1.0f / 120.0f);  // 0.5 s: 1.23 m of free fall
@@ -234,7 +237,7 @@ TEST(PbfSleep, RestingWaterSleepsAndWakesWhenWaterLandsOnIt) {
     spawn.flow_rate = 0.0f;
     PbfDef def = pbf_def();
     def.sleep_threshold = 0.05f;
-    ParticleSolver s = robust_solver(w, spawn, def, 0.02f);
+    PbfSolver s = robust_solver(w, spawn, def, 0.02f);
     s.place(pool);
     for (int f = 0; f < 720; ++f) s.step_frame(1.0f / 120.0f);  // 6 s
     const Particles& p = s.particles();
@@ -272,7 +275,7 @@ TEST(Pbf, NeighbourListsGiveBitwiseTheSameStepsAsTheCellLoops) {
     World w = make_world(box_map(17, 3), TerrainDef{.area_scale = 1.0f, .height_scale = 6.0f});
     auto run = [&](bool lists, int threads, uint64_t* builds, float skin = kPbfListSkin) {
         tbb::global_control gc(tbb::global_control::max_allowed_parallelism, size_t(threads));
-        ParticleSolver s = jet_solver(w);
+        PbfSolver s = jet_solver(w);
         s.set_pbf_neighbor_lists(lists, skin);
         std::vector<uint64_t> hashes;
         for (int f = 0; f < 240; ++f) {
@@ -309,7 +312,7 @@ TEST(Pbf, SameResultWithOneOrTwoThreadsAndSameSeed) {
     World w = make_world(box_map(17, 3), TerrainDef{.area_scale = 1.0f, .height_scale = 6.0f});
     auto run = [&](int threads) {
         tbb::global_control gc(tbb::global_control::max_allowed_parallelism, size_t(threads));
-        ParticleSolver s = jet_solver(w);
+        PbfSolver s = jet_solver(w);
         for (int f = 0; f < 240; ++f) s.step_frame(1.0f / 120.0f);
         uint64_t h = 1469598103934665603ull;
         const Particles& p = s.particles();

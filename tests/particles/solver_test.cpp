@@ -39,7 +39,7 @@ class SolverModes : public ::testing::TestWithParam<CollisionMode> {};
 
 TEST_P(SolverModes, ParticleRestingOnFlatTerrainStaysAbove) {
     World w = make_world(flat_map(17, 17, 0.5f));  // ground at y = 3.5
-    ParticleSolver s(w.terrain, w.bvh, one_particle_at(Vec3(7.3f, 4.5f, 8.6f)), SpringDef{},
+    SpringSolver s(w.terrain, w.bvh, one_particle_at(Vec3(7.3f, 4.5f, 8.6f)), SpringDef{},
                      CollisionDef{.mode = GetParam()}, IntegratorDef{}, 1);
     for (int f = 0; f < 2000; ++f) {
         s.step_frame(1.0f / 60.0f);
@@ -57,7 +57,7 @@ TEST_P(SolverModes, ParticleRestingOnFlatTerrainStaysAbove) {
 TEST_P(SolverModes, ParticleDroppedOnSlopeSlidesDownhill) {
     World w = make_world(ramp_x(33, 33));  // y = 7 x / 32: downhill is -x
     const Vec3 start(24.9f, w.terrain.height_mesh(24.9f, 16.3f) + 0.3f, 16.3f);
-    ParticleSolver s(w.terrain, w.bvh, one_particle_at(start), SpringDef{}, CollisionDef{.mode = GetParam()},
+    SpringSolver s(w.terrain, w.bvh, one_particle_at(start), SpringDef{}, CollisionDef{.mode = GetParam()},
                      IntegratorDef{}, 1);
     // Slides towards -x, never uphill, until it leaves the leaf it started in: x = 24
     // is a leaf boundary (4 cells per leaf) where paper mode loses the ground.
@@ -101,7 +101,7 @@ TEST(Solver, PaperModeLosesParticlesThroughTheGroundWhereRobustModeLosesNone) {
     World w = make_world(hills(33, 33, 11));
     SpawnDef spawn{.count = 200, .center = Vec3(16, 12, 16), .half_extent = Vec3(12, 2, 12), .interval = 0};
     auto tunneled = [&](CollisionMode mode) {
-        ParticleSolver s(w.terrain, w.bvh, spawn, SpringDef{}, CollisionDef{.mode = mode}, IntegratorDef{}, 4);
+        SpringSolver s(w.terrain, w.bvh, spawn, SpringDef{}, CollisionDef{.mode = mode}, IntegratorDef{}, 4);
         for (int f = 0; f < 600; ++f) s.step_frame(1.0f / 60.0f);
         return s.counters().tunneled;
     };
@@ -119,7 +119,7 @@ INSTANTIATE_TEST_SUITE_P(Collision, SolverModes, ::testing::Values(CollisionMode
 TEST(Solver, WithoutCollisionParticlesFallThroughAndAreCountedAndRespawned) {
     World w = make_world(flat_map(9, 9, 0.5f));
     SpawnDef spawn{.count = 4, .center = Vec3(4, 6, 4), .half_extent = Vec3(1, 0.5f, 1), .interval = 0};
-    ParticleSolver s(w.terrain, w.bvh, spawn, SpringDef{}, CollisionDef{.mode = CollisionMode::None},
+    SpringSolver s(w.terrain, w.bvh, spawn, SpringDef{}, CollisionDef{.mode = CollisionMode::None},
                      IntegratorDef{}, 5);
     for (int f = 0; f < 120; ++f) s.step_frame(1.0f / 60.0f);
     EXPECT_GT(s.counters().tunneled, 0u);
@@ -136,7 +136,7 @@ TEST(Solver, RespawnsParticlesLeavingTheRectangle) {
     World w = make_world(flat_map(9, 9, 0.0f));
     SpawnDef spawn{.count = 1, .center = Vec3(4, 1, 4), .half_extent = Vec3(0.5f), .interval = 0,
                    .initial_velocity = Vec3(60.0f, 0.0f, 0.0f)};
-    ParticleSolver s(w.terrain, w.bvh, spawn, SpringDef{}, CollisionDef{.mode = CollisionMode::Robust},
+    SpringSolver s(w.terrain, w.bvh, spawn, SpringDef{}, CollisionDef{.mode = CollisionMode::Robust},
                      IntegratorDef{}, 2);
     s.step_frame(1.0f / 60.0f);  // activates at x ~ 4, moves 1 m
     EXPECT_EQ(s.counters().respawned, 0u);
@@ -148,7 +148,7 @@ TEST(Solver, RespawnsParticlesLeavingTheRectangle) {
 TEST(Solver, ActivatesOneParticleEverySpawnInterval) {
     World w = make_world(flat_map(9, 9, 0.0f));
     SpawnDef spawn{.count = 5, .center = Vec3(4, 3, 4), .half_extent = Vec3(1.0f), .interval = 3};
-    ParticleSolver s(w.terrain, w.bvh, spawn, SpringDef{}, CollisionDef{}, IntegratorDef{}, 1);
+    SpringSolver s(w.terrain, w.bvh, spawn, SpringDef{}, CollisionDef{}, IntegratorDef{}, 1);
     std::vector<size_t> active;
     for (int f = 0; f < 20; ++f) {
         s.step_frame(1.0f / 60.0f);
@@ -166,7 +166,7 @@ TEST(Solver, ActivatesOneParticleEverySpawnInterval) {
 TEST(Solver, PourActivatesParticlesAtThePointThenRecyclesTheOldest) {
     World w = make_world(flat_map(17, 17, 0.0f));
     SpawnDef spawn{.count = 6, .center = Vec3(4, 3, 4), .half_extent = Vec3(0.5f), .interval = 1000};
-    ParticleSolver s(w.terrain, w.bvh, spawn, SpringDef{}, CollisionDef{}, IntegratorDef{}, 1);
+    SpringSolver s(w.terrain, w.bvh, spawn, SpringDef{}, CollisionDef{}, IntegratorDef{}, 1);
     s.pour(Vec3(12, 5, 12), 4);
     EXPECT_EQ(s.particles().active_count(), 4u);
     for (size_t i = 0; i < 4; ++i) EXPECT_NEAR(glm::length(s.particles().position[i] - Vec3(12, 5, 12)), 0.0f, 0.87f);
@@ -179,7 +179,7 @@ TEST(Solver, PourActivatesParticlesAtThePointThenRecyclesTheOldest) {
 
 TEST(Solver, FreeFallFollowsSemiImplicitEuler) {
     World w = make_world(flat_map(9, 9, 0.0f));
-    ParticleSolver s(w.terrain, w.bvh, one_particle_at(Vec3(4, 100, 4)), SpringDef{},
+    SpringSolver s(w.terrain, w.bvh, one_particle_at(Vec3(4, 100, 4)), SpringDef{},
                      CollisionDef{.mode = CollisionMode::None}, IntegratorDef{.gravity = 9.82f}, 1);
     const float dt = 0.01f;
     s.step_frame(dt);
@@ -191,7 +191,7 @@ TEST(Solver, FreeFallFollowsSemiImplicitEuler) {
 
 TEST(Solver, FixedTimeStepAndSubstepsIgnoreTheFrameTime) {
     World w = make_world(flat_map(9, 9, 0.0f));
-    ParticleSolver a(w.terrain, w.bvh, one_particle_at(Vec3(4, 100, 4)), SpringDef{},
+    SpringSolver a(w.terrain, w.bvh, one_particle_at(Vec3(4, 100, 4)), SpringDef{},
                      CollisionDef{.mode = CollisionMode::None}, IntegratorDef{.fixed_dt = 0.02f, .substeps = 4}, 1);
     a.step_frame(0.5f);
     // 4 substeps of 0.005 s: v = -4 g h
@@ -203,7 +203,7 @@ TEST(Solver, SameSeedSameStateDifferentSeedDifferentState) {
     SpawnDef spawn{.count = 30, .center = Vec3(8, 9, 8), .half_extent = Vec3(3, 1, 3), .interval = 2};
     SpringDef springs{.stiffness = 5.0f, .min_distance = 1.0f, .max_distance = 1.0f};
     auto run = [&](uint32_t seed) {
-        ParticleSolver s(w.terrain, w.bvh, spawn, springs, CollisionDef{.mode = CollisionMode::Robust},
+        SpringSolver s(w.terrain, w.bvh, spawn, springs, CollisionDef{.mode = CollisionMode::Robust},
                          IntegratorDef{}, seed);
         for (int f = 0; f < 200; ++f) s.step_frame(1.0f / 60.0f);
         return s.particles().position;
@@ -215,7 +215,7 @@ TEST(Solver, SameSeedSameStateDifferentSeedDifferentState) {
 TEST(Solver, RobustHeightfieldQueryAlsoLosesNothing) {
     World w = make_world(hills(33, 33, 12));
     SpawnDef spawn{.count = 200, .center = Vec3(16, 12, 16), .half_extent = Vec3(12, 2, 12), .interval = 0};
-    ParticleSolver s(w.terrain, w.bvh, spawn, SpringDef{},
+    SpringSolver s(w.terrain, w.bvh, spawn, SpringDef{},
                      CollisionDef{.mode = CollisionMode::Robust, .query = CollisionQuery::Heightfield}, IntegratorDef{},
                      4);
     for (int f = 0; f < 600; ++f) s.step_frame(1.0f / 60.0f);
@@ -251,7 +251,7 @@ TEST(Solver, SpheresRestAtTheirRadiusOnFlatGround) {
     World w = make_world(flat_map(17, 17, 0.5f));  // ground at y = 3.5
     SpawnDef spawn{.count = 1, .center = Vec3(8.3f, 6.0f, 8.6f), .half_extent = Vec3(0.0f), .interval = 0};
     for (CollisionMode mode : {CollisionMode::Paper, CollisionMode::Robust}) {
-        ParticleSolver s(w.terrain, w.bvh, spawn, SpringDef{},
+        SpringSolver s(w.terrain, w.bvh, spawn, SpringDef{},
                          CollisionDef{.mode = mode, .damping = 0.5f, .offset = 0.0f, .radius = 0.5f}, IntegratorDef{},
                          1);
         for (int f = 0; f < 600; ++f) s.step_frame(1.0f / 60.0f);
@@ -266,8 +266,8 @@ TEST(Solver, GridSpringsMatchPairSpringsOverOneStep) {
     SpringDef pairs{.stiffness = 30.0f, .min_distance = 1.0f, .max_distance = 0.5f, .mode = SpringMode::Pairs};
     SpringDef grid = pairs;
     grid.mode = SpringMode::Grid;
-    ParticleSolver a(w.terrain, w.bvh, spawn, pairs, CollisionDef{.mode = CollisionMode::Robust}, IntegratorDef{}, 9);
-    ParticleSolver b(w.terrain, w.bvh, spawn, grid, CollisionDef{.mode = CollisionMode::Robust}, IntegratorDef{}, 9);
+    SpringSolver a(w.terrain, w.bvh, spawn, pairs, CollisionDef{.mode = CollisionMode::Robust}, IntegratorDef{}, 9);
+    SpringSolver b(w.terrain, w.bvh, spawn, grid, CollisionDef{.mode = CollisionMode::Robust}, IntegratorDef{}, 9);
     a.step_frame(1.0f / 60.0f);
     b.step_frame(1.0f / 60.0f);
     ASSERT_EQ(a.particles().active_count(), 400u);
@@ -288,7 +288,7 @@ TEST(Solver, SameResultWithOneOrTwoThreads) {
     SpringDef springs{.stiffness = 10.0f, .min_distance = 0.6f, .max_distance = 0.3f, .mode = SpringMode::Grid};
     auto run = [&](int threads) {
         tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-        ParticleSolver s(w.terrain, w.bvh, spawn, springs,
+        SpringSolver s(w.terrain, w.bvh, spawn, springs,
                          CollisionDef{.mode = CollisionMode::Robust, .query = CollisionQuery::Heightfield},
                          IntegratorDef{}, 3);
         for (int f = 0; f < 60; ++f) s.step_frame(1.0f / 60.0f);

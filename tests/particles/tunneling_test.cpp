@@ -144,7 +144,7 @@ struct Tally {
 /// below the mesh lifted by the radius (more than kTunnelEpsilon).
 Tally run(const World& w, SpawnDef spawn, const std::vector<Vec3>* placed, CollisionDef col, int frames) {
     IntegratorDef integ{.gravity = 9.82f, .fixed_dt = 1.0f / 60.0f, .substeps = 1};
-    ParticleSolver s(w.terrain, w.bvh, spawn, SpringDef{}, col, integ, 17);
+    SpringSolver s(w.terrain, w.bvh, spawn, SpringDef{}, col, integ, 17);
     if (placed) s.place(*placed);
     Tally t;
     for (int f = 0; f < frames; ++f) {
@@ -248,10 +248,10 @@ TEST(Tunneling, PbfWaterOnSpikesAndCliffsLosesNothing) {
         SpawnDef rain{.count = test::scaled(3000), .center = Vec3(mid.x, b.max.y + 3.0f, mid.z),
                       .half_extent = Vec3(0.4f * b.extent().x, 2.0f, 0.4f * b.extent().z), .interval = 0,
                       .initial_velocity = Vec3(0.3f, -2.0f, -0.2f)};
-        ParticleSolver s(w.terrain, w.bvh, rain, SpringDef{},
+        PbfSolver s(w.terrain, w.bvh, rain, PbfDef{},
                          CollisionDef{.mode = CollisionMode::Robust, .damping = 0.02f, .offset = 0.005f, .radius = 0.1f,
                                       .query = CollisionQuery::Heightfield},
-                         IntegratorDef{.gravity = 9.82f, .fixed_dt = 1.0f / 120.0f, .substeps = 1}, 5, PbfDef{}, SinkDef{});
+                         IntegratorDef{.gravity = 9.82f, .fixed_dt = 1.0f / 120.0f, .substeps = 1}, 5, SinkDef{});
         float max_speed = 0.0f;  // any frame's
         for (int f = 0; f < 360; ++f) {
             s.step_frame(1.0f / 120.0f);
@@ -286,7 +286,7 @@ TEST(Tunneling, CountersSeeACrossingTheQueryMisses) {
     {
         SpawnDef spawn{.count = 10, .center = Vec3(4, 2, 4), .half_extent = Vec3(0.5f), .interval = 0,
                        .initial_velocity = Vec3(0.0f, -1.0f, 0.0f)};
-        ParticleSolver s(w.terrain, w.bvh, spawn, SpringDef{},
+        SpringSolver s(w.terrain, w.bvh, spawn, SpringDef{},
                          CollisionDef{.mode = CollisionMode::Robust, .damping = 0.1f, .offset = 0.01f},
                          IntegratorDef{.gravity = 9.82f, .fixed_dt = 1.0f / 60.0f}, 1);
         s.place(below);
@@ -297,8 +297,8 @@ TEST(Tunneling, CountersSeeACrossingTheQueryMisses) {
     }
     {
         SpawnDef spawn{.count = 10, .center = Vec3(4, 2, 4), .half_extent = Vec3(0.5f), .interval = 0};
-        ParticleSolver s(w.terrain, w.bvh, spawn, SpringDef{}, CollisionDef{.mode = CollisionMode::None},
-                         IntegratorDef{.gravity = 9.82f, .fixed_dt = 1.0f / 60.0f}, 1, PbfDef{}, SinkDef{});
+        PbfSolver s(w.terrain, w.bvh, spawn, PbfDef{}, CollisionDef{.mode = CollisionMode::None},
+                         IntegratorDef{.gravity = 9.82f, .fixed_dt = 1.0f / 60.0f}, 1, SinkDef{});
         for (int f = 0; f < 60; ++f) s.step_frame(1.0f / 60.0f);
         EXPECT_GT(s.counters().tunneled, 10u) << "pbf water falling through the ground";
         EXPECT_EQ(s.counters().guarded, 0u);
@@ -319,7 +319,7 @@ TEST(Tunneling, ASourceVolumeThroughTheGroundSpawnsNothingUnderIt) {
                          .initial_velocity = Vec3(0.0f, 0.0f, -1.0f)};
     for (const float radius : {0.0f, 0.2f}) {
         const CollisionDef collision{.mode = CollisionMode::Robust, .damping = 0.05f, .offset = 0.01f, .radius = radius};
-        ParticleSolver s(w.terrain, w.bvh, spawn, SpringDef{}, collision,
+        SpringSolver s(w.terrain, w.bvh, spawn, SpringDef{}, collision,
                          IntegratorDef{.gravity = 9.82f, .fixed_dt = 1.0f / 60.0f}, 3);
         size_t born_checked = 0;
         for (int f = 0; f < 120; ++f) {
@@ -338,7 +338,7 @@ TEST(Tunneling, ASourceVolumeThroughTheGroundSpawnsNothingUnderIt) {
     // Without collision nothing is lifted: about a third of the box is under the ramp.
     SpawnDef at_once = spawn;
     at_once.interval = 0;
-    ParticleSolver none(w.terrain, w.bvh, at_once, SpringDef{}, CollisionDef{.mode = CollisionMode::None},
+    SpringSolver none(w.terrain, w.bvh, at_once, SpringDef{}, CollisionDef{.mode = CollisionMode::None},
                         IntegratorDef{.gravity = 0.0f, .fixed_dt = 1.0f / 60.0f}, 3);
     none.step_frame(1.0f / 60.0f);
     size_t under = 0, active = 0;

@@ -321,9 +321,9 @@ TEST(OutletMeter, WaterThrownOverTheUpstreamEdgeIsNotTheMainOutlet) {
         SpawnDef spawn{.count = 60, .center = centre, .half_extent = Vec3(0.5f, 0.1f, 0.5f), .interval = 0,
                        .initial_velocity = velocity};
         spawn.flow_rate = 30.0f;
-        ParticleSolver s(v, bvh.value(), spawn, SpringDef{},
+        SpringSolver s(v, bvh.value(), spawn, SpringDef{},
                          CollisionDef{.mode = CollisionMode::Robust, .damping = 0.0f, .offset = 0.01f},
-                         IntegratorDef{.fixed_dt = 1.0f / 60.0f}, 1, std::nullopt, SinkDef{.kind = SinkKind::Edges});
+                         IntegratorDef{.fixed_dt = 1.0f / 60.0f}, 1, SinkDef{.kind = SinkKind::Edges});
         for (int f = 0; f < 900; ++f) {
             s.step_frame(1.0f / 60.0f);
             meter.record(double(f + 1) / 60.0, s.last_exits());
