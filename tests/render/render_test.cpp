@@ -8,6 +8,7 @@
 #include <metariver/render.h>
 
 #include "bowl_drop.h"
+#include "long_scale.h"
 
 #include <gtest/gtest.h>
 
@@ -500,6 +501,83 @@ TEST(Renderer, AnIncrementalTerrainUploadDrawsWhatAWholeOneDraws) {
         inc.update_terrain(s.view(), *e);
     }
     EXPECT_EQ(pixels_differing(before, draw(inc), 0), 0u) << "undo did not draw the terrain as before";
+}
+
+// Sculpting a dam (issue 14): the default river, a dam raised across the middle of its
+// main channel under the running water: the channel below the dam runs dry, the water
+// finds another way to the map's edge (it still leaves as fast as the source feeds it),
+// nothing tunnels; images before, at and after (written to the test's temp folder).
+TEST(Renderer, ADamAcrossTheRiverDriesItsChannelAndTheWaterFindsAnotherWay) {
+    REQUIRE_GL();
+    auto sim = Simulation::create(default_scene());
+    ASSERT_TRUE(sim.ok()) << sim.error().message;
+    Simulation& s = *sim.value();
+    const float dt = 1.0f / 60.0f;
+    for (int f = 0; f < test::scaled(1200, 300); ++f) s.step(dt);
+    const auto path = s.main_channel();
+    ASSERT_GT(path.size(), 20u);
+    const float a = s.terrain().area_scale();
+    const Vec3 o = s.terrain().vertices().front();
+    const size_t k = path.size() / 2;  // the dam
+    const auto [di, dj] = path[k];
+    const Vec3 dam(o.x + float(dj) * a, 0.0f, o.z + float(di) * a);
+    // Particles over the channel's cells below the dam (k+6 .. k+20: past the 4 m brush).
+    const auto count_over = [&](size_t from, size_t to) {
+        size_t n = 0;
+        const Particles& p = s.particles();
+        for (size_t i = 0; i < p.size(); ++i) {
+            if (!p.active[i]) continue;
+            const int pi = int(std::lround((p.position[i].z - o.z) / a)), pj = int(std::lround((p.position[i].x - o.x) / a));
+            for (size_t c = from; c <= to && c < path.size(); ++c)
+                if (path[c].first == pi && path[c].second == pj) {
+                    ++n;
+                    break;
+                }
+        }
+        return n;
+    };
+    const size_t down0 = count_over(k + 6, k + 20);
+
+    auto r = render::Renderer::create();
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    render::Renderer& renderer = *r.value();
+    renderer.set_scene(s.view());
+    const int w = 480, h = 320;
+    render::Camera cam = render::frame_terrain_from_above(s.terrain(), float(w) / float(h));
+    render::fit_clip_planes(cam, s.terrain());
+    const auto shot = [&](const char* name) {
+        std::vector<uint8_t> rgb;
+        renderer.update(s.view());
+        renderer.draw(cam, w, h, {});
+        renderer.read_rgb(rgb);
+        const std::string out = ::testing::TempDir() + name;
+        EXPECT_TRUE(write_png(out, rgb, w, h, 3).ok());
+        std::printf("wrote %s\n", out.c_str());
+    };
+    shot("dam_0_before.png");
+    // The dam: five strokes of 1 m, 4 m across, on the channel's bed.
+    for (int stroke = 0; stroke < 5; ++stroke) {
+        auto e = s.sculpt({.x = dam.x, .z = dam.z, .radius = 4.0f, .strength = 1.0f});
+        ASSERT_TRUE(e.ok()) << e.error().message;
+        renderer.update_terrain(s.view(), e.value());
+    }
+    shot("dam_1_raised.png");
+    for (int f = 0; f < test::scaled(2400, 200); ++f) s.step(dt);
+    // The last 10 s: what the source emitted and what left over the map's edges.
+    const uint64_t emitted0 = s.counters().emitted, sunk0 = s.counters().sunk;
+    for (int f = 0; f < test::scaled(600, 100); ++f) s.step(dt);
+    shot("dam_2_after.png");
+    const size_t down1 = count_over(k + 6, k + 20);
+    const double emitted = double(s.counters().emitted - emitted0), sunk = double(s.counters().sunk - sunk0);
+    std::printf("dam at path cell %zu of %zu (%.1f, %.1f): below it %zu -> %zu particles; last 10 s emitted %.0f, "
+                "left the map %.0f; lifted %llu, tunneled %llu\n",
+                k, path.size(), dam.x, dam.z, down0, down1, emitted, sunk, (unsigned long long)s.terrain_lifts(),
+                (unsigned long long)s.counters().tunneled);
+    EXPECT_EQ(s.counters().tunneled, 0u);
+    EXPECT_GT(down0, 10u) << "the channel below the dam site had no water to begin with";
+    EXPECT_LT(down1 * 4, down0) << "the channel below the dam still carries the river";
+    if (!test::full_size()) return;  // the new way takes the full time to reach the edge
+    EXPECT_GT(sunk, 0.7 * emitted) << "the water did not find another way off the map";
 }
 
 /// Draws `sim` at two flow-clock times, flow detail on and off, close up.
