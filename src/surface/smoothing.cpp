@@ -50,6 +50,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <numbers>
 
 #if defined(__SSE2__)
@@ -66,11 +67,12 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
-/// Vertices per parallel task and per partial sum: a step over a few thousand vertices
-/// takes microseconds, so small meshes run on one thread without the scheduling cost
-/// (on two busy cores a parallel_for costs tens of microseconds). The field probes cost
-/// more per vertex and split sooner.
-constexpr size_t kChunk = 16384;
+/// Vertices per parallel task and per partial sum: a mesh of fewer runs on one thread
+/// without the scheduling cost (on two busy cores a parallel_for costs tens of
+/// microseconds). 4096: the default river's sheet (6,500 moving vertices) steps on both
+/// cores (16384 kept it on one: its surface stage 1.59 -> 1.32 ms, `run --stats`). The
+/// field probes cost more per vertex and split at the same size.
+constexpr size_t kChunk = 4096;
 constexpr size_t kProbeChunk = 4096;
 /// Chebyshev steps come in cycles of at most this many: longer cycles amplify the
 /// middle of the band in between (50x at 20 steps on [0.1, 2]) and with it float error.
@@ -428,12 +430,14 @@ void smooth_surface(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspa
     t0 = Clock::now();
     ws.a.resize(nv);
     ws.b.resize(nv);
-    for (const uint32_t t : ws.tris)
-        for (int c = 0; c < 3; ++c) {
-            const uint32_t v = mesh.indices[3 * size_t(t) + c];
-            const Vec3& q = mesh.positions[v];
-            ws.a[v] = ws.b[v] = P4{q.x, q.y, q.z, 0.0f};
-        }
+    // Every vertex, in order (a stream; visiting the triangles' corners touched each
+    // vertex six times and stalled on reading back the padded store): most are corners
+    // of a listed triangle in a river's sheet anyway.
+    for (size_t v = 0; v < nv; ++v) {
+        const Vec3& q = mesh.positions[v];
+        ws.a[v] = P4{q.x, q.y, q.z, 0.0f};
+    }
+    std::memcpy(ws.b.data(), ws.a.data(), nv * sizeof(P4));
     // The listed triangles' volume is what changes (an open mesh's too: its rim stays put).
     const bool restore = def.method == SmoothingMethod::Laplacian && def.keep_volume;
     const double before = restore ? tris_volume(&ws.a[0].x, 4, mesh, ws) : 0.0;
