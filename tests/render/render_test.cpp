@@ -8,7 +8,7 @@
 #include <metariver/render.h>
 
 #include "bowl_drop.h"
-#include "long_scale.h"
+#include "render_support.h"
 
 #include <gtest/gtest.h>
 
@@ -21,61 +21,10 @@
 
 namespace fs = std::filesystem;
 using namespace mr;
+using test::pixels_differing;
+using test::small_valley;
 
 namespace {
-
-/// One context for the whole test program (creating one costs ~50 ms on llvmpipe).
-render::HeadlessContext* context() {
-    static std::unique_ptr<render::HeadlessContext> ctx;
-    static std::string error;
-    static bool tried = false;
-    if (!tried) {
-        tried = true;
-        auto r = render::HeadlessContext::create();
-        if (r) ctx = std::move(r.value());
-        else error = r.error().message;
-    }
-    return ctx.get();
-}
-
-std::string context_error() {
-    auto r = render::HeadlessContext::create();
-    return r ? std::string() : r.error().message;
-}
-
-#define REQUIRE_GL()                                                                   \
-    do {                                                                               \
-        if (!context()) {                                                              \
-            GTEST_SKIP() << "no headless OpenGL 4.5 (EGL surfaceless): " << context_error(); \
-        }                                                                              \
-    } while (0)
-
-/// A small deterministic scene: a reduced procedural valley with the paper's own
-/// physics. Built on the paper-bowl preset (the paper's fixed parameters), not on
-/// default_scene(), so the golden images follow the renderer, not the default scene's tuning.
-SceneDef small_valley() {
-    auto p = preset("paper-bowl");
-    EXPECT_TRUE(p.ok());
-    SceneDef d = p.ok() ? p.value() : SceneDef{};
-    d.name = "render-test-valley";
-    d.source = {.kind = TerrainSource::Valley, .heightmap = {}, .width = 33, .height = 49, .seed = 7};
-    d.terrain.height_scale = 12.0f;
-    d.spawn.count = 120;
-    d.spawn.interval = 1;
-    d.spawn.auto_center = true;
-    d.spawn.auto_height = 1.5f;
-    d.spawn.half_extent = Vec3(1.5f, 0.5f, 1.5f);
-    d.springs.stiffness = 4.0f;
-    d.springs.min_distance = 1.0f;
-    d.springs.max_distance = 0.5f;
-    d.collision.mode = CollisionMode::Robust;
-    d.collision.damping = 0.003f;
-    d.collision.offset = 0.02f;
-    d.field.resolution = 1.5f;
-    d.field.bounds_offset = 2.0f;
-    d.field.threshold = 0.08f;
-    return d;
-}
 
 struct Rendered {
     int width = 0, height = 0;
@@ -403,181 +352,6 @@ TEST(Renderer, FoamAppearsWhiteOnTheWaterAndCanBeTurnedOff) {
     std::printf("foam splash: %zu spray, %zu foam, %zu bubbles; %zu foam pixels of %d\n", fs.spray, fs.foam,
                 fs.bubbles, foam_pixels, w * h);
     EXPECT_GT(foam_pixels, 40u) << "foam must show as white on the water";
-}
-
-/// Pixels where two images differ by more than `by` in some channel.
-size_t pixels_differing(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b, int by) {
-    size_t n = 0;
-    for (size_t p = 0; p + 2 < a.size() && p + 2 < b.size(); p += 3) {
-        bool d = false;
-        for (int c = 0; c < 3; ++c) d |= std::abs(int(a[p + c]) - int(b[p + c])) > by;
-        n += d;
-    }
-    return n;
-}
-
-// Sculpting (issue 14): a hill raised under the running scene shows after set_scene(sim,
-// true) re-uploads the terrain, and undo draws the same image as before it.
-TEST(Renderer, ASculptedHillShowsAndUndoDrawsTheSameImage) {
-    REQUIRE_GL();
-    auto sim = Simulation::create(small_valley());
-    ASSERT_TRUE(sim.ok()) << sim.error().message;
-    Simulation& s = *sim.value();
-    for (int i = 0; i < 30; ++i) s.step(1.0f / 60.0f);
-    auto r = render::Renderer::create();
-    ASSERT_TRUE(r.ok()) << r.error().message;
-    render::Renderer& renderer = *r.value();
-    renderer.set_scene(s.view());
-    render::Camera cam = render::frame_terrain(s.terrain());
-    render::fit_clip_planes(cam, s.terrain());
-    const int w = 320, h = 200;
-    std::vector<uint8_t> before, hill, undone;
-    renderer.draw(cam, w, h, {});
-    renderer.read_rgb(before);
-    const Vec3 c = s.terrain().bounds().center();
-    auto e = s.sculpt({.x = c.x, .z = c.z + 8.0f, .radius = 6.0f, .strength = 8.0f});
-    ASSERT_TRUE(e.ok()) << e.error().message;
-    renderer.set_scene(s.view(), true);
-    renderer.draw(cam, w, h, {});
-    renderer.read_rgb(hill);
-    const size_t changed = pixels_differing(before, hill, 8);
-    std::printf("sculpted hill: %zu of %d pixels changed\n", changed, w * h);
-    EXPECT_GT(changed, 500u);
-    const std::string out = ::testing::TempDir() + "sculpted_hill.png";
-    EXPECT_TRUE(write_png(out, hill, w, h, 3).ok());
-    std::printf("wrote %s\n", out.c_str());
-    s.restore(e.value());
-    renderer.set_scene(s.view(), true);
-    renderer.draw(cam, w, h, {});
-    renderer.read_rgb(undone);
-    EXPECT_EQ(pixels_differing(before, undone, 0), 0u);
-}
-
-// Incremental terrain upload (issue 14): after a stroke, update_terrain sends only the
-// rows around it and the boxes the refit moved, and draws exactly what a whole upload
-// draws: a stroke inside, one over a corner (the skirts), the tree boxes drawn, undo.
-TEST(Renderer, AnIncrementalTerrainUploadDrawsWhatAWholeOneDraws) {
-    REQUIRE_GL();
-    auto sim = Simulation::create(small_valley());
-    ASSERT_TRUE(sim.ok()) << sim.error().message;
-    Simulation& s = *sim.value();
-    for (int i = 0; i < 10; ++i) s.step(1.0f / 60.0f);
-    auto ra = render::Renderer::create(), rb = render::Renderer::create();
-    ASSERT_TRUE(ra.ok() && rb.ok());
-    render::Renderer &inc = *ra.value(), &whole = *rb.value();
-    inc.set_scene(s.view());
-    const uint64_t full_bytes = inc.stats().last_terrain_upload_bytes;
-    render::Camera cam = render::frame_terrain(s.terrain());
-    render::fit_clip_planes(cam, s.terrain());
-    render::RenderSettings settings;
-    settings.bvh = true;  // the boxes the refit moved show too
-    const int w = 256, h = 160;
-    const auto draw = [&](render::Renderer& r) {
-        std::vector<uint8_t> rgb;
-        r.draw(cam, w, h, settings);
-        r.read_rgb(rgb);
-        return rgb;
-    };
-    const std::vector<uint8_t> before = draw(inc);
-    std::vector<TerrainEdit> edits;
-    const Vec3 c = s.terrain().bounds().center(), lo = s.terrain().bounds().min;
-    for (const Brush& brush : {Brush{.x = c.x, .z = c.z + 6.0f, .radius = 4.0f, .strength = 3.0f},
-                               Brush{.x = lo.x + 1.0f, .z = lo.z + 1.0f, .radius = 5.0f, .strength = 2.0f}}) {
-        auto e = s.sculpt(brush);
-        ASSERT_TRUE(e.ok()) << e.error().message;
-        ASSERT_FALSE(e->empty());
-        inc.update_terrain(s.view(), e.value());
-        const uint64_t sent = inc.stats().last_terrain_upload_bytes;
-        std::printf("stroke at (%.1f, %.1f): %llu of %llu bytes sent\n", brush.x, brush.z, (unsigned long long)sent,
-                    (unsigned long long)full_bytes);
-        EXPECT_GT(sent, 0u);
-        EXPECT_LT(sent * 4, full_bytes) << "an incremental upload sent a quarter of the terrain or more";
-        whole.set_scene(s.view(), true);
-        EXPECT_EQ(pixels_differing(draw(inc), draw(whole), 0), 0u) << "incremental and whole uploads draw differently";
-        edits.push_back(std::move(e.value()));
-    }
-    for (auto e = edits.rbegin(); e != edits.rend(); ++e) {
-        s.restore(*e);
-        inc.update_terrain(s.view(), *e);
-    }
-    EXPECT_EQ(pixels_differing(before, draw(inc), 0), 0u) << "undo did not draw the terrain as before";
-}
-
-// Sculpting a dam (issue 14): the default river, a dam raised across the middle of its
-// main channel under the running water: the channel below the dam runs dry, the water
-// finds another way to the map's edge (it still leaves as fast as the source feeds it),
-// nothing tunnels; images before, at and after (written to the test's temp folder).
-TEST(Renderer, ADamAcrossTheRiverDriesItsChannelAndTheWaterFindsAnotherWay) {
-    REQUIRE_GL();
-    auto sim = Simulation::create(default_scene());
-    ASSERT_TRUE(sim.ok()) << sim.error().message;
-    Simulation& s = *sim.value();
-    const float dt = 1.0f / 60.0f;
-    for (int f = 0; f < test::scaled(1200, 300); ++f) s.step(dt);
-    const auto path = s.main_channel();
-    ASSERT_GT(path.size(), 20u);
-    const float a = s.terrain().area_scale();
-    const Vec3 o = s.terrain().vertices().front();
-    const size_t k = path.size() / 2;  // the dam
-    const auto [di, dj] = path[k];
-    const Vec3 dam(o.x + float(dj) * a, 0.0f, o.z + float(di) * a);
-    // Particles over the channel's cells below the dam (k+6 .. k+20: past the 4 m brush).
-    const auto count_over = [&](size_t from, size_t to) {
-        size_t n = 0;
-        const Particles& p = s.particles();
-        for (size_t i = 0; i < p.size(); ++i) {
-            if (!p.active[i]) continue;
-            const int pi = int(std::lround((p.position[i].z - o.z) / a)), pj = int(std::lround((p.position[i].x - o.x) / a));
-            for (size_t c = from; c <= to && c < path.size(); ++c)
-                if (path[c].first == pi && path[c].second == pj) {
-                    ++n;
-                    break;
-                }
-        }
-        return n;
-    };
-    const size_t down0 = count_over(k + 6, k + 20);
-
-    auto r = render::Renderer::create();
-    ASSERT_TRUE(r.ok()) << r.error().message;
-    render::Renderer& renderer = *r.value();
-    renderer.set_scene(s.view());
-    const int w = 480, h = 320;
-    render::Camera cam = render::frame_terrain_from_above(s.terrain(), float(w) / float(h));
-    render::fit_clip_planes(cam, s.terrain());
-    const auto shot = [&](const char* name) {
-        std::vector<uint8_t> rgb;
-        renderer.update(s.view());
-        renderer.draw(cam, w, h, {});
-        renderer.read_rgb(rgb);
-        const std::string out = ::testing::TempDir() + name;
-        EXPECT_TRUE(write_png(out, rgb, w, h, 3).ok());
-        std::printf("wrote %s\n", out.c_str());
-    };
-    shot("dam_0_before.png");
-    // The dam: five strokes of 1 m, 4 m across, on the channel's bed.
-    for (int stroke = 0; stroke < 5; ++stroke) {
-        auto e = s.sculpt({.x = dam.x, .z = dam.z, .radius = 4.0f, .strength = 1.0f});
-        ASSERT_TRUE(e.ok()) << e.error().message;
-        renderer.update_terrain(s.view(), e.value());
-    }
-    shot("dam_1_raised.png");
-    for (int f = 0; f < test::scaled(2400, 200); ++f) s.step(dt);
-    // The last 10 s: what the source emitted and what left over the map's edges.
-    const uint64_t emitted0 = s.counters().emitted, sunk0 = s.counters().sunk;
-    for (int f = 0; f < test::scaled(600, 100); ++f) s.step(dt);
-    shot("dam_2_after.png");
-    const size_t down1 = count_over(k + 6, k + 20);
-    const double emitted = double(s.counters().emitted - emitted0), sunk = double(s.counters().sunk - sunk0);
-    std::printf("dam at path cell %zu of %zu (%.1f, %.1f): below it %zu -> %zu particles; last 10 s emitted %.0f, "
-                "left the map %.0f; lifted %llu, tunneled %llu\n",
-                k, path.size(), dam.x, dam.z, down0, down1, emitted, sunk, (unsigned long long)s.terrain_lifts(),
-                (unsigned long long)s.counters().tunneled);
-    EXPECT_EQ(s.counters().tunneled, 0u);
-    EXPECT_GT(down0, 10u) << "the channel below the dam site had no water to begin with";
-    EXPECT_LT(down1 * 4, down0) << "the channel below the dam still carries the river";
-    if (!test::full_size()) return;  // the new way takes the full time to reach the edge
-    EXPECT_GT(sunk, 0.7 * emitted) << "the water did not find another way off the map";
 }
 
 /// Draws `sim` at two flow-clock times, flow detail on and off, close up.
