@@ -426,7 +426,8 @@ public:
     /// for the automatic channel source on terrain that is not carved, else the channel
     /// cell nearest the source's centre: on a carved terrain the automatic source stays
     /// at the head the carve was cut from) to the border cell where it leaves the
-    /// terrain (back()).
+    /// terrain (back()). Valid until the next sculpt(), restore() or move_source(), which
+    /// measure the channel again (copy it to keep it across them).
     std::span<const std::pair<int, int>> main_channel() const { return main_path_; }
     /// ChannelCoverage of the main channel by the current particles (1.5 samples, 3 m).
     float channel_coverage() const;
