@@ -467,6 +467,9 @@ private:
     float prefill_share() const;
     void configure_field();
     void after_terrain_edit(const TerrainEdit& edit);
+    /// main_path_ and coverage_ from the source at def_.spawn.center (`asked`: the source as
+    /// the scene gave it, which says whether it follows the main head).
+    void measure_main_channel(const SpawnDef& asked);
 };
 
 }  // namespace mr

@@ -46,6 +46,8 @@ Result<Heightmap> load_heightmap_png_memory(std::span<const uint8_t> bytes, cons
 /// and the image loader run it (stb_image alone takes a file cut inside IEND, and
 /// allocates what a chunk's length field claims before reading it).
 Result<std::array<uint32_t, 2>> check_png_structure(std::span<const uint8_t> bytes, const std::string& name);
+/// CRC-32 (ISO 3309) as PNG chunks carry it: over a chunk's type and data.
+uint32_t png_crc32(const uint8_t* data, size_t n);
 
 /// A width x height map with every sample = value (procedural, bit_depth 32);
 /// negative sizes count as 0. Callers shape it from there.
@@ -197,6 +199,8 @@ public:
 
     /// Mesh bounds grown by 1 m up and down (the paper's terrain bounding box).
     const Aabb& bounds() const { return bounds_; }
+    /// The vertices' own box (bounds() before the 1 m growth: the height colours' range).
+    const Aabb& mesh_bounds() const { return mesh_bounds_; }
     /// True when (x, z) lies inside the terrain's rectangle [0, (W-1)s] x [0, (H-1)s].
     bool contains_xz(float x, float z) const;
 
@@ -249,6 +253,7 @@ private:
     std::vector<Vec3> vertices_;
     std::vector<uint32_t> indices_;
     Aabb bounds_;
+    Aabb mesh_bounds_;
     ConditionReport condition_;
     std::vector<float> given_heights_;  ///< the heights before conditioning (when conditioned)
 

@@ -1,7 +1,9 @@
 // The terrain as a 16-bit grey PNG plus the JSON sidecar `--real-scale` reads
 // (issue 14: save what was sculpted, load it back). stb_image_write has no 16-bit PNG:
-// the chunks are written here, the deflate stream comes from its zlib compressor.
+// the chunks are written here (their CRC: png_crc32, terrain.h), the deflate stream
+// comes from its zlib compressor.
 #include <metariver/io.h>
+#include <metariver/terrain.h>
 
 #include <fmt/format.h>
 
@@ -17,15 +19,6 @@ extern "C" unsigned char* stbi_zlib_compress(unsigned char* data, int data_len, 
 namespace mr {
 namespace {
 
-uint32_t crc32(const uint8_t* data, size_t n, uint32_t crc = 0) {
-    crc ^= 0xffffffffu;
-    for (size_t i = 0; i < n; ++i) {
-        crc ^= data[i];
-        for (int k = 0; k < 8; ++k) crc = (crc & 1u) ? 0xedb88320u ^ (crc >> 1) : crc >> 1;
-    }
-    return crc ^ 0xffffffffu;
-}
-
 void put_be32(std::string& out, uint32_t v) {
     for (int s = 24; s >= 0; s -= 8) out.push_back(char((v >> s) & 0xffu));
 }
@@ -35,7 +28,7 @@ void put_chunk(std::string& out, const char type[4], std::string_view data) {
     const size_t start = out.size();
     out.append(type, 4);
     out.append(data);
-    put_be32(out, crc32(reinterpret_cast<const uint8_t*>(out.data()) + start, out.size() - start));
+    put_be32(out, png_crc32(reinterpret_cast<const uint8_t*>(out.data()) + start, out.size() - start));
 }
 
 }  // namespace
@@ -71,8 +64,7 @@ Result<std::string> encode_png_gray16(std::span<const uint16_t> samples, int wid
 
 Result<TerrainSaved> write_terrain_heightmap(const std::string& png_path, const Terrain& t, bool paper_row_orientation) {
     const int W = t.columns(), H = t.rows();
-    float lo = t.sample(0, 0), hi = lo;
-    for (const Vec3& v : t.vertices()) lo = std::min(lo, v.y), hi = std::max(hi, v.y);
+    const float lo = t.mesh_bounds().min.y, hi = t.mesh_bounds().max.y;
     const float range = hi > lo ? hi - lo : 1.0f;  // a flat terrain: every sample 0
     std::vector<uint16_t> px(size_t(W) * size_t(H));
     for (int i = 0; i < H; ++i) {

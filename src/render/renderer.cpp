@@ -51,7 +51,6 @@ static_assert(kFlowDetailMinSpeed == static_cast<float>(MR_FLOW_MIN_SPEED) &&
                   kFlowDetailFullSpeed == static_cast<float>(MR_FLOW_FULL_SPEED),
               "the water shader's flow speeds (shaders.h) are render.h's");
 
-/// Terrain vertex: position, normal, and 1 on the skirt (the cut at the edge).
 }  // namespace
 
 struct Renderer::Impl {
@@ -66,7 +65,8 @@ struct Renderer::Impl {
 
     size_t terrain_index_count = 0;
     TerrainGeometry geo;      // what terrain_vbo / terrain_ibo hold (bounds, texture rect)
-    TreeBoxes tree, tree_next;  // what box_vbo holds; the next refit's, compared with it
+    TreeBoxes tree;             // what box_vbo holds
+    std::vector<std::pair<uint32_t, uint32_t>> box_spans;  // update_terrain: the boxes the refit moved
     bool has_texture = false;
 
     const void* last_owner = nullptr;
@@ -269,31 +269,14 @@ struct Renderer::Impl {
                      (geo.vertices.size() - first) * sizeof(TerrainVertex));
             }
         }
-        build_tree_boxes(bvh, tree_next);
-        if (tree_next.boxes.size() != tree.boxes.size() || tree_next.level_first != tree.level_first) {
-            std::swap(tree, tree_next);  // a different tree: all of it
+        if (!refit_tree_boxes(bvh, tree, box_spans)) {
+            build_tree_boxes(bvh, tree);  // another tree: all of it
             glNamedBufferData(box_vbo, static_cast<GLsizeiptr>(tree.boxes.size() * sizeof(BoxInstance)),
                               tree.boxes.data(), GL_STATIC_DRAW);
             bytes += tree.boxes.size() * sizeof(BoxInstance);
-        } else {
-            // Per level (and the leaves): the span from the first to the last box that moved.
-            const auto same = [](const BoxInstance& a, const BoxInstance& b) {
-                return a.min == b.min && a.max == b.max && a.depth == b.depth;
-            };
-            std::vector<uint32_t> starts = tree.level_first;
-            starts.push_back(tree.leaves_first);
-            starts.push_back(uint32_t(tree.boxes.size()));
-            for (size_t s = 0; s + 1 < starts.size(); ++s) {
-                size_t lo = starts[s], hi = starts[s + 1];
-                while (lo < hi && same(tree.boxes[lo], tree_next.boxes[lo])) ++lo;
-                while (hi > lo && same(tree.boxes[hi - 1], tree_next.boxes[hi - 1])) --hi;
-                if (lo < hi) {
-                    std::copy(tree_next.boxes.begin() + std::ptrdiff_t(lo), tree_next.boxes.begin() + std::ptrdiff_t(hi),
-                              tree.boxes.begin() + std::ptrdiff_t(lo));
-                    send(box_vbo, lo * sizeof(BoxInstance), &tree.boxes[lo], (hi - lo) * sizeof(BoxInstance));
-                }
-            }
         }
+        for (const auto& [lo, hi] : box_spans)
+            send(box_vbo, lo * sizeof(BoxInstance), &tree.boxes[lo], (hi - lo) * sizeof(BoxInstance));
         stats.bytes_uploaded += bytes;
         stats.last_terrain_upload_bytes = bytes;
     }

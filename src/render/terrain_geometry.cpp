@@ -46,11 +46,6 @@ void build_skirts(std::span<const Vec3> verts, TerrainGeometry& g, std::vector<u
     }
 }
 
-void grid_bounds(std::span<const Vec3> verts, TerrainGeometry& g) {
-    g.bounds = Aabb{};  // the mesh's own range (Terrain::bounds() is grown by 1 m)
-    for (const Vec3& v : verts) g.bounds.grow(v);
-}
-
 }  // namespace
 
 void build_terrain_geometry(const Terrain& t, bool paper_rows, TerrainGeometry& g) {
@@ -68,7 +63,7 @@ void build_terrain_geometry(const Terrain& t, bool paper_rows, TerrainGeometry& 
     g.indices.assign(idx.begin(), idx.end());
     g.skirt_bottom = t.bounds().min.y;
     build_skirts(verts, g, &g.indices);
-    grid_bounds(verts, g);
+    g.bounds = t.mesh_bounds();
     // Texture row 0 is the heightmap's row 0: at the far end (high z) in the paper's
     // orientation, at z = 0 otherwise.
     const float xmax = float(g.columns - 1) * t.area_scale(), zmax = float(g.rows - 1) * t.area_scale();
@@ -110,7 +105,7 @@ bool update_terrain_geometry(const Terrain& t, const TerrainEdit& changed, Terra
         }
     rows_out = TerrainEdit{.i0 = i0, .j0 = j0, .i1 = i1, .j1 = j1, .before = {}};
     if (touches_border(g, rows_out)) build_skirts(verts, g, nullptr);
-    grid_bounds(verts, g);
+    g.bounds = t.mesh_bounds();
     return true;
 }
 
@@ -132,20 +127,49 @@ void build_tree_boxes(const Bvh& bvh, TreeBoxes& out) {
     }
     out.depth = 0;
     for (int d : depth) out.depth = std::max(out.depth, d);
+    out.nodes = nodes.size();
     out.boxes.clear();
+    out.node.clear();
     out.boxes.reserve(nodes.size() * 2);
+    out.node.reserve(nodes.size() * 2);
+    const auto add = [&](size_t n, int d) {
+        out.boxes.push_back({nodes[n].box.min, nodes[n].box.max, float(d)});
+        out.node.push_back(uint32_t(n));
+    };
     out.level_first.assign(size_t(out.depth) + 1, 0);
     out.level_count.assign(size_t(out.depth) + 1, 0);
     for (int d = 0; d <= out.depth; ++d) {
         out.level_first[size_t(d)] = uint32_t(out.boxes.size());
         for (size_t n = 0; n < nodes.size(); ++n)
-            if (depth[n] == d) out.boxes.push_back({nodes[n].box.min, nodes[n].box.max, float(d)});
+            if (depth[n] == d) add(n, d);
         out.level_count[size_t(d)] = uint32_t(out.boxes.size()) - out.level_first[size_t(d)];
     }
     out.leaves_first = uint32_t(out.boxes.size());
     for (size_t n = 0; n < nodes.size(); ++n)
-        if (nodes[n].count > 0) out.boxes.push_back({nodes[n].box.min, nodes[n].box.max, float(depth[n])});
+        if (nodes[n].count > 0) add(n, depth[n]);
     out.leaves_count = uint32_t(out.boxes.size()) - out.leaves_first;
+}
+
+bool refit_tree_boxes(const Bvh& bvh, TreeBoxes& t, std::vector<std::pair<uint32_t, uint32_t>>& spans) {
+    const auto nodes = bvh.nodes();
+    spans.clear();
+    if (t.boxes.empty() || nodes.size() != t.nodes) return false;
+    std::vector<uint32_t> starts = t.level_first;
+    starts.push_back(t.leaves_first);
+    starts.push_back(uint32_t(t.boxes.size()));
+    for (size_t s = 0; s + 1 < starts.size(); ++s) {
+        uint32_t lo = starts[s + 1], hi = starts[s];  // first and end of the moved boxes
+        for (uint32_t k = starts[s]; k < starts[s + 1]; ++k) {
+            const Aabb& b = nodes[t.node[k]].box;
+            if (t.boxes[k].min == b.min && t.boxes[k].max == b.max) continue;
+            t.boxes[k].min = b.min;
+            t.boxes[k].max = b.max;
+            lo = std::min(lo, k);
+            hi = k + 1;
+        }
+        if (lo < hi) spans.emplace_back(lo, hi);
+    }
+    return true;
 }
 
 }  // namespace mr::render

@@ -9,10 +9,12 @@
 #include <glm/vec4.hpp>
 
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace mr::render {
 
+/// Terrain vertex: position, normal, and 1 on the skirt (the cut at the edge).
 struct TerrainVertex {
     Vec3 pos;
     Vec3 normal;
@@ -56,10 +58,18 @@ bool touches_border(const TerrainGeometry& g, const TerrainEdit& r);
 
 struct TreeBoxes {
     std::vector<BoxInstance> boxes;              ///< by depth, then the leaves again
+    std::vector<uint32_t> node;                  ///< per box, the tree node it shows
+    size_t nodes = 0;                            ///< the tree's node count
     std::vector<uint32_t> level_first, level_count;
     uint32_t leaves_first = 0, leaves_count = 0;
     int depth = 0;
 };
 void build_tree_boxes(const Bvh& bvh, TreeBoxes& out);
+
+/// After Bvh::refit_heights (the same tree, new boxes): every box taken from its node
+/// again, in place; `spans` gets, per depth and for the leaves, the [first, end) of the
+/// boxes from the first to the last that moved (none when nothing did). False, nothing
+/// changed, when `bvh` has another node count than the boxes were built from: build again.
+bool refit_tree_boxes(const Bvh& bvh, TreeBoxes& t, std::vector<std::pair<uint32_t, uint32_t>>& spans);
 
 }  // namespace mr::render

@@ -152,8 +152,7 @@ Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh, std::optio
       sizing_(sizing) {  // before the prefill, which reads it
     SpawnDef spawn = def_.spawn;
     if (resolve_source(terrain_, channel_, spawn)) def_.spawn = spawn;
-    main_path_ = detail::main_channel_path(terrain_, channel_, def.spawn, def_.spawn.center);
-    coverage_ = ChannelCoverage(terrain_, main_path_);
+    measure_main_channel(def.spawn);
     configure_field();
     switch (def_.solver) {
         case SolverKind::Springs:
@@ -171,6 +170,11 @@ Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh, std::optio
                                                      def_.seed);
             break;
     }
+}
+
+void Simulation::measure_main_channel(const SpawnDef& asked) {
+    main_path_ = detail::main_channel_path(terrain_, channel_, asked, def_.spawn.center);
+    coverage_ = ChannelCoverage(terrain_, main_path_);
 }
 
 void Simulation::configure_field() {

@@ -92,8 +92,7 @@ Status Simulation::move_source(const Vec3& center) {
     requested_.spawn.center = center;
     requested_.spawn.auto_center = requested_.spawn.auto_channel = false;
     solver_->set_spawn_center(center);
-    main_path_ = detail::main_channel_path(terrain_, channel_, def_.spawn, center);
-    coverage_ = ChannelCoverage(terrain_, main_path_);
+    measure_main_channel(def_.spawn);
     return Ok{};
 }
 
@@ -126,8 +125,7 @@ void Simulation::after_terrain_edit(const TerrainEdit& e) {
     if (e.empty()) return;
     bvh_.refit_heights(terrain_);
     channel_ = ChannelMap::build(terrain_);
-    main_path_ = detail::main_channel_path(terrain_, channel_, def_.spawn, def_.spawn.center);
-    coverage_ = ChannelCoverage(terrain_, main_path_);
+    measure_main_channel(def_.spawn);
     auto& ps = static_cast<ParticleSolver&>(*solver_);
     // The triangles of the cells around the changed samples moved: particles over them
     // that are now under the ground (plus the collision's clearance) go up onto it, with

@@ -29,21 +29,6 @@ uint32_t read_be32(const uint8_t* p) {
     return (uint32_t{p[0]} << 24) | (uint32_t{p[1]} << 16) | (uint32_t{p[2]} << 8) | uint32_t{p[3]};
 }
 
-/// CRC-32 (ISO 3309 / PNG), table driven.
-uint32_t crc32_png(const uint8_t* data, size_t n) {
-    static const std::array<uint32_t, 256> table = [] {
-        std::array<uint32_t, 256> t{};
-        for (uint32_t i = 0; i < 256; ++i) {
-            uint32_t c = i;
-            for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xedb88320u ^ (c >> 1) : c >> 1;
-            t[i] = c;
-        }
-        return t;
-    }();
-    uint32_t c = 0xffffffffu;
-    for (size_t i = 0; i < n; ++i) c = table[(c ^ data[i]) & 0xffu] ^ (c >> 8);
-    return c ^ 0xffffffffu;
-}
 
 std::string chunk_name(const uint8_t* type) {
     std::string s;
@@ -57,6 +42,22 @@ std::string chunk_name(const uint8_t* type) {
 Error fail(const std::string& name, const std::string& what) { return Error{name + ": " + what}; }
 
 }  // namespace
+
+// Table driven.
+uint32_t png_crc32(const uint8_t* data, size_t n) {
+    static const std::array<uint32_t, 256> table = [] {
+        std::array<uint32_t, 256> t{};
+        for (uint32_t i = 0; i < 256; ++i) {
+            uint32_t c = i;
+            for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xedb88320u ^ (c >> 1) : c >> 1;
+            t[i] = c;
+        }
+        return t;
+    }();
+    uint32_t c = 0xffffffffu;
+    for (size_t i = 0; i < n; ++i) c = table[(c ^ data[i]) & 0xffu] ^ (c >> 8);
+    return c ^ 0xffffffffu;
+}
 
 Result<std::array<uint32_t, 2>> check_png_structure(std::span<const uint8_t> bytes, const std::string& name) {
     if (bytes.size() < kPngSignature.size() ||
@@ -83,7 +84,7 @@ Result<std::array<uint32_t, 2>> check_png_structure(std::span<const uint8_t> byt
         if (critical) {
             // libpng's default: a CRC error in a critical chunk is fatal.
             const uint32_t stored = read_be32(type + 4 + length);
-            if (crc32_png(type, length + 4u) != stored) {
+            if (png_crc32(type, length + 4u) != stored) {
                 return fail(name, fmt::format("corrupt PNG (CRC mismatch in chunk {})", type_name));
             }
         }

@@ -47,6 +47,7 @@ void Terrain::recompute_bounds() {
     // The paper's terrain box: the mesh's bounds grown by 1 m up and down.
     Aabb b;
     for (const Vec3& v : vertices_) b.grow(v);
+    mesh_bounds_ = b;
     b.min.y -= 1.0f;
     b.max.y += 1.0f;
     bounds_ = b;

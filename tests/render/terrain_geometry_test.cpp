@@ -67,5 +67,40 @@ TEST(TerrainGeometry, UpdatingAroundAStrokeEqualsAWholeBuild) {
     EXPECT_FALSE(update_terrain_geometry(terrain, e.value(), g, rows));
 }
 
+// The tree boxes after a refit, updated in place, equal a whole build; the spans say
+// where they moved (a raise above the highest sample moves every box's top).
+TEST(TerrainGeometry, RefittedTreeBoxesEqualAWholeBuildAndTheirSpansCoverEveryMove) {
+    auto t = Terrain::build(bumpy(23, 17), TerrainDef{.area_scale = 1.0f, .height_scale = 6.0f});
+    ASSERT_TRUE(t.ok()) << t.error().message;
+    Terrain& terrain = t.value();
+    auto bvh = Bvh::build(terrain, BvhDef{});
+    ASSERT_TRUE(bvh.ok()) << bvh.error().message;
+    TreeBoxes boxes;
+    build_tree_boxes(bvh.value(), boxes);
+    const std::vector<BoxInstance> before = boxes.boxes;
+    auto e = terrain.sculpt({.x = 11.0f, .z = 8.0f, .radius = 3.0f, .strength = 20.0f});
+    ASSERT_TRUE(e.ok()) << e.error().message;
+    bvh.value().refit_heights(terrain);
+    std::vector<std::pair<uint32_t, uint32_t>> spans;
+    ASSERT_TRUE(refit_tree_boxes(bvh.value(), boxes, spans));
+    TreeBoxes whole;
+    build_tree_boxes(bvh.value(), whole);
+    ASSERT_EQ(boxes.boxes.size(), whole.boxes.size());
+    EXPECT_EQ(std::memcmp(boxes.boxes.data(), whole.boxes.data(), whole.boxes.size() * sizeof(BoxInstance)), 0);
+    size_t moved = 0;
+    for (uint32_t k = 0; k < whole.boxes.size(); ++k) {
+        if (std::memcmp(&before[k], &whole.boxes[k], sizeof(BoxInstance)) == 0) continue;
+        ++moved;
+        bool covered = false;
+        for (const auto& [lo, hi] : spans) covered |= k >= lo && k < hi;
+        EXPECT_TRUE(covered) << "box " << k << " moved outside every span";
+    }
+    EXPECT_GT(moved, 0u) << "the stroke moved no box: the test checks nothing";
+    // Another tree (another node count) is refused, for a whole build.
+    TreeBoxes other = boxes;
+    other.nodes += 1;
+    EXPECT_FALSE(refit_tree_boxes(bvh.value(), other, spans));
+}
+
 }  // namespace
 }  // namespace mr::render
