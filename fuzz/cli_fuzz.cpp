@@ -70,11 +70,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
 
     mr::app::CommandLine cl = mr::app::parse_command_line(static_cast<int>(argv.size()), argv.data());
     if (!cl.action && cl.exit_code == mr::app::kExitOk && argv.size() > 1) {
-        // exit 0 without an action only for help: --help, --help-all, or -h alone or in a
-        // group of short flags ("-help" is -h -e -l -p to CLI11)
+        // exit 0 without an action only for help or the version: --help, --help-all, -h
+        // alone or in a group of short flags ("-help" is -h -e -l -p to CLI11), --version
         bool help = false;
         for (const auto& a : args)
-            help |= a.rfind("--help", 0) == 0 || (a.size() > 1 && a[0] == '-' && a[1] != '-' && a.find('h') != std::string::npos);
+            help |= a.rfind("--help", 0) == 0 || a == "--version" ||
+                    (a.size() > 1 && a[0] == '-' && a[1] != '-' && a.find('h') != std::string::npos);
         if (!help) std::abort();
     }
     if (!cl.action) return 0;

@@ -266,6 +266,7 @@ CLI = {
     "view": "view\n--preset\npaper-nile\n--size\n640x480\n--dt\n0.02\n--frames\n5\n--screenshot\ns.png",
     "bench": "bench\n--scenario\nw1\n--balls\n100\n--res\n32\n--frames\n3\n--threads\n1\n--json\nb.json",
     "help": "--help",
+    "version_then_run_options": "--version\n--preset\ndefault\n--frames\n10",
     "run_help": "run\n--help",
     "unknown_command": "fly\n--frames\n1",
     "no_command": "",
