@@ -53,17 +53,19 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 }
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+    // An argument ends at its first NUL byte, as argv's C strings do: the checks below
+    // must see what CLI11 sees ("--version\0..." is --version; found by CI's fuzz run).
     std::vector<std::string> args = {"metariver"};
     std::string cur;
     for (size_t i = 0; i < size; ++i) {
         if (data[i] == '\n') {
-            args.push_back(cur);
+            args.emplace_back(cur.c_str());
             cur.clear();
         } else {
             cur += static_cast<char>(data[i]);
         }
     }
-    if (!cur.empty()) args.push_back(cur);
+    if (!cur.empty()) args.emplace_back(cur.c_str());
     if (args.size() > 64) return 0;  // no command takes more
     std::vector<const char*> argv;
     for (const auto& a : args) argv.push_back(a.c_str());
