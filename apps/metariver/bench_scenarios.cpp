@@ -78,7 +78,7 @@ ScenarioResult bench_simulation(const std::string& name, const SceneDef& def, co
     // frames, water in the channel, density error, no explosion, no spray, settled speed.
     // Outflow over inflow: the main outlet's rate over the second half of the measured
     // frames over the source's nominal rate; coverage of the main channel at the end.
-    const double inflow = s.def().spawn.particles_per_second();  // as sized
+    const double inflow = s.def().spawn.total_particles_per_second();  // as sized, every source
     r.quality = {{"tunneled", s.counters().tunneled},
                  {"guarded", s.counters().guarded},
                  {"respawned", s.counters().respawned},

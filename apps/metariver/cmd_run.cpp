@@ -240,7 +240,7 @@ int run(const RunOptions& o) {
     const Percentiles final_speed = percentiles(sim.active_speeds());
     const double coverage = coverage_sum / double(std::max(spray_n, 1LL));
     const OutletMeter::Summary os = outlets.summary();
-    const double inflow = d.spawn.particles_per_second();  // as asked, not capped
+    const double inflow = d.spawn.total_particles_per_second();  // every source, as asked, not capped
     const double over_inflow = inflow > 0.0 ? os.main.rate / inflow : 0.0;
     if (!o.stats.empty()) {
         nlohmann::json j;

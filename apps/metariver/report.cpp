@@ -33,7 +33,7 @@ long long counter_balance(const Simulation& sim, long long frames_done) {
     long long expected = 0;
     if (d.solver == SolverKind::Pbf)
         expected = static_cast<long long>(c.emitted) - static_cast<long long>(c.sunk) - static_cast<long long>(c.respawned);
-    else if (d.spawn.particles_per_second() > 0.0f)
+    else if (d.spawn.has_rate())
         expected = static_cast<long long>(c.emitted) - static_cast<long long>(c.sunk);
     else if (d.spawn.interval == 0)
         expected = total;

@@ -12,6 +12,8 @@
 #include <climits>
 #include <cmath>
 #include <string>
+#include <type_traits>
+#include <variant>
 
 namespace mr::app {
 
@@ -63,16 +65,10 @@ bool word_combo(const SceneKey& k, SceneDef& d, bool& number) {
     return commit;
 }
 
-bool key_widget(const SceneKey& k, SceneDef& d) {
+/// The widget of field `f` as key `k`, labelled `leaf` (and the unit), `id` unique.
+bool field_widget(const SceneKey& k, const FieldRef& f, std::string_view leaf, std::string_view id) {
     bool commit = false;
-    if (k.words.current) {
-        bool number = false;
-        commit = word_combo(k, d, number);
-        if (!number) return commit;
-    }
-    const std::string label = k.unit.empty() ? fmt::format("{}##{}", k.leaf(), k.name)
-                                             : fmt::format("{} ({})##{}", k.leaf(), k.unit, k.name);
-    const FieldRef f = k.field(d);
+    const std::string label = k.unit.empty() ? fmt::format("{}##{}", leaf, id) : fmt::format("{} ({})##{}", leaf, k.unit, id);
     const ImGuiSliderFlags clamp = ImGuiSliderFlags_AlwaysClamp;
     if (auto* p = std::get_if<bool*>(&f)) {
         commit |= ImGui::Checkbox(label.c_str(), *p);
@@ -93,7 +89,7 @@ bool key_widget(const SceneKey& k, SceneDef& d) {
         commit |= ImGui::IsItemDeactivatedAfterEdit();
     } else if (auto* p = std::get_if<std::string*>(&f)) {
         const bool heightmap = k.name == "terrain.heightmap";
-        ImGui::TextWrapped("%s: %s", std::string(k.leaf()).c_str(),
+        ImGui::TextWrapped("%s: %s", std::string(leaf).c_str(),
                            (*p)->empty() && heightmap ? "(drop a PNG on the window)" : (*p)->c_str());
     } else {
         const EnumRef e = std::get<EnumRef>(f);
@@ -107,7 +103,65 @@ bool key_widget(const SceneKey& k, SceneDef& d) {
             ImGui::EndCombo();
         }
     }
+    return commit;
+}
+
+bool key_widget(const SceneKey& k, SceneDef& d) {
+    bool commit = false;
+    if (k.words.current) {
+        bool number = false;
+        commit = word_combo(k, d, number);
+        if (!number) return commit;
+    }
+    commit |= field_widget(k, k.field(d), k.leaf(), k.name);
     tooltip(k);
+    return commit;
+}
+
+/// A list's entries ([[particles.source]]): each entry's keys and a button that removes
+/// it; a button that adds one (a copy of the last, or the list's defaults).
+bool list_widget(const SceneList& l, SceneDef& d) {
+    bool commit = false;
+    const size_t n = l.size(d);
+    const std::string title = fmt::format("[[{}]]: {} of at most {}###{}", l.name, n, l.max, l.name);
+    if (!ImGui::TreeNode(title.c_str())) return false;
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", std::string(l.help).c_str());
+    for (size_t i = 0; i < l.size(d); ++i) {
+        ImGui::PushID(static_cast<int>(i));
+        ImGui::TextDisabled("%s[%zu]", std::string(l.name).c_str(), i + 1);
+        ImGui::SameLine();
+        if (ImGui::SmallButton("remove")) {
+            SceneDef copy = d;  // entries after i move up one place
+            for (size_t j = i + 1; j < l.size(d); ++j)
+                for (const SceneListKey& k : l.keys) {
+                    const FieldRef from = k.item(copy, j), to = k.item(d, j - 1);
+                    std::visit([&](const auto& a) {
+                        using P = std::decay_t<decltype(a)>;
+                        if constexpr (!std::is_same_v<P, EnumRef>) *std::get<P>(to) = *a;
+                    }, from);
+                }
+            l.resize(d, l.size(d) - 1);
+            ImGui::PopID();
+            commit = true;
+            break;
+        }
+        for (const SceneListKey& k : l.keys) {
+            commit |= field_widget(k.key, k.item(d, i), k.key.name, l.entry_key(i, k));
+            if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s: %s", l.entry_key(i, k).c_str(), std::string(k.key.help).c_str());
+        }
+        ImGui::PopID();
+    }
+    if (n < l.max && ImGui::SmallButton("add")) {
+        l.resize(d, n + 1);
+        if (n > 0)
+            for (const SceneListKey& k : l.keys)
+                std::visit([&](const auto& a) {
+                    using P = std::decay_t<decltype(a)>;
+                    if constexpr (!std::is_same_v<P, EnumRef>) *std::get<P>(k.item(d, n)) = *a;
+                }, k.item(d, n - 1));
+        commit = true;
+    }
+    ImGui::TreePop();
     return commit;
 }
 
@@ -126,6 +180,8 @@ bool scene_editor(SceneDef& d) {
         if (!ImGui::CollapsingHeader(header.c_str(), open ? ImGuiTreeNodeFlags_DefaultOpen : 0)) continue;
         for (const SceneKey& k : scene_keys())
             if (k.section() == s.name && k.readers(before)) commit |= key_widget(k, d);
+        for (const SceneList& l : scene_lists())
+            if (l.section() == s.name && l.readers(before)) commit |= list_widget(l, d);
     }
     return commit;
 }

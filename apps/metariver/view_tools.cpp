@@ -4,7 +4,10 @@
 
 #include <glm/geometric.hpp>
 
+#include <fmt/format.h>
+
 #include <algorithm>
+#include <cmath>
 
 namespace mr::view {
 
@@ -25,7 +28,7 @@ bool Tools::frame(Simulation& sim, SceneDef& def, const std::optional<Vec3>& hit
         return false;
     }
     if (!hit) return false;
-    if (tool_ == MoveSource || tool_ == PlaceSink) {  // once per press
+    if (tool_ >= MoveSource) {  // once per press
         if (dragging_) return false;
         dragging_ = true;
         if (tool_ == MoveSource) {
@@ -38,9 +41,7 @@ bool Tools::frame(Simulation& sim, SceneDef& def, const std::optional<Vec3>& hit
                 source_moved_ = true;
             }
         } else {
-            SceneDef next = def;
-            next.sink = SinkDef{.kind = SinkKind::Box, .min = *hit - Vec3(radius_), .max = *hit + Vec3(radius_)};
-            edit = next;
+            edit = click_edit(def, *hit, error);
         }
         return false;
     }
@@ -75,6 +76,45 @@ bool Tools::frame(Simulation& sim, SceneDef& def, const std::optional<Vec3>& hit
     return changed;
 }
 
+std::optional<SceneDef> Tools::click_edit(const SceneDef& def, const Vec3& hit, std::string& error) const {
+    SceneDef next = def;
+    if (tool_ == AddSource) {
+        if (next.spawn.sources.size() >= kMaxMoreSources) {
+            error = fmt::format("particles.source: at most {} more sources; remove one first", kMaxMoreSources);
+            return std::nullopt;
+        }
+        // The main source's size and height over the ground, at the tool's rate.
+        next.spawn.sources.push_back(SourceDef{.center = hit + Vec3(0.0f, def.spawn.half_extent.y + def.spawn.auto_height, 0.0f),
+                                               .half_extent = def.spawn.half_extent,
+                                               .flow_rate = source_rate_});
+    } else if (tool_ == AddSink) {
+        if (next.sink.boxes.size() >= kMaxMoreSinks) {
+            error = fmt::format("sink.box: at most {} more sink boxes; remove one first", kMaxMoreSinks);
+            return std::nullopt;
+        }
+        next.sink.boxes.push_back(SinkBox{hit - Vec3(radius_), hit + Vec3(radius_)});
+    } else {  // Remove: the added source or sink box nearest the click (x, z), within the radius
+        float best = radius_;
+        int source = -1, box = -1;
+        auto consider = [&](const Vec3& c, int s, int b) {
+            const float d = std::hypot(c.x - hit.x, c.z - hit.z);
+            if (d <= best) best = d, source = s, box = b;
+        };
+        for (size_t k = 0; k < def.spawn.sources.size(); ++k) consider(def.spawn.sources[k].center, int(k), -1);
+        for (size_t k = 0; k < def.sink.boxes.size(); ++k)
+            consider(0.5f * (def.sink.boxes[k].min + def.sink.boxes[k].max), -1, int(k));
+        if (source >= 0) next.spawn.sources.erase(next.spawn.sources.begin() + source);
+        else if (box >= 0) next.sink.boxes.erase(next.sink.boxes.begin() + box);
+        else {
+            error = fmt::format("remove: no added source or sink box within {:.1f} m of the click (the main source "
+                                "is moved, or turned off with its flow rate)",
+                                radius_);
+            return std::nullopt;
+        }
+    }
+    return next;
+}
+
 bool Tools::undo(Simulation& sim) {
     if (undo_.empty()) return false;
     changed_ = TerrainEdit{};
@@ -95,10 +135,15 @@ bool Tools::undo(Simulation& sim) {
 
 void Tools::ui() {
     ImGui::Combo("tool (left button)", &tool_,
-                 "pour / orbit\0raise\0lower\0smooth\0flatten\0push water\0move source\0place sink box\0");
+                 "pour / orbit\0raise\0lower\0smooth\0flatten\0push water\0move source\0add source\0add sink "
+                 "box\0remove source / sink\0");
     if (!active() || tool_ == MoveSource) return;
+    if (tool_ == AddSource) {
+        ImGui::DragFloat("new source's flow rate", &source_rate_, 0.5f, 0.0f, 1e4f, "%.1f", ImGuiSliderFlags_AlwaysClamp);
+        return;
+    }
     ImGui::DragFloat("tool radius (m)", &radius_, 0.05f, 0.1f, 200.0f, "%.2f", ImGuiSliderFlags_AlwaysClamp);
-    if (tool_ == PlaceSink) return;  // the radius is the box's half size
+    if (tool_ == AddSink || tool_ == Remove) return;  // the box's half size; how near a click removes
     if (tool_ == Push) {
         ImGui::DragFloat("push gain", &push_gain_, 0.01f, 0.0f, 5.0f, "%.2f", ImGuiSliderFlags_AlwaysClamp);
         return;

@@ -1,7 +1,8 @@
 // The viewer's hands-on tools (issue 14): the left button as a terrain brush (raise,
 // lower, smooth, flatten: Simulation::sculpt) with undo per drag, a hand that pushes
-// the water (Simulation::push), or a click that moves the source (Simulation::move_source)
-// or places the sink box (a live scene edit). The window code feeds it the cursor's
+// the water (Simulation::push), or a click that moves the main source
+// (Simulation::move_source), adds a source or a sink box, or removes the added source or
+// sink box nearest to it (live scene edits: [[particles.source]], [[sink.box]]). The window code feeds it the cursor's
 // terrain hit each frame; the panel's controls are its ui().
 #pragma once
 
@@ -15,7 +16,7 @@ namespace mr::view {
 
 class Tools {
 public:
-    enum Tool { Pour = 0, Raise, Lower, Smooth, Flatten, Push, MoveSource, PlaceSink };
+    enum Tool { Pour = 0, Raise, Lower, Smooth, Flatten, Push, MoveSource, AddSource, AddSink, Remove };
 
     /// True when the left button belongs to a tool (not to pouring and orbiting).
     bool active() const { return tool_ != Pour; }
@@ -23,7 +24,7 @@ public:
     /// terrain), `left` whether the button is held, `frame_s` the display frame's
     /// seconds. Returns true when the terrain changed (upload it again); an error goes
     /// to `error`. `def` is the viewer's scene: moving the source writes the new centre
-    /// into it; placing the sink fills `edit` with the scene to apply.
+    /// into it; adding or removing a source or sink fills `edit` with the scene to apply.
     bool frame(Simulation& sim, SceneDef& def, const std::optional<Vec3>& hit, bool left, double frame_s,
                std::string& error, std::optional<SceneDef>& edit);
     /// Undoes the newest brush drag (its strokes newest first: bit for bit). Returns
@@ -41,10 +42,15 @@ public:
     void ui();
 
 private:
+    /// The scene after a click of AddSource, AddSink or Remove at `hit` (none, and an
+    /// error, when the list is full or nothing is near enough to remove).
+    std::optional<SceneDef> click_edit(const SceneDef& def, const Vec3& hit, std::string& error) const;
+
     int tool_ = Pour;
     float radius_ = 3.0f;
     float strength_ = 0.1f;  ///< brushes: m (raise, lower) or share (smooth, flatten) per frame
     float push_gain_ = 1.0f; ///< push: water velocity per cursor velocity
+    float source_rate_ = 20.0f;  ///< add source: its flow rate (particles.flow_rate's unit)
     float target_ = 0.0f;    ///< flatten: the height where the drag began
     bool dragging_ = false;
     bool source_moved_ = false;

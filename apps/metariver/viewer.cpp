@@ -295,6 +295,7 @@ void Viewer::panel(int win_h) {
         ImGui::Checkbox("foam and spray (O)", &draw_.foam);
         ImGui::SameLine();
         ImGui::Checkbox("flow detail (L)", &draw_.flow_detail);
+        ImGui::Checkbox("sources and sinks", &show_markers_);
         ImGui::Checkbox("AABB tree (B)", &draw_.bvh);
         ImGui::SameLine();
         ImGui::SliderInt("depth##bvh", &draw_.bvh_level, -1, 16, draw_.bvh_level < 0 ? "leaves" : "%d");
@@ -343,6 +344,39 @@ void Viewer::overlay(int win_w) {
     ImGui::End();
 }
 
+void Viewer::markers(int win_w, int win_h) {
+    if (!show_markers_ || win_w <= 0 || win_h <= 0) return;
+    const glm::mat4 m = camera_.projection(float(win_w) / float(win_h)) * camera_.view();
+    ImDrawList* dl = ImGui::GetBackgroundDrawList();
+    auto project = [&](const Vec3& p, ImVec2& out) {
+        const glm::vec4 c = m * glm::vec4(p, 1.0f);
+        if (c.w <= 1e-4f) return false;  // behind the camera
+        out = ImVec2((c.x / c.w * 0.5f + 0.5f) * float(win_w), (0.5f - c.y / c.w * 0.5f) * float(win_h));
+        return true;
+    };
+    auto box = [&](const Vec3& lo, const Vec3& hi, ImU32 colour, const std::string& label) {
+        ImVec2 q[8];
+        for (int k = 0; k < 8; ++k)
+            if (!project(Vec3(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z), q[k])) return;
+        constexpr int kEdges[12][2] = {{0, 1}, {2, 3}, {4, 5}, {6, 7}, {0, 2}, {1, 3}, {4, 6}, {5, 7}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
+        for (const auto& e : kEdges) dl->AddLine(q[e[0]], q[e[1]], colour, 2.0f);
+        dl->AddText(q[6], colour, label.c_str());
+    };
+    const SpawnDef& sp = def_.spawn;
+    auto extent = [&](const Vec3& h) {  // as the emitters read it
+        return sp.shape == SourceShape::Point ? Vec3(0.2f) : sp.shape == SourceShape::Disc ? Vec3(h.x, h.y, h.x) : h;
+    };
+    box(sp.center - extent(sp.half_extent), sp.center + extent(sp.half_extent), IM_COL32(80, 230, 255, 255), "source");
+    for (size_t k = 0; k < sp.sources.size(); ++k) {
+        const SourceDef& s = sp.sources[k];
+        box(s.center - extent(s.half_extent), s.center + extent(s.half_extent), IM_COL32(90, 140, 255, 255),
+            fmt::format("source {}", k + 1));
+    }
+    if (def_.sink.kind == SinkKind::Box) box(def_.sink.min, def_.sink.max, IM_COL32(255, 90, 70, 255), "sink");
+    for (size_t k = 0; k < def_.sink.boxes.size(); ++k)
+        box(def_.sink.boxes[k].min, def_.sink.boxes[k].max, IM_COL32(255, 90, 70, 255), fmt::format("sink {}", k + 1));
+}
+
 void Viewer::draw(int fb_w, int fb_h, bool last) {
     render::fit_clip_planes(camera_, sim_->terrain());
     renderer_.update(sim_->view());
@@ -384,6 +418,7 @@ void Viewer::frame(long long n, double elapsed) {
     ImGui::NewFrame();
     panel(win_h);
     overlay(win_w);
+    markers(win_w, win_h);
     ImGui::Render();
 
     const bool last = settings_.frames > 0 && n + 1 >= settings_.frames;

@@ -59,6 +59,9 @@ private:
     void load_dropped();
     void panel(int win_h);
     void overlay(int win_w);
+    /// Outlines of the sources (cyan: the main one, blue: the added ones) and the sink
+    /// boxes (red), numbered as the scene's lists are, over the 3D view.
+    void markers(int win_w, int win_h);
     void draw(int fb_w, int fb_h, bool last);
 
     GLFWwindow* window_;
@@ -88,6 +91,7 @@ private:
     std::vector<double> frame_ms_;  ///< every frame, for the summary
     double press_x_ = 0, press_y_ = 0, last_x_ = 0, last_y_ = 0;
     bool left_down_ = false, dragged_ = false;
+    bool show_markers_ = true;
 };
 
 }  // namespace mr::app

@@ -34,10 +34,47 @@ enum class SinkKind {
 };
 std::string_view to_string(SinkKind s);
 
+/// A box that takes particles out (and back to the sources), [min, max] in metres.
+struct SinkBox {
+    Vec3 min{0.0f};
+    Vec3 max{0.0f};
+    bool contains(const Vec3& p) const {
+        return p.x >= min.x && p.y >= min.y && p.z >= min.z && p.x <= max.x && p.y <= max.y && p.z <= max.z;
+    }
+    bool operator==(const SinkBox&) const = default;
+};
+
+/// Most entries of the scene's lists: more sources (`[[particles.source]]`) and more
+/// sink boxes (`[[sink.box]]`).
+inline constexpr size_t kMaxMoreSources = 16;
+inline constexpr size_t kMaxMoreSinks = 16;
+
 struct SinkDef {
     SinkKind kind = SinkKind::None;
     Vec3 min{0.0f};  ///< box sink corner, metres
     Vec3 max{0.0f};  ///< box sink corner, metres
+    /// More box sinks (`[[sink.box]]`), taking particles whatever `kind` is; at most
+    /// kMaxMoreSinks.
+    std::vector<SinkBox> boxes;
+    /// The particle at `p` is in the main box (kind = Box) or one of `boxes`.
+    bool in_a_box(const Vec3& p) const {
+        if (kind == SinkKind::Box && SinkBox{min, max}.contains(p)) return true;
+        for (const SinkBox& b : boxes)
+            if (b.contains(p)) return true;
+        return false;
+    }
+};
+
+/// One more source of a scene with a particle rate (`[[particles.source]]`): a volume of
+/// the main source's shape (particles.source_shape), inflow velocity and ground
+/// following, at its own centre, size and rate (in the main source's unit: particles
+/// or, with particles.litres_per_particle, litres per second). All sources draw on the
+/// one particle budget.
+struct SourceDef {
+    Vec3 center{0.0f};           ///< metres
+    Vec3 half_extent{0.5f};      ///< metres (>= 0)
+    float flow_rate = 0.0f;      ///< [0, 1e7]
+    bool operator==(const SourceDef&) const = default;
 };
 
 /// A fluid source that never overlaps water: its volume (box, disc, or the single point

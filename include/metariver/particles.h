@@ -104,11 +104,28 @@ struct SpawnDef {
     /// born on the ground instead of falling from a flat disc metres above its downhill
     /// side (particles.follow_ground; strict17.png's spray 0.035 -> 0.003, docs/river.md).
     bool follow_ground = false;
-    /// Particles per second the source emits.
+    /// More sources (`[[particles.source]]`, at most kMaxMoreSources), emitting with
+    /// the main one when the scene has a particle rate (has_rate()).
+    std::vector<SourceDef> sources;
+    /// Particles per second the (main) source emits.
     float particles_per_second() const {
         if (auto_rate()) return 0.0f;  // not known before the terrain is
-        return litres_per_particle > 0.0f ? flow_rate / litres_per_particle : flow_rate;
+        return per_second(flow_rate);
     }
+    /// Particles per second more source k emits.
+    float particles_per_second(size_t k) const { return per_second(sources[k].flow_rate); }
+    /// The main source and every more source together, particles per second.
+    float total_particles_per_second() const {
+        float r = particles_per_second();
+        for (size_t k = 0; k < sources.size(); ++k) r += particles_per_second(k);
+        return r;
+    }
+    /// Emission by rate (the sources owe rate x time) rather than the paper's activation
+    /// every `interval` frames: a rate on the main source or on any more source.
+    bool has_rate() const { return total_particles_per_second() > 0.0f; }
+
+private:
+    float per_second(float rate) const { return litres_per_particle > 0.0f ? rate / litres_per_particle : rate; }
 };
 
 /// Position Based Fluids (Macklin and Mueller 2013). The rest density is the kernel
@@ -280,11 +297,14 @@ public:
     std::span<const Vec3> last_exits() const override { return exits_; }
 
     /// PBF: the lattice source (emission at the rest spacing, never onto water); none
-    /// for the paper's springs, which spawn at random points of the volume.
-    const LatticeSource* lattice_source() const { return lattice_ ? &*lattice_ : nullptr; }
-    /// Particles per second the source emits: the flow rate, capped (PBF) to what the
-    /// lattice source can deliver.
-    float emit_rate() const;
+    /// for the paper's springs, which spawn at random points of the volume. `k` = 0: the
+    /// main source, k >= 1: more source k - 1 (SpawnDef::sources).
+    const LatticeSource* lattice_source(size_t k = 0) const;
+    /// Particles per second source k emits (0: the main one): its flow rate, capped
+    /// (PBF) to what its lattice can deliver.
+    float emit_rate(size_t k = 0) const;
+    /// Sources: the main one and SpawnDef::sources.
+    size_t source_count() const { return 1 + spawn_.sources.size(); }
 
     /// Activates particles at the given positions (with the initial velocity), in
     /// order, starting at the first inactive one; extra positions are ignored.
@@ -294,6 +314,8 @@ public:
 
     /// Places particle i at a random point of the spawn volume with the initial velocity.
     void spawn(size_t i);
+    /// The same in source k's volume (0: the main source).
+    void spawn(size_t i, size_t k);
 
     /// The neighbour grid of the latest step (grid spring mode, PBF).
     const NeighborGrid& grid() const { return grid_; }
@@ -327,14 +349,21 @@ protected:
     void collide_paper(size_t i, float dt, StepCounts& c);
     void collide_robust(size_t i, float dt, StepCounts& c);
     void emit(float dt);
-    /// PBF: emits floor(emit_debt_) particles (at most the pool) into free lattice slots.
-    void emit_lattice();
+    /// PBF: emits floor(credit) particles of source k (at most the pool) into its free
+    /// lattice slots.
+    void emit_lattice(size_t k);
+    /// The lattices of every source (lattice_spacing_ > 0).
     void build_lattice();
-    /// Flags particles for respawn (1) or the sink (2) after a step.
+    /// The scene emits by rate (SpawnDef::has_rate).
+    bool by_rate() const { return spawn_.has_rate(); }
+    /// Source k's volume: centre and half extent (0: the main source).
+    std::pair<Vec3, Vec3> source_volume(size_t k) const;
+    /// Flags particles for respawn (1), a sink box (2) or the outlet-edge sink (3) after a step.
     uint8_t exit_flag(const Vec3& p) const;
     void finish_step(uint64_t steps, const StepCounts& c);
-    /// Counts particle i as sunk; with the outlet-edge sink, records where it left.
-    void record_sunk(size_t i);
+    /// Counts particle i as sunk; one that left over an edge (the outlet-edge sink) is
+    /// recorded where it left (last_exits).
+    void record_sunk(size_t i, bool over_an_edge);
     void record_max_speed();
     std::optional<RayHit> robust_hit(const Vec3& from, const Vec3& to) const;
     /// True when `lifted` (a centre moved down by the radius) is below the mesh.
@@ -363,8 +392,15 @@ protected:
     std::vector<Vec3> exits_;  ///< last_exits(): reused, no allocation once warm
     SinkDef sink_;
     float lattice_spacing_ = 0.0f;  ///< > 0: the lattice source's spacing
-    double emit_credit_ = 0.0;      ///< fractional particles the source owes
-    std::optional<LatticeSource> lattice_;
+    /// Per source (0: the main one, then SpawnDef::sources): the particles it owes (a
+    /// fraction carried over) and its lattice (PBF).
+    struct Emitter {
+        double credit = 0.0;
+        std::optional<LatticeSource> lattice;
+    };
+    std::vector<Emitter> emitters_;
+    /// PBF: every activation goes through the sources' lattices (built).
+    bool uses_lattice() const { return !emitters_.empty() && emitters_[0].lattice.has_value(); }
     std::vector<Vec3> emit_slots_;  ///< scratch of emit_lattice()
     // Reorder scratch (reused; no allocation once warm).
     std::vector<uint32_t> perm_;

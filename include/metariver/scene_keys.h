@@ -92,8 +92,34 @@ struct SceneSection {
     std::string_view help;
 };
 
+/// A list of tables in a scene file (`[[particles.source]]`, `[[sink.box]]`): every entry
+/// holds the keys of `keys`, whose SceneKey rows carry the leaf name ("center"), type,
+/// unit, range and help (no `field`, no words); `item` finds entry i's field. Messages
+/// name an entry by its 1-based place in the file: "particles.source[2].center".
+struct SceneListKey {
+    SceneKey key;
+    FieldRef (*item)(SceneDef& d, size_t i) = nullptr;
+};
+
+struct SceneList {
+    std::string_view name;  ///< "section.leaf": the file's [[section.leaf]]
+    std::string_view help;
+    KeyReaders readers;
+    size_t max = 0;  ///< most entries
+    size_t (*size)(const SceneDef& d) = nullptr;
+    void (*resize)(SceneDef& d, size_t n) = nullptr;
+    std::span<const SceneListKey> keys;
+
+    std::string_view section() const;  ///< "particles"
+    std::string_view leaf() const;     ///< "source"
+    /// "particles.source[2].center" (i is 0-based).
+    std::string entry_key(size_t i, const SceneListKey& k) const;
+};
+
 /// Every key, section by section in the order of scene_sections().
 std::span<const SceneKey> scene_keys();
+/// The lists (each in its section).
+std::span<const SceneList> scene_lists();
 /// The sections, the root ("") first.
 std::span<const SceneSection> scene_sections();
 /// The key named `name` ("pbf.spacing"), or null.
@@ -104,6 +130,15 @@ std::string key_value_toml(const SceneKey& key, const SceneDef& d);
 /// "" when the key's value in `d` is inside its range (a word always is), else the
 /// message without the key ("must be in (0, 64] (got -2)").
 std::string key_range_error(const SceneKey& key, const SceneDef& d);
+/// The same two for a value found elsewhere (a list entry's field; no words).
+std::string field_value_toml(const SceneKey& key, const FieldRef& f);
+std::string field_range_error(const SceneKey& key, const FieldRef& f);
+/// The lists' entries in `d` where the scene reads them: "" or the first message with
+/// its key ("particles.source[2].flow_rate: must be in [0, 10000000] (got -1)", or too
+/// many entries).
+std::string list_range_error(const SceneDef& d);
+/// The list's entries in `d` as TOML ([[name]] blocks, one key per line); "" when empty.
+std::string list_toml(const SceneList& list, const SceneDef& d);
 
 /// The scene as a complete TOML file a user can start from: `preset = "<base>"` (the
 /// scene keys left out keep the values of; a root key outside the table, read before all

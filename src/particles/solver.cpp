@@ -64,23 +64,37 @@ ParticleSolver::ParticleSolver(const Terrain& terrain, const Bvh& bvh, SpawnDef 
         particles_.id[i] = static_cast<uint32_t>(i);
     }
     respawn_flag_.assign(n, 0);
+    emitters_.resize(1 + spawn_.sources.size());
 }
 
 SpringSolver::SpringSolver(const Terrain& terrain, const Bvh& bvh, SpawnDef spawn, SpringDef springs,
                            CollisionDef collision, IntegratorDef integrator, uint32_t seed, SinkDef sink)
     : ParticleSolver(terrain, bvh, spawn, collision, integrator, seed, sink, 0.0f), springs_(springs) {}
 
-void ParticleSolver::spawn(size_t i) {
-    const Vec3 lo = spawn_.center - spawn_.half_extent;
-    const Vec3 hi = spawn_.center + spawn_.half_extent;
-    Vec3 p = spawn_.center;
+std::pair<Vec3, Vec3> ParticleSolver::source_volume(size_t k) const {
+    if (k == 0) return {spawn_.center, spawn_.half_extent};
+    const SourceDef& s = spawn_.sources[k - 1];
+    return {s.center, s.half_extent};
+}
+
+const LatticeSource* ParticleSolver::lattice_source(size_t k) const {
+    return k < emitters_.size() && emitters_[k].lattice ? &*emitters_[k].lattice : nullptr;
+}
+
+void ParticleSolver::spawn(size_t i) { spawn(i, 0); }
+
+void ParticleSolver::spawn(size_t i, size_t k) {
+    const auto [center, half] = source_volume(k);
+    const Vec3 lo = center - half;
+    const Vec3 hi = center + half;
+    Vec3 p = center;
     if (spawn_.shape == SourceShape::Box) {
         p.x = rng_.uniform(lo.x, hi.x);
         p.y = rng_.uniform(lo.y, hi.y);
         p.z = rng_.uniform(lo.z, hi.z);
     } else if (spawn_.shape == SourceShape::Disc) {
         // Uniform in the disc: radius sqrt(u) R, angle 2 pi v.
-        const float r = std::sqrt(rng_.uniform(0.0f, 1.0f)) * spawn_.half_extent.x;
+        const float r = std::sqrt(rng_.uniform(0.0f, 1.0f)) * half.x;
         const float a = rng_.uniform(0.0f, 6.2831853f);
         p.x += r * std::cos(a);
         p.z += r * std::sin(a);
@@ -130,6 +144,7 @@ bool ParticleSolver::set_shared(const SpawnDef& spawn, const CollisionDef& colli
     integrator_ = integrator;
     sink_ = sink;
     lattice_spacing_ = lattice_spacing;
+    emitters_.resize(1 + spawn_.sources.size());  // a removed source's debt goes with it
     return true;
 }
 
@@ -142,7 +157,7 @@ bool SpringSolver::set_params(const SpawnDef& spawn, const SpringDef& springs, c
 
 void ParticleSolver::set_spawn_center(const Vec3& center) {
     spawn_.center = center;
-    if (lattice_) build_lattice();
+    if (uses_lattice()) build_lattice();
 }
 
 size_t ParticleSolver::push(const Vec3& center, float radius, const Vec3& velocity) {
@@ -165,7 +180,7 @@ void ParticleSolver::pour(const Vec3& center, int count) {
     set_spawn_center(center);
     const size_t n = particles_.size();
     if (n == 0 || count <= 0) return;
-    if (lattice_) {
+    if (uses_lattice()) {
         // The lattice source emits them as slots free up; when the pool is short, the
         // oldest-poured particles are taken back into it first.
         for (int k = 0; k < count && size_t(k) < n; ++k) {
@@ -175,7 +190,7 @@ void ParticleSolver::pour(const Vec3& center, int count) {
                 next_to_pour_ = static_cast<uint32_t>((next_to_pour_ + 1) % n);
             }
         }
-        emit_credit_ += double(std::min<size_t>(size_t(count), n));
+        emitters_[0].credit += double(std::min<size_t>(size_t(count), n));
         return;
     }
     for (int k = 0; k < count; ++k) {
@@ -204,63 +219,80 @@ void ParticleSolver::deactivate(size_t i) {
 }
 
 void ParticleSolver::emit(float dt) {
-    // The source owes rate * dt particles; whole ones come from the inactive pool
+    // Each source owes rate * dt particles; whole ones come from the inactive pool
     // (never-spawned or recycled by a sink). An empty pool drops the debt: the budget
-    // caps the flow.
-    emit_credit_ += double(spawn_.particles_per_second()) * dt;
-    while (emit_credit_ >= 1.0) {
-        emit_credit_ -= 1.0;
-        if (next_to_activate_ >= particles_.size()) {
-            emit_credit_ = std::min(emit_credit_, 1.0);
-            break;
+    // caps the flow. The sources take their turns in order within a step.
+    for (size_t k = 0; k < emitters_.size(); ++k) {
+        double& credit = emitters_[k].credit;
+        credit += double(k == 0 ? spawn_.particles_per_second() : spawn_.particles_per_second(k - 1)) * dt;
+        while (credit >= 1.0) {
+            credit -= 1.0;
+            if (next_to_activate_ >= particles_.size()) {
+                credit = std::min(credit, 1.0);
+                break;
+            }
+            spawn(next_to_activate_++, k);
+            ++counters_.emitted;
         }
-        spawn(next_to_activate_++);
-        ++counters_.emitted;
     }
 }
 
-float ParticleSolver::emit_rate() const {
-    const float rate = spawn_.particles_per_second();
-    return lattice_ ? std::min(rate, lattice_->max_rate()) : rate;
+float ParticleSolver::emit_rate(size_t k) const {
+    if (k >= source_count()) return 0.0f;
+    const float rate = k == 0 ? spawn_.particles_per_second() : spawn_.particles_per_second(k - 1);
+    const LatticeSource* l = lattice_source(k);
+    return l ? std::min(rate, l->max_rate()) : rate;
 }
 
 void ParticleSolver::build_lattice() {
-    LatticeSource::Def d{.shape = spawn_.shape,
-                         .center = spawn_.center,
-                         .half_extent = spawn_.half_extent,
-                         .inflow = spawn_.initial_velocity,
-                         .spacing = lattice_spacing_,
-                         .clearance = collision_.mode == CollisionMode::None ? 0.0f : collision_.radius + collision_.offset,
-                         .gravity = integrator_.gravity,
-                         .follow_ground = spawn_.follow_ground && spawn_.particles_per_second() > 0.0f};
-    lattice_ = LatticeSource::build(d, terrain_);
+    emitters_.resize(source_count());
+    for (size_t k = 0; k < emitters_.size(); ++k) {
+        const auto [center, half] = source_volume(k);
+        LatticeSource::Def d{.shape = spawn_.shape,
+                             .center = center,
+                             .half_extent = half,
+                             .inflow = spawn_.initial_velocity,
+                             .spacing = lattice_spacing_,
+                             .clearance = collision_.mode == CollisionMode::None ? 0.0f : collision_.radius + collision_.offset,
+                             .gravity = integrator_.gravity,
+                             .follow_ground = spawn_.follow_ground && by_rate()};
+        emitters_[k].lattice = LatticeSource::build(d, terrain_);
+    }
 }
 
 std::vector<std::string> ParticleSolver::warnings() const {
     std::vector<std::string> w;
-    if (!lattice_) return w;
-    const float rate = spawn_.particles_per_second();
-    if (lattice_->slots().empty())
-        w.push_back(fmt::format("particles.spawn_center: the source volume at [{}, {}, {}] has no lattice slot above "
-                                "the terrain (spacing pbf.spacing = {} m): it cannot emit; raise the source or "
-                                "widen particles.spawn_half_extent",
-                                spawn_.center.x, spawn_.center.y, spawn_.center.z, lattice_spacing_));
-    else if (rate > lattice_->max_rate())
-        w.push_back(fmt::format("particles.flow_rate: {:.1f} particles per second is more than the source can deliver "
-                                "at spacing {} m and inflow speed {:.2f} m/s ({} lattice slots): capped to {:.1f}; "
-                                "widen particles.spawn_half_extent or raise particles.initial_velocity",
-                                rate, lattice_spacing_, glm::length(spawn_.initial_velocity), lattice_->slots().size(),
-                                lattice_->max_rate()));
+    if (!uses_lattice()) return w;
+    for (size_t k = 0; k < emitters_.size(); ++k) {
+        const LatticeSource& l = *emitters_[k].lattice;
+        const auto [c, half] = source_volume(k);
+        const float rate = k == 0 ? spawn_.particles_per_second() : spawn_.particles_per_second(k - 1);
+        const std::string centre = k == 0 ? "particles.spawn_center" : fmt::format("particles.source[{}].center", k);
+        const std::string extent = k == 0 ? "particles.spawn_half_extent" : fmt::format("particles.source[{}].half_extent", k);
+        const std::string flow = k == 0 ? "particles.flow_rate" : fmt::format("particles.source[{}].flow_rate", k);
+        if (l.slots().empty())
+            w.push_back(fmt::format("{}: the source volume at [{}, {}, {}] has no lattice slot above the terrain "
+                                    "(spacing pbf.spacing = {} m): it cannot emit; raise the source or widen {}",
+                                    centre, c.x, c.y, c.z, lattice_spacing_, extent));
+        else if (rate > l.max_rate())
+            w.push_back(fmt::format("{}: {:.1f} particles per second is more than the source can deliver "
+                                    "at spacing {} m and inflow speed {:.2f} m/s ({} lattice slots): capped to {:.1f}; "
+                                    "widen {} or raise particles.initial_velocity",
+                                    flow, rate, lattice_spacing_, glm::length(spawn_.initial_velocity), l.slots().size(),
+                                    l.max_rate(), extent));
+    }
     return w;
 }
 
-void ParticleSolver::emit_lattice() {
+void ParticleSolver::emit_lattice(size_t k) {
+    LatticeSource& lattice = *emitters_[k].lattice;
+    double& credit = emitters_[k].credit;
     const size_t pool = particles_.size() - next_to_activate_;
-    const double cap = double(std::max<size_t>(lattice_->slots().size(), 1));
-    if (emit_credit_ > cap) emit_credit_ = cap;  // a blocked source does not build an endless backlog
-    const size_t want = std::min(pool, static_cast<size_t>(std::max(emit_credit_, 0.0)));
+    const double cap = double(std::max<size_t>(lattice.slots().size(), 1));
+    if (credit > cap) credit = cap;  // a blocked source does not build an endless backlog
+    const size_t want = std::min(pool, static_cast<size_t>(std::max(credit, 0.0)));
     if (want == 0) return;
-    lattice_->emit(particles_.position, next_to_activate_, want, emit_slots_);
+    lattice.emit(particles_.position, next_to_activate_, want, emit_slots_);
     for (const Vec3& q : emit_slots_) {
         const size_t i = next_to_activate_++;
         particles_.position[i] = q;
@@ -271,21 +303,22 @@ void ParticleSolver::emit_lattice() {
         reset_slot(i);
         ++counters_.emitted;
     }
-    emit_credit_ -= double(emit_slots_.size());
+    credit -= double(emit_slots_.size());
 }
 
 void ParticleSolver::step_frame(float frame_dt) {
     exits_.clear();
-    const bool by_rate = spawn_.particles_per_second() > 0.0f;
+    const bool by_rate = this->by_rate();
     const bool due = spawn_.interval == 0 || frame_ % static_cast<uint64_t>(spawn_.interval) == 0;
-    if (lattice_) {
+    if (uses_lattice()) {
         // PBF: every activation goes through the lattice source. Without a rate the
-        // source owes the whole pool (interval 0) or one particle when due; what does
-        // not fit now is emitted as the slots free up.
+        // (main) source owes the whole pool (interval 0) or one particle when due; what
+        // does not fit now is emitted as the slots free up.
         const size_t pool = particles_.size() - next_to_activate_;
-        if (!by_rate && spawn_.interval == 0) emit_credit_ = std::max(emit_credit_, double(pool));
-        else if (!by_rate && due) emit_credit_ += 1.0;
-        if (frame_ == 0) emit_lattice();
+        double& credit = emitters_[0].credit;
+        if (!by_rate && spawn_.interval == 0) credit = std::max(credit, double(pool));
+        else if (!by_rate && due) credit += 1.0;
+        if (frame_ == 0) emit_lattice(0);
     } else if (due && !by_rate) {
         const size_t n = spawn_.interval == 0 ? particles_.size() : 1;
         for (size_t k = 0; k < n && next_to_activate_ < particles_.size(); ++k) spawn(next_to_activate_++);
@@ -297,9 +330,11 @@ void ParticleSolver::step_frame(float frame_dt) {
         // Emit after the step: particles a sink took out this step are back at once
         // when the rate allows, so the budget stays in the river.
         step(h);
-        if (lattice_) {
-            if (by_rate) emit_credit_ += double(emit_rate()) * h;
-            emit_lattice();
+        if (uses_lattice()) {
+            for (size_t k = 0; k < emitters_.size(); ++k) {
+                if (by_rate) emitters_[k].credit += double(emit_rate(k)) * h;
+                emit_lattice(k);
+            }
         } else if (by_rate) {
             emit(h);
         }
@@ -312,14 +347,12 @@ bool ParticleSolver::out_of_bounds(const Vec3& p) const {
 }
 
 uint8_t ParticleSolver::exit_flag(const Vec3& p) const {
-    if (sink_.kind == SinkKind::Box && p.x >= sink_.min.x && p.y >= sink_.min.y && p.z >= sink_.min.z &&
-        p.x <= sink_.max.x && p.y <= sink_.max.y && p.z <= sink_.max.z)
-        return 2;
+    if (sink_.in_a_box(p)) return 2;
     if (!out_of_bounds(p)) return 0;
     // Over an edge (not through the bottom): an outlet.
     if (sink_.kind == SinkKind::Edges && std::isfinite(p.y) && p.y >= terrain_.bounds().min.y &&
         std::isfinite(p.x) && std::isfinite(p.z))
-        return 2;
+        return 3;
     return 1;
 }
 
@@ -329,44 +362,44 @@ void ParticleSolver::finish_step(uint64_t steps, const StepCounts& c) {
     counters_.guarded += c.guarded;
     counters_.tunneled += c.tunneled;
     const size_t n = particles_.size();
-    if (lattice_) {
+    if (uses_lattice()) {
         // PBF: out of bounds or sunk, every particle goes back to the pool; without a
         // flow rate the source owes it back at once (it re-emits as slots free up).
-        const bool by_rate = spawn_.particles_per_second() > 0.0f;
+        const bool by_rate = this->by_rate();
         for (size_t i = n; i-- > 0;) {
             if (respawn_flag_[i] == 0) continue;
             if (respawn_flag_[i] == 1) ++counters_.respawned;
-            else record_sunk(i);
+            else record_sunk(i, respawn_flag_[i] == 3);
             deactivate(i);
-            if (!by_rate) emit_credit_ += 1.0;
+            if (!by_rate) emitters_[0].credit += 1.0;
         }
         record_max_speed();
         return;
     }
-    const bool pool = spawn_.particles_per_second() > 0.0f;
+    const bool pool = by_rate();
     // Serial, in index order: the RNG sequence does not depend on the thread count.
     for (size_t i = 0; i < n; ++i) {
         if (respawn_flag_[i] == 1) {
             ++counters_.respawned;
             spawn(i);
-        } else if (respawn_flag_[i] == 2 && !pool) {
-            record_sunk(i);  // no flow rate: straight back to the source
+        } else if (respawn_flag_[i] >= 2 && !pool) {
+            record_sunk(i, respawn_flag_[i] == 3);  // no flow rate: straight back to the source
             spawn(i);
         }
     }
     if (pool) {  // recycled into the pool, highest index first (swaps only move processed slots)
         for (size_t i = n; i-- > 0;)
-            if (respawn_flag_[i] == 2) {
-                record_sunk(i);
+            if (respawn_flag_[i] >= 2) {
+                record_sunk(i, respawn_flag_[i] == 3);
                 deactivate(i);
             }
     }
     record_max_speed();
 }
 
-void ParticleSolver::record_sunk(size_t i) {
+void ParticleSolver::record_sunk(size_t i, bool over_an_edge) {
     ++counters_.sunk;
-    if (sink_.kind == SinkKind::Edges) exits_.push_back(particles_.position[i]);
+    if (over_an_edge) exits_.push_back(particles_.position[i]);
 }
 
 void ParticleSolver::record_max_speed() {

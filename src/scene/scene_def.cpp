@@ -285,43 +285,62 @@ Status validate(const SceneDef& d) {
     if (d.solver != SolverKind::Bullet && d.sink.kind == SinkKind::Box)
         check(d.sink.min.x <= d.sink.max.x && d.sink.min.y <= d.sink.max.y && d.sink.min.z <= d.sink.max.z,
               "sink.max: every component must be >= sink.min's");
+    if (const std::string e = list_range_error(d); !e.empty()) check(false, "{}", e);
+    if (d.solver != SolverKind::Bullet)
+        for (size_t i = 0; i < d.sink.boxes.size(); ++i) {
+            const SinkBox& b = d.sink.boxes[i];
+            check(b.min.x <= b.max.x && b.min.y <= b.max.y && b.min.z <= b.max.z,
+                  "sink.box[{}].max: every component must be >= sink.box[{}].min's", i + 1, i + 1);
+        }
     if (!error.empty()) return Error{error};
     return Ok{};
 }
 
 Status validate_on_terrain(const SceneDef& d, const Terrain& t) {
-    const Vec3 c = d.spawn.center;
     const Aabb b = t.bounds();
-    // The source's half sizes as the emitters read them: a point has none (its
-    // spawn_half_extent is not read), a disc is spawn_half_extent.x across both axes.
-    const Vec3 he = d.spawn.shape == SourceShape::Point  ? Vec3(0.0f)
-                    : d.spawn.shape == SourceShape::Disc ? Vec3(d.spawn.half_extent.x, d.spawn.half_extent.y, d.spawn.half_extent.x)
-                                                         : d.spawn.half_extent;
-    if (!t.contains_xz(c.x, c.z))
-        return Error{fmt::format("particles.spawn_center: the source at [{}, {}, {}] is outside the terrain's rectangle "
-                                 "x in [0, {}], z in [0, {}]",
-                                 c.x, c.y, c.z, b.max.x, b.max.z)};
-    if (d.sink.kind == SinkKind::Box) {
+    // The sources: the main one, then the more sources where the scene reads them.
+    const bool more = d.solver != SolverKind::Bullet && (d.spawn.auto_rate() ? d.solver == SolverKind::Pbf : d.spawn.has_rate());
+    const size_t sources = 1 + (more ? d.spawn.sources.size() : 0);
+    for (size_t k = 0; k < sources; ++k) {
+        const Vec3 c = k == 0 ? d.spawn.center : d.spawn.sources[k - 1].center;
+        const Vec3 half = k == 0 ? d.spawn.half_extent : d.spawn.sources[k - 1].half_extent;
+        const std::string centre = k == 0 ? "particles.spawn_center" : fmt::format("particles.source[{}].center", k);
+        const std::string extent = k == 0 ? "particles.spawn_half_extent" : fmt::format("particles.source[{}].half_extent", k);
+        // The source's half sizes as the emitters read them: a point has none (its
+        // half extent is not read), a disc is half_extent.x across both axes.
+        const Vec3 he = d.spawn.shape == SourceShape::Point  ? Vec3(0.0f)
+                        : d.spawn.shape == SourceShape::Disc ? Vec3(half.x, half.y, half.x)
+                                                             : half;
+        if (!t.contains_xz(c.x, c.z))
+            return Error{fmt::format("{}: the source at [{}, {}, {}] is outside the terrain's rectangle "
+                                     "x in [0, {}], z in [0, {}]",
+                                     centre, c.x, c.y, c.z, b.max.x, b.max.z)};
         const Vec3 lo = c - he, hi = c + he;
-        if (lo.x <= d.sink.max.x && hi.x >= d.sink.min.x && lo.y <= d.sink.max.y && hi.y >= d.sink.min.y &&
-            lo.z <= d.sink.max.z && hi.z >= d.sink.min.z)
+        auto overlaps = [&](const SinkBox& s) {
+            return lo.x <= s.max.x && hi.x >= s.min.x && lo.y <= s.max.y && hi.y >= s.min.y && lo.z <= s.max.z &&
+                   hi.z >= s.min.z;
+        };
+        if (d.sink.kind == SinkKind::Box && overlaps(SinkBox{d.sink.min, d.sink.max}))
             return Error{fmt::format("sink.min/sink.max: the sink box overlaps the source volume around [{}, {}, {}] "
-                                     "(particles.spawn_center): particles would be recycled as they are born",
-                                     c.x, c.y, c.z)};
-    }
-    if (d.sink.kind == SinkKind::Edges) {
-        const Vec3 lo = c - he, hi = c + he;
-        if (!t.contains_xz(lo.x, lo.z) || !t.contains_xz(hi.x, hi.z))
-            return Error{fmt::format("particles.spawn_half_extent: the source volume around [{}, {}, {}] crosses the "
-                                     "terrain's edge, which is the sink (sink.kind = \"edges\")",
-                                     c.x, c.y, c.z)};
+                                     "({}): particles would be recycled as they are born",
+                                     c.x, c.y, c.z, centre)};
+        if (d.solver != SolverKind::Bullet)
+            for (size_t i = 0; i < d.sink.boxes.size(); ++i)
+                if (overlaps(d.sink.boxes[i]))
+                    return Error{fmt::format("sink.box[{}]: the sink box overlaps the source volume around [{}, {}, {}] "
+                                             "({}): particles would be recycled as they are born",
+                                             i + 1, c.x, c.y, c.z, centre)};
+        if (d.sink.kind == SinkKind::Edges && (!t.contains_xz(lo.x, lo.z) || !t.contains_xz(hi.x, hi.z)))
+            return Error{fmt::format("{}: the source volume around [{}, {}, {}] crosses the terrain's edge, which is "
+                                     "the sink (sink.kind = \"edges\")",
+                                     extent, c.x, c.y, c.z)};
     }
     return Ok{};
 }
 
 std::vector<std::string> scene_warnings(const SceneDef& d) {
     std::vector<std::string> w;
-    const float rate = d.spawn.particles_per_second();
+    const float rate = d.spawn.total_particles_per_second();  // every source
     if (rate > float(d.spawn.count))
         w.push_back(fmt::format("particles.flow_rate: {} particles per second is more than the whole particle "
                                 "budget (particles.count = {}) every second: the source runs dry and the flow is "

@@ -36,7 +36,7 @@ constexpr KeyRange big_vec(double lo) { return {.lo = lo, .hi = 1e6}; }
 // Who reads a key (include/metariver/scene_keys.h, KeyReaders).
 using S = const SceneDef&;
 bool smoothing_on(S d) { return d.surface && d.smoothing.method != SmoothingMethod::None && d.smoothing.iterations > 0; }
-bool with_rate(S d) { return d.spawn.auto_rate() ? d.solver == SolverKind::Pbf : d.spawn.particles_per_second() > 0.0f; }
+bool with_rate(S d) { return d.spawn.auto_rate() ? d.solver == SolverKind::Pbf : d.spawn.has_rate(); }
 bool springs_on(S d) { return d.solver == SolverKind::Springs || (d.solver == SolverKind::Bullet && d.bullet.springs); }
 constexpr KeyReaders kAll{"every scene"};
 constexpr KeyReaders kNotPbf{"solver = springs, bullet", [](S d) { return d.solver != SolverKind::Pbf; }};
@@ -450,6 +450,48 @@ const SceneSection kSections[] = {
 
 std::string number(double v) { return fmt::format("{}", v); }
 
+// [[particles.source]] and [[sink.box]]: the entries' keys (the name is the leaf).
+#define MR_ITEM(list, member) [](SceneDef& d, size_t i) { return field_ref(&d.list[i].member); }
+const SceneListKey kSourceKeys[] = {
+    {{.name = "center", .type = K::Vec3, .unit = "m", .range = big_vec(-1e6), .help = "Centre of this source's volume."},
+     MR_ITEM(spawn.sources, center)},
+    {{.name = "half_extent", .type = K::Vec3, .unit = "m", .range = closed(0, 1e4),
+      .help = "Half size of this source (a disc: radius .x, half height .y; a point: not read)."},
+     MR_ITEM(spawn.sources, half_extent)},
+    {{.name = "flow_rate", .type = K::Float, .unit = "particles/s or L/s", .range = closed(0, 1e7),
+      .help = "This source's rate, in the unit of particles.flow_rate (litres per second with "
+              "particles.litres_per_particle); 0: off."},
+     MR_ITEM(spawn.sources, flow_rate)},
+};
+const SceneListKey kSinkBoxKeys[] = {
+    {{.name = "min", .type = K::Vec3, .unit = "m", .range = big_vec(-1e6), .help = "Box corner."}, MR_ITEM(sink.boxes, min)},
+    {{.name = "max", .type = K::Vec3, .unit = "m", .range = {.lo = -1e6, .hi = 1e6, .text = "[min, 1000000]"},
+      .help = "The opposite corner."},
+     MR_ITEM(sink.boxes, max)},
+};
+#undef MR_ITEM
+
+const SceneList kLists[] = {
+    {.name = "particles.source",
+     .help = "More sources besides the main one (particles.spawn_*), each `[[particles.source]]` a volume of the main "
+             "source's shape, inflow velocity and ground following at its own centre, size and rate. Read in a scene "
+             "with a particle rate (on the main source or on any of these); every source draws on the one particle "
+             "budget (particles.count), and sunk particles return to whichever source emits next.",
+     .readers = kRate,
+     .max = kMaxMoreSources,
+     .size = [](S d) { return d.spawn.sources.size(); },
+     .resize = [](SceneDef& d, size_t n) { d.spawn.sources.resize(n); },
+     .keys = kSourceKeys},
+    {.name = "sink.box",
+     .help = "More box sinks, each `[[sink.box]]` taking the particles inside it back to the sources, whatever "
+             "sink.kind is.",
+     .readers = kNotBullet,
+     .max = kMaxMoreSinks,
+     .size = [](S d) { return d.sink.boxes.size(); },
+     .resize = [](SceneDef& d, size_t n) { d.sink.boxes.resize(n); },
+     .keys = kSinkBoxKeys},
+};
+
 }  // namespace
 
 std::string_view to_string(KeyType t) {
@@ -492,6 +534,13 @@ std::string_view SceneKey::leaf() const {
 }
 
 std::span<const SceneKey> scene_keys() { return kKeys; }
+std::span<const SceneList> scene_lists() { return kLists; }
+
+std::string_view SceneList::section() const { return name.substr(0, name.find('.')); }
+std::string_view SceneList::leaf() const { return name.substr(name.find('.') + 1); }
+std::string SceneList::entry_key(size_t i, const SceneListKey& k) const {
+    return fmt::format("{}[{}].{}", name, i + 1, k.key.name);
+}
 std::span<const SceneSection> scene_sections() { return kSections; }
 
 const SceneKey* find_scene_key(std::string_view name) {
@@ -531,7 +580,10 @@ std::string key_value_toml(const SceneKey& k, const SceneDef& d) {
     if (k.words.current) {
         if (const int w = k.words.current(d); w >= 0) return toml_string(k.words.words[static_cast<size_t>(w)]);
     }
-    const FieldRef f = read_field(k, d);
+    return field_value_toml(k, read_field(k, d));
+}
+
+std::string field_value_toml(const SceneKey& k, const FieldRef& f) {
     if (auto* p = std::get_if<bool*>(&f)) return **p ? "true" : "false";
     if (auto* p = std::get_if<int*>(&f)) return fmt::format("{}", **p);
     if (auto* p = std::get_if<uint32_t*>(&f)) return fmt::format("{}", **p);
@@ -544,8 +596,12 @@ std::string key_value_toml(const SceneKey& k, const SceneDef& d) {
 }
 
 std::string key_range_error(const SceneKey& k, const SceneDef& d) {
-    if (!k.numeric() || (k.words.current && k.words.current(d) >= 0)) return {};
-    const FieldRef f = read_field(k, d);
+    if (k.words.current && k.words.current(d) >= 0) return {};
+    return field_range_error(k, read_field(k, d));
+}
+
+std::string field_range_error(const SceneKey& k, const FieldRef& f) {
+    if (!k.numeric()) return {};
     if (auto* p = std::get_if<Vec3*>(&f)) {
         const Vec3& v = **p;
         if (k.range.contains(v.x) && k.range.contains(v.y) && k.range.contains(v.z)) return {};
@@ -558,6 +614,30 @@ std::string key_range_error(const SceneKey& k, const SceneDef& d) {
     else if (auto* p = std::get_if<float*>(&f)) v = **p, got = fmt::format("{}", **p);
     if (k.range.contains(v)) return {};
     return fmt::format("must be {} (got {})", k.range.phrase(), got);
+}
+
+std::string list_range_error(const SceneDef& d) {
+    for (const SceneList& l : kLists) {
+        if (!l.readers(d)) continue;
+        const size_t n = l.size(d);
+        if (n > l.max) return fmt::format("{}: at most {} entries (got {})", l.name, l.max, n);
+        SceneDef& m = const_cast<SceneDef&>(d);  // FieldRef is mutable; only read here
+        for (size_t i = 0; i < n; ++i)
+            for (const SceneListKey& k : l.keys)
+                if (std::string e = field_range_error(k.key, k.item(m, i)); !e.empty())
+                    return fmt::format("{}: {}", l.entry_key(i, k), e);
+    }
+    return {};
+}
+
+std::string list_toml(const SceneList& l, const SceneDef& d) {
+    std::string out;
+    SceneDef& m = const_cast<SceneDef&>(d);  // only read
+    for (size_t i = 0; i < l.size(d); ++i) {
+        out += fmt::format("[[{}]]\n", l.name);
+        for (const SceneListKey& k : l.keys) out += fmt::format("{} = {}\n", k.key.name, field_value_toml(k.key, k.item(m, i)));
+    }
+    return out;
 }
 
 }  // namespace mr

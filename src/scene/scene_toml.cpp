@@ -60,7 +60,38 @@ public:
     bool key(const toml::table& t, const SceneKey& k, SceneDef& d) {
         const toml::node* n = t.get(k.leaf());
         if (!n) return false;
-        const std::string key(k.name);
+        return value(*n, k, std::string(k.name), d, [&] { return k.field(d); });
+    }
+
+    /// Reads the list `l` from its section's table `t` when the file has it (an array
+    /// of tables, at most l.max, each with only the list's keys); the entries replace
+    /// the base scene's (validate() checks their ranges).
+    void list(const toml::table& t, const SceneList& l, SceneDef& d) {
+        const toml::node* n = t.get(l.leaf());
+        if (!n) return;
+        const std::string name(l.name);
+        const toml::array* a = n->as_array();
+        if (!a || !a->is_array_of_tables())
+            return fail(name, fmt::format("must be a list of tables, each written [[{}]]", name));
+        if (a->size() > l.max) return fail(name, fmt::format("at most {} entries (got {})", l.max, a->size()));
+        l.resize(d, 0);
+        l.resize(d, a->size());
+        std::vector<std::string_view> allowed;
+        for (const SceneListKey& k : l.keys) allowed.push_back(k.key.name);
+        for (size_t i = 0; i < a->size() && !failed(); ++i) {
+            const toml::table& e = *(*a)[i].as_table();
+            allow(e, fmt::format("{}[{}].", name, i + 1), allowed);
+            for (const SceneListKey& k : l.keys)
+                if (const toml::node* v = e.get(k.key.name))
+                    value(*v, k.key, l.entry_key(i, k), d, [&] { return k.item(d, i); });
+        }
+    }
+
+    /// Reads `node` into the field `field()` finds, as key `k` (its type, words and an
+    /// integer's range), naming it `key` in messages.
+    template <class Field>
+    bool value(const toml::node& node, const SceneKey& k, const std::string& key, SceneDef& d, Field&& field) {
+        const toml::node* n = &node;
         if (k.words.apply && n->is_string()) {
             const std::string s = *n->value<std::string>();
             for (size_t i = 0; i < k.words.words.size(); ++i)
@@ -71,7 +102,7 @@ public:
             fail(key, fmt::format("must be {} or {}", quoted(k.words.words, " or "), what(k)));
             return true;
         }
-        const FieldRef f = k.field(d);
+        const FieldRef f = field();
         switch (k.type) {
             case KeyType::Bool:
                 if (!n->is_boolean()) return fail(key, "must be true or false"), true;
@@ -333,7 +364,7 @@ void refuse_irrelevant_keys(const toml::table& root, Reader& r, const SceneDef& 
     // The source: a rate (flow_rate > 0, or "auto" sized for a PBF river) or one
     // activation every spawn_interval frames. Bullet's flow_rate is 0 here already.
     const bool auto_rate = d.spawn.auto_rate() && d.solver == SolverKind::Pbf;
-    const bool by_rate = auto_rate || (!d.spawn.auto_rate() && d.spawn.particles_per_second() > 0.0f);
+    const bool by_rate = auto_rate || (!d.spawn.auto_rate() && d.spawn.has_rate());
     const bool flow_given = given("particles", "flow_rate");
     if (by_rate) {
         const std::string rate =
@@ -475,6 +506,8 @@ Result<SceneDef> parse_scene_toml_lines(std::string_view text, const std::string
         std::vector<std::string_view> allowed;
         for (const SceneKey& k : scene_keys())
             if (k.section() == s.name) allowed.push_back(k.leaf());
+        for (const SceneList& l : scene_lists())
+            if (l.section() == s.name) allowed.push_back(l.leaf());
         const toml::table* t = &root;
         if (s.name.empty()) {
             allowed.push_back("preset");
@@ -493,6 +526,8 @@ Result<SceneDef> parse_scene_toml_lines(std::string_view text, const std::string
         r.allow(*t, s.name.empty() ? "" : std::string(s.name) + ".", allowed);
         for (const SceneKey& k : scene_keys())
             if (k.section() == s.name && r.key(*t, k, d) && k.numeric()) given.push_back(&k);
+        for (const SceneList& l : scene_lists())
+            if (l.section() == s.name) r.list(*t, l, d);
         if (s.name == "terrain" && t->get("heightmap") && !r.failed()) {
             if (!t->get("source")) d.source.kind = TerrainSource::File;
             std::filesystem::path hp(d.source.heightmap);
@@ -502,6 +537,9 @@ Result<SceneDef> parse_scene_toml_lines(std::string_view text, const std::string
     }
     if (!r.failed()) apply_solver_scope(root, r, d);
     if (!r.failed()) refuse_irrelevant_keys(root, r, d);
+    for (const SceneList& l : scene_lists())  // a list the scene as written never reads
+        if (const toml::table* t = root[l.section()].as_table(); t && t->get(l.leaf()) && !l.readers(d))
+            r.fail(std::string(l.name), fmt::format("ignored: only {} reads it; remove it", l.readers.text));
     for (const SceneKey* k : given) r.check_range(*k, d);
     if (r.failed()) return Error{r.error()};
     if (d.source.kind == TerrainSource::File && d.source.heightmap.empty())

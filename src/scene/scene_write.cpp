@@ -57,12 +57,15 @@ std::string key_kind(const SceneKey& k, const char* bar) {
     return s;
 }
 
-std::string key_comment(const SceneKey& k) {
+/// Type, unit and range: "number, m/s, [0, 10]".
+std::string key_summary(const SceneKey& k) {
     std::string s = key_kind(k, " | ");
     if (!k.unit.empty()) s += ", " + std::string(k.unit);
     if (k.numeric()) s += ", " + k.range.describe();
-    return fmt::format("{}; read by {}. {}", s, k.readers.text, k.help);
+    return s;
 }
+
+std::string key_comment(const SceneKey& k) { return fmt::format("{}; read by {}. {}", key_summary(k), k.readers.text, k.help); }
 
 constexpr const char* kOrigin = "scene.toml";
 
@@ -93,6 +96,26 @@ std::string render(const SceneDef& d, std::string_view base, const std::map<std:
             if (!all_off && key_off != off.end()) comment(out, kColumn, "(not read here: " + key_off->second + ")");
             if (k.name == "terrain.heightmap" && d.source.kind == TerrainSource::File && d.source.heightmap.empty())
                 comment(out, kColumn, "(required: this preset's terrain is a PNG; write its path here, or give --heightmap)");
+        }
+        // The section's lists after its keys (a [[list]] header ends the section's keys).
+        for (const SceneList& l : scene_lists()) {
+            if (l.section() != s.name || all_off) continue;
+            const bool read = l.readers(d);
+            out += "\n";
+            comment(out, 0, fmt::format("[[{}]]: {} At most {}; read by {}.{}", l.name, l.help, l.max, l.readers.text,
+                                        l.size(d) == 0 ? " None here." : ""));
+            for (const SceneListKey& k : l.keys)
+                comment(out, 0, fmt::format("  {}: {}. {}", k.key.name, key_summary(k.key), k.key.help));
+            std::string entries = list_toml(l, d);
+            if (!read) {  // kept as a comment: this scene would refuse it
+                std::string c;
+                for (size_t a = 0, b; a < entries.size(); a = b + 1) {
+                    b = entries.find('\n', a);
+                    c += "# " + entries.substr(a, b - a + 1);
+                }
+                entries = c;
+            }
+            out += entries;
         }
     }
     return out;
@@ -148,6 +171,16 @@ std::string scene_reference_markdown() {
             out += fmt::format("| `{}` | {} | {} | {} | `{}` | {} | {} |\n", k.name, cell(key_kind(k, " | ")), k.unit,
                                k.numeric() ? k.range.describe() : "", cell(key_value_toml(k, def)), k.readers.text,
                                cell(k.help));
+        }
+        for (const SceneList& l : scene_lists()) {
+            if (l.section() != s.name) continue;
+            out += fmt::format("\n#### [[{}]]\n\n{} At most {} entries; read by {}; none in the default scene. "
+                               "Messages name an entry by its place in the file: `{}[1]` is the first.\n\n",
+                               l.name, l.help, l.max, l.readers.text, l.name);
+            out += "| key | type | unit | range | meaning |\n|---|---|---|---|---|\n";
+            for (const SceneListKey& k : l.keys)
+                out += fmt::format("| `{}.{}` | {} | {} | {} | {} |\n", l.name, k.key.name, cell(key_kind(k.key, " | ")),
+                                   k.key.unit, k.key.range.describe(), cell(k.key.help));
         }
     }
     return out + "\n" + std::string(kReferenceEnd) + "\n";

@@ -246,7 +246,7 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def) {
 
 bool is_river(const SceneDef& def) {
     return def.solver == SolverKind::Pbf && def.sink.kind == SinkKind::Edges &&
-           (def.spawn.particles_per_second() > 0.0 || def.spawn.auto_rate());
+           (def.spawn.has_rate() || def.spawn.auto_rate());
 }
 
 TerrainCondition resolved_condition(const SceneDef& def) {

@@ -27,10 +27,8 @@ bool needs_rebuild(const SceneKey& k, const SceneDef& d) {
            n == "particles.auto_height" || n == "pbf.spacing" || n == "collision.bvh_leaf_triangles";
 }
 
-/// Copies the value of key `k` from `from` into `to` (the same field of another SceneDef).
-void copy_key(const SceneKey& k, const SceneDef& from, SceneDef& to) {
-    SceneDef& src = const_cast<SceneDef&>(from);  // FieldRef is mutable; only read here
-    const FieldRef a = k.field(src), b = k.field(to);
+/// Copies the value of field `a` into field `b` (the same field of another SceneDef).
+void copy_field(const FieldRef& a, const FieldRef& b) {
     std::visit(
         [&](const auto& pa) {
             using P = std::decay_t<decltype(pa)>;
@@ -39,6 +37,19 @@ void copy_key(const SceneKey& k, const SceneDef& from, SceneDef& to) {
             else *pb = *pa;
         },
         a);
+}
+
+/// Copies the value of key `k` from `from` into `to`.
+void copy_key(const SceneKey& k, const SceneDef& from, SceneDef& to) {
+    copy_field(k.field(const_cast<SceneDef&>(from)), k.field(to));  // `from` only read
+}
+
+/// Copies every entry of list `l` from `from` into `to`.
+void copy_list(const SceneList& l, const SceneDef& from, SceneDef& to) {
+    SceneDef& src = const_cast<SceneDef&>(from);  // only read
+    l.resize(to, l.size(from));
+    for (size_t i = 0; i < l.size(from); ++i)
+        for (const SceneListKey& k : l.keys) copy_field(k.item(src, i), k.item(to, i));
 }
 }  // namespace
 
@@ -52,6 +63,11 @@ Result<ApplyResult> Simulation::apply(const SceneDef& next) {
         const bool word = k.words.current && (k.words.current(requested_) >= 0 || k.words.current(next) >= 0);
         if (r.rebuild_key.empty() && (word || needs_rebuild(k, requested_))) r.rebuild_key = std::string(k.name);
         if (r.rebuild_key.empty()) copy_key(k, next, edited);
+    }
+    for (const SceneList& l : scene_lists()) {  // sources and sinks: in place
+        if (list_toml(l, requested_) == list_toml(l, next)) continue;
+        r.keys.emplace_back(l.name);
+        if (r.rebuild_key.empty()) copy_list(l, next, edited);
     }
     if (!r.rebuild_key.empty()) return r;
     if (auto f = detail::field_box_fits(edited.field, terrain_); !f) return f.error();
