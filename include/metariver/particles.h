@@ -437,25 +437,16 @@ public:
     bool set_params(const SpawnDef& spawn, const PbfDef& pbf, const CollisionDef& collision,
                     const IntegratorDef& integrator, const SinkDef& sink);
     const PbfDef& def() const { return pbf_; }
+    /// Rest number density (lattice sum of the poly6 kernel).
+    float pbf_rest_density() const { return rest_density_; }
+
+private:
+    friend struct PbfProbe;  ///< the twin tests' hooks (src/particles/pbf_probe.h)
 
     /// Number density of every particle through the grid (after sort_by_cell) and by
     /// brute force over all active pairs: the twin tests compare them.
     void pbf_densities(std::vector<float>& out);
     void pbf_densities_brute_force(std::vector<float>& out) const;
-    /// Rest number density (lattice sum of the poly6 kernel).
-    float pbf_rest_density() const { return rest_density_; }
-    /// Passes through per-particle neighbour lists built once per step (true, the
-    /// default) or through the 27 cells around each particle's cell (false: the slow
-    /// twin; the same pairs in the same order, so the same result bit for bit). `skin`:
-    /// the lists' reach beyond h, as a fraction of h (a smaller skin rebuilds more often).
-    void set_pbf_neighbor_lists(bool on, float skin = kPbfListSkin) {
-        pbf_lists_on_ = on;
-        pbf_list_skin_ = skin;
-    }
-    /// The lists of the latest step (their builds() counts rebuilds too).
-    const NeighborLists& pbf_neighbor_lists() const { return pbf_lists_; }
-
-private:
     void init_pbf();
     /// Fluid response: the swept robust query on last -> p, the particle slides along
     /// the ground (normal motion removed, damped), heightfield guard.

@@ -177,7 +177,9 @@ TEST(Foam, RemovedWhenTheirLifeEnds) {
         EXPECT_EQ(foam.stats().generated, 0u);
         expired += foam.stats().expired;
         left += foam.stats().left;
-        if (f < int(d.lifetime_min / kDt) - 1) EXPECT_GT(foam.particles().size(), 0u) << "none dies before lifetime_min";
+        if (f < int(d.lifetime_min / kDt) - 1) {
+            EXPECT_GT(foam.particles().size(), 0u) << "none dies before lifetime_min";
+        }
     }
     EXPECT_EQ(foam.particles().size(), 0u);
     EXPECT_EQ(expired + left, made);

@@ -2,6 +2,8 @@
 // against a brute-force twin, a resting column of water, momentum, determinism.
 #include <metariver/particles.h>
 
+#include "pbf_probe.h"
+
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
@@ -88,8 +90,8 @@ TEST(Pbf, GridDensityEqualsBruteForceSum) {
     const auto solver = column_solver(w, pts);
     PbfSolver& s = *solver;
     std::vector<float> grid, brute;
-    s.pbf_densities(grid);  // reorders the particles by cell first
-    s.pbf_densities_brute_force(brute);
+    PbfProbe::densities(s, grid);  // reorders the particles by cell first
+    PbfProbe::densities_brute_force(s, brute);
     ASSERT_EQ(grid.size(), brute.size());
     for (size_t i = 0; i < grid.size(); ++i)
         // float sums of ~40 terms in different orders: relative rounding ~1e-6.
@@ -276,7 +278,7 @@ TEST(Pbf, NeighbourListsGiveBitwiseTheSameStepsAsTheCellLoops) {
     auto run = [&](bool lists, int threads, uint64_t* builds, float skin = kPbfListSkin) {
         tbb::global_control gc(tbb::global_control::max_allowed_parallelism, size_t(threads));
         PbfSolver s = jet_solver(w);
-        s.set_pbf_neighbor_lists(lists, skin);
+        PbfProbe::set_neighbor_lists(s, lists, skin);
         std::vector<uint64_t> hashes;
         for (int f = 0; f < 240; ++f) {
             s.step_frame(1.0f / 120.0f);
@@ -290,7 +292,7 @@ TEST(Pbf, NeighbourListsGiveBitwiseTheSameStepsAsTheCellLoops) {
             }
             hashes.push_back(h);
         }
-        if (builds) *builds = s.pbf_neighbor_lists().builds();
+        if (builds) *builds = PbfProbe::neighbor_lists(s).builds();
         EXPECT_GT(s.particles().active_count(), 100u) << "the case must hold water";
         return hashes;
     };

@@ -1,0 +1,28 @@
+// The PBF solver's test hooks (not a user's API, so not in include/metariver): the twin
+// tests reach its density sums and switch its neighbour lists through here.
+#pragma once
+
+#include <metariver/particles.h>
+
+#include <vector>
+
+namespace mr {
+
+struct PbfProbe {
+    /// Number density of every particle through the grid (after sort_by_cell) and by
+    /// brute force over all active pairs.
+    static void densities(PbfSolver& s, std::vector<float>& out) { s.pbf_densities(out); }
+    static void densities_brute_force(const PbfSolver& s, std::vector<float>& out) { s.pbf_densities_brute_force(out); }
+    /// Passes through per-particle neighbour lists built once per step (true, the
+    /// default) or through the 27 cells around each particle's cell (false: the slow
+    /// twin; the same pairs in the same order, so the same result bit for bit). `skin`:
+    /// the lists' reach beyond h, as a fraction of h (a smaller skin rebuilds more often).
+    static void set_neighbor_lists(PbfSolver& s, bool on, float skin = kPbfListSkin) {
+        s.pbf_lists_on_ = on;
+        s.pbf_list_skin_ = skin;
+    }
+    /// The lists of the latest step (their builds() counts rebuilds too).
+    static const NeighborLists& neighbor_lists(const PbfSolver& s) { return s.pbf_lists_; }
+};
+
+}  // namespace mr
