@@ -409,8 +409,14 @@ public:
     const std::string& field_overflow_message() const { return field_overflow_message_; }
     /// FNV-1a hash of the particles' positions and velocities (determinism checks).
     uint64_t state_hash() const;
-    /// The terrain's drainage network (automatic source, wet-channel measure).
-    const ChannelMap& channel() const { return channel_; }
+    /// The terrain's drainage network (automatic source, wet-channel measure). After a
+    /// sculpt() or restore() it is built again when it is next read (here, by
+    /// main_channel(), wet_fraction() or channel_coverage()): the network is global (a
+    /// dam reroutes its whole upstream basin), so a drag of many strokes builds it once.
+    const ChannelMap& channel() const {
+        refresh_channel();
+        return channel_;
+    }
     /// Fraction of the active particles inside the wet channel (WetChannelDef defaults
     /// scaled to the terrain: width max(3 m, 3 samples), depth 3 m).
     float wet_fraction() const;
@@ -426,9 +432,12 @@ public:
     /// for the automatic channel source on terrain that is not carved, else the channel
     /// cell nearest the source's centre: on a carved terrain the automatic source stays
     /// at the head the carve was cut from) to the border cell where it leaves the
-    /// terrain (back()). Valid until the next sculpt(), restore() or move_source(), which
-    /// measure the channel again (copy it to keep it across them).
-    std::span<const std::pair<int, int>> main_channel() const { return main_path_; }
+    /// terrain (back()). Valid until the next sculpt(), restore() or move_source(), after
+    /// which the channel is measured again (copy it to keep it across them).
+    std::span<const std::pair<int, int>> main_channel() const {
+        refresh_channel();
+        return main_path_;
+    }
     /// ChannelCoverage of the main channel by the current particles (1.5 samples, 3 m).
     float channel_coverage() const;
     /// How the river sized itself (particles.count / flow_rate = "auto"); empty when
@@ -456,9 +465,12 @@ private:
     uint64_t field_overflows_ = 0;
     uint64_t terrain_lifts_ = 0;
     std::string field_overflow_message_;
-    ChannelMap channel_;
-    std::vector<std::pair<int, int>> main_path_;
-    ChannelCoverage coverage_;
+    // The drainage network and what is measured on it; rebuilt when read after a
+    // terrain edit (channel_stale_: refresh_channel()).
+    mutable ChannelMap channel_;
+    mutable std::vector<std::pair<int, int>> main_path_;
+    mutable ChannelCoverage coverage_;
+    mutable bool channel_stale_ = false;
     std::optional<RiverSize> sizing_;
     std::optional<FoamSystem> foam_;
     size_t prefilled_ = 0;
@@ -469,7 +481,10 @@ private:
     void after_terrain_edit(const TerrainEdit& edit);
     /// main_path_ and coverage_ from the source at def_.spawn.center (`asked`: the source as
     /// the scene gave it, which says whether it follows the main head).
-    void measure_main_channel(const SpawnDef& asked);
+    void measure_main_channel(const SpawnDef& asked) const;
+    /// Builds the drainage network and measures the main channel again when a terrain
+    /// edit left them stale.
+    void refresh_channel() const;
 };
 
 }  // namespace mr

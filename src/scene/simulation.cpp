@@ -172,9 +172,16 @@ Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh, std::optio
     }
 }
 
-void Simulation::measure_main_channel(const SpawnDef& asked) {
+void Simulation::measure_main_channel(const SpawnDef& asked) const {
     main_path_ = detail::main_channel_path(terrain_, channel_, asked, def_.spawn.center);
     coverage_ = ChannelCoverage(terrain_, main_path_);
+}
+
+void Simulation::refresh_channel() const {
+    if (!channel_stale_) return;
+    channel_stale_ = false;
+    channel_ = ChannelMap::build(terrain_);
+    measure_main_channel(def_.spawn);
 }
 
 void Simulation::configure_field() {
@@ -524,10 +531,11 @@ std::array<int, 3> Simulation::field_dims() const {
 float Simulation::wet_fraction() const {
     const Particles& p = particles();
     const WetChannelDef wet{.width = std::max(3.0f, 3.0f * terrain_.area_scale()), .depth = 3.0f};
-    return wet_channel_fraction(terrain_, channel_, p.position, p.active, wet);
+    return wet_channel_fraction(terrain_, channel(), p.position, p.active, wet);
 }
 
 float Simulation::channel_coverage() const {
+    refresh_channel();
     const Particles& p = particles();
     return coverage_.measure(p.position, p.active);
 }

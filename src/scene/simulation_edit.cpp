@@ -108,6 +108,7 @@ Status Simulation::move_source(const Vec3& center) {
     requested_.spawn.center = center;
     requested_.spawn.auto_center = requested_.spawn.auto_channel = false;
     solver_->set_spawn_center(center);
+    refresh_channel();
     measure_main_channel(def_.spawn);
     return Ok{};
 }
@@ -140,8 +141,7 @@ void Simulation::restore(const TerrainEdit& edit) {
 void Simulation::after_terrain_edit(const TerrainEdit& e) {
     if (e.empty()) return;
     bvh_.refit_heights(terrain_);
-    channel_ = ChannelMap::build(terrain_);
-    measure_main_channel(def_.spawn);
+    channel_stale_ = true;  // built again when next read (refresh_channel)
     auto& ps = static_cast<ParticleSolver&>(*solver_);
     // The triangles of the cells around the changed samples moved: particles over them
     // that are now under the ground (plus the collision's clearance) go up onto it, with

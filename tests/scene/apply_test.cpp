@@ -235,6 +235,32 @@ TEST(Sculpt, RaisingTheBedUnderTheRiverLiftsTheWaterAndNothingTunnels) {
     for (size_t k = 0; k < before.size(); ++k) ASSERT_EQ(sim->terrain().vertices()[k].y, before[k].y) << k;
 }
 
+// The drainage network after strokes: a drag of strokes leaves it stale and it is built
+// once when read, then it is the network of the sculpted terrain (the same as one built
+// from scratch: accumulation everywhere, the main head, the path from the source).
+TEST(Sculpt, TheChannelReadAfterStrokesIsTheSculptedTerrains) {
+    auto sim = make(default_scene(), 60);
+    ASSERT_TRUE(sim);
+    const std::vector<std::pair<int, int>> path(sim->main_channel().begin(), sim->main_channel().end());
+    const auto [ci, cj] = path[path.size() / 2];
+    const float s = sim->terrain().area_scale();
+    const Vec3 o = sim->terrain().vertices().front();
+    for (int k = 0; k < 5; ++k)  // a dam across the channel
+        ASSERT_TRUE(sim->sculpt({.x = o.x + float(cj + k - 2) * s, .z = o.z + float(ci) * s, .radius = 4.0f, .strength = 1.0f}).ok());
+    const ChannelMap fresh = ChannelMap::build(sim->terrain());
+    const ChannelMap& m = sim->channel();
+    ASSERT_EQ(m.rows(), fresh.rows());
+    for (int i = 0; i < m.rows(); ++i)
+        for (int j = 0; j < m.columns(); ++j) ASSERT_EQ(m.accumulation(i, j), fresh.accumulation(i, j)) << i << " " << j;
+    EXPECT_EQ(m.main_head(), fresh.main_head());
+    const auto after = sim->main_channel();
+    ASSERT_FALSE(after.empty());
+    using Path = std::vector<std::pair<int, int>>;
+    const Path now(after.begin(), after.end());
+    EXPECT_EQ(now, fresh.path_from(after.front().first, after.front().second));
+    EXPECT_NE(now, path) << "the dam changed the main channel";
+}
+
 // Pushing water (issue 14): a pool at rest moves where it is pushed, in the push's
 // direction, and nowhere else.
 TEST(Push, APoolAtRestMovesWhereItIsPushed) {
