@@ -14,6 +14,9 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <initializer_list>
+#include <optional>
+#include <string_view>
 
 namespace mr::app {
 
@@ -82,14 +85,28 @@ std::string terrain_key(const SceneDef& d) {
                        d.terrain.paper_row_orientation, d.collision.leaf_triangles);
 }
 
+namespace {
+/// The first number (000, 001, ...) for which no file named by `names` (patterns with one
+/// {:03}) exists in `dir`; none when every one up to 99999 is taken.
+std::optional<int> free_number(const std::string& dir, std::initializer_list<std::string_view> names) {
+    for (int i = 0; i < 100000; ++i) {
+        bool taken = false;
+        for (std::string_view n : names) {
+            std::error_code ec;
+            taken |= fs::exists(fs::path(dir) / fmt::format(fmt::runtime(n), i), ec);
+        }
+        if (!taken) return i;
+    }
+    return std::nullopt;
+}
+}  // namespace
+
 Result<std::string> save_terrain_and_scene(const Simulation& sim, const SceneDef& def, const std::string& dir) {
     std::error_code ec;
-    fs::path png, toml;
-    for (int i = 0; i < 100000; ++i) {
-        png = fs::path(dir) / fmt::format("metariver_terrain_{:03}.png", i);
-        toml = fs::path(dir) / fmt::format("metariver_scene_{:03}.toml", i);
-        if (!fs::exists(png, ec) && !fs::exists(toml, ec)) break;
-    }
+    const auto i = free_number(dir, {"metariver_terrain_{:03}.png", "metariver_scene_{:03}.toml"});
+    if (!i) return Error{fmt::format("{}: metariver_terrain_000.png to _99999.png are all taken; save elsewhere", dir)};
+    const fs::path png = fs::path(dir) / fmt::format("metariver_terrain_{:03}.png", *i);
+    const fs::path toml = fs::path(dir) / fmt::format("metariver_scene_{:03}.toml", *i);
     auto saved = write_terrain_heightmap(png.string(), sim.terrain(), def.terrain.paper_row_orientation);
     if (!saved) return saved.error();
     SceneDef next = def;
@@ -108,11 +125,8 @@ Result<std::string> save_terrain_and_scene(const Simulation& sim, const SceneDef
 }
 
 std::string next_screenshot_path(const std::string& dir) {
-    for (int i = 0; i < 100000; ++i) {
-        const fs::path p = fs::path(dir) / fmt::format("metariver_screenshot_{:03}.png", i);
-        std::error_code ec;
-        if (!fs::exists(p, ec)) return p.string();
-    }
+    if (const auto i = free_number(dir, {"metariver_screenshot_{:03}.png"}))
+        return (fs::path(dir) / fmt::format("metariver_screenshot_{:03}.png", *i)).string();
     return (fs::path(dir) / "metariver_screenshot.png").string();
 }
 
