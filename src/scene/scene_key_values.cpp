@@ -1,0 +1,137 @@
+// Scene key values as text: a key's value as TOML, a range and its words, the range
+// checks of keys and list entries, and a list's entries as TOML (scene_keys.h). The
+// table of keys itself is scene_keys.cpp.
+#include <metariver/scene_keys.h>
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <string>
+
+namespace mr {
+
+namespace {
+std::string number(double v) { return fmt::format("{}", v); }
+}  // namespace
+
+std::string_view to_string(KeyType t) {
+    switch (t) {
+        case KeyType::Bool: return "bool";
+        case KeyType::Int: return "integer";
+        case KeyType::Seed: return "integer";
+        case KeyType::Float: return "number";
+        case KeyType::Vec3: return "[x, y, z]";
+        case KeyType::String: return "string";
+        case KeyType::Choice: return "choice";
+    }
+    return "?";
+}
+
+bool KeyRange::contains(double v) const {
+    if (!std::isfinite(v)) return false;
+    if (zero_too && v == 0.0) return true;
+    return (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi);
+}
+
+std::string KeyRange::describe() const {
+    if (!text.empty()) return std::string(text);
+    return fmt::format("{}{}{}, {}{}", zero_too ? "0 or " : "", lo_open ? "(" : "[", number(lo), number(hi), hi_open ? ")" : "]");
+}
+
+std::string KeyRange::phrase() const {
+    if (!text.empty() || !zero_too) return "in " + describe();
+    return "0 or in " + KeyRange{lo, hi, lo_open, hi_open}.describe();
+}
+
+namespace {
+
+/// A float as TOML writes it: the shortest text that reads back to the same float,
+/// always with a fraction or an exponent (TOML's 1 is an integer).
+std::string toml_float(float v) {
+    std::string s = fmt::format("{}", v);
+    if (s.find_first_of(".en") == std::string::npos) s += ".0";
+    return s;
+}
+
+std::string toml_string(std::string_view s) {
+    std::string out = "\"";
+    for (const char ch : s) {
+        const auto c = static_cast<unsigned char>(ch);
+        if (ch == '"' || ch == '\\') out += {'\\', ch};
+        else if (c < 0x20 || c == 0x7f) out += fmt::format("\\u{:04x}", c);
+        else out += ch;
+    }
+    return out + "\"";
+}
+
+/// Reading a key's field from a const scene: the accessor takes a mutable one but only
+/// its address is used here.
+FieldRef read_field(const SceneKey& k, const SceneDef& d) { return k.field(const_cast<SceneDef&>(d)); }
+
+}  // namespace
+
+std::string key_value_toml(const SceneKey& k, const SceneDef& d) {
+    if (k.words.current) {
+        if (const int w = k.words.current(d); w >= 0) return toml_string(k.words.words[static_cast<size_t>(w)]);
+    }
+    return field_value_toml(k, read_field(k, d));
+}
+
+std::string field_value_toml(const SceneKey& k, const FieldRef& f) {
+    if (auto* p = std::get_if<bool*>(&f)) return **p ? "true" : "false";
+    if (auto* p = std::get_if<int*>(&f)) return fmt::format("{}", **p);
+    if (auto* p = std::get_if<uint32_t*>(&f)) return fmt::format("{}", **p);
+    if (auto* p = std::get_if<float*>(&f)) return toml_float(**p);
+    if (auto* p = std::get_if<Vec3*>(&f)) return fmt::format("[{}, {}, {}]", toml_float((*p)->x), toml_float((*p)->y), toml_float((*p)->z));
+    if (auto* p = std::get_if<std::string*>(&f)) return toml_string(**p);
+    const EnumRef& e = std::get<EnumRef>(f);
+    const int i = e.get(e.field);
+    return i >= 0 && static_cast<size_t>(i) < k.choices.size() ? toml_string(k.choices[static_cast<size_t>(i)]) : "\"?\"";
+}
+
+std::string key_range_error(const SceneKey& k, const SceneDef& d) {
+    if (k.words.current && k.words.current(d) >= 0) return {};
+    return field_range_error(k, read_field(k, d));
+}
+
+std::string field_range_error(const SceneKey& k, const FieldRef& f) {
+    if (!k.numeric()) return {};
+    if (auto* p = std::get_if<Vec3*>(&f)) {
+        const Vec3& v = **p;
+        if (k.range.contains(v.x) && k.range.contains(v.y) && k.range.contains(v.z)) return {};
+        return fmt::format("every component must be {} (got [{}, {}, {}])", k.range.phrase(), v.x, v.y, v.z);
+    }
+    double v = 0.0;
+    std::string got;
+    if (auto* p = std::get_if<int*>(&f)) v = **p, got = fmt::format("{}", **p);
+    else if (auto* p = std::get_if<uint32_t*>(&f)) v = **p, got = fmt::format("{}", **p);
+    else if (auto* p = std::get_if<float*>(&f)) v = **p, got = fmt::format("{}", **p);
+    if (k.range.contains(v)) return {};
+    return fmt::format("must be {} (got {})", k.range.phrase(), got);
+}
+
+std::string list_range_error(const SceneDef& d) {
+    for (const SceneList& l : scene_lists()) {
+        if (!l.readers(d)) continue;
+        const size_t n = l.size(d);
+        if (n > l.max) return fmt::format("{}: at most {} entries (got {})", l.name, l.max, n);
+        SceneDef& m = const_cast<SceneDef&>(d);  // FieldRef is mutable; only read here
+        for (size_t i = 0; i < n; ++i)
+            for (const SceneListKey& k : l.keys)
+                if (std::string e = field_range_error(k.key, k.item(m, i)); !e.empty())
+                    return fmt::format("{}: {}", l.entry_key(i, k), e);
+    }
+    return {};
+}
+
+std::string list_toml(const SceneList& l, const SceneDef& d) {
+    std::string out;
+    SceneDef& m = const_cast<SceneDef&>(d);  // only read
+    for (size_t i = 0; i < l.size(d); ++i) {
+        out += fmt::format("[[{}]]\n", l.name);
+        for (const SceneListKey& k : l.keys) out += fmt::format("{} = {}\n", k.key.name, field_value_toml(k.key, k.item(m, i)));
+    }
+    return out;
+}
+
+}  // namespace mr
