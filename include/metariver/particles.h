@@ -71,6 +71,9 @@ inline constexpr float kAutoSleep = -1.0f;
 /// PbfDef::damping: the still-water default (1/s), and "auto" (resolved per scene).
 inline constexpr float kStillDamping = 1.0f;
 inline constexpr float kAutoDamping = -1.0f;
+/// PbfDef::wall_density: the still-water default (weight), and "auto" (resolved per scene).
+inline constexpr float kStillWallDensity = 1.0f;
+inline constexpr float kAutoWallDensity = -1.0f;
 /// PbfDef::contact_band: the still-water default (spacings), and "auto" (resolved per scene).
 inline constexpr float kStillContactBand = 1.5f;
 inline constexpr float kAutoContactBand = -1.0f;
@@ -171,9 +174,14 @@ struct PbfDef {
     /// under the terrain (a quadrature over the heightfield around the particle, so a
     /// steep wall beside it and the crease at a wall's foot count as well as the ground
     /// below), with its gradient in the constraint. Water at the bed and banks is then
-    /// held at the rest spacing by pressure, and a pool is level to its shore (false:
-    /// SPH's particle deficiency at a wall; the still pool's surface rose 4-7 cm to the banks).
-    bool wall_density = true;
+    /// held at the rest spacing by pressure, and a pool is level to its shore (0:
+    /// SPH's particle deficiency at a wall; the still pool's surface rose 4-7 cm to the
+    /// banks). A weight in [0, 1] on the share (1: the terrain is water at rest).
+    /// kAutoWallDensity (the default scene's): 0 for a river (its flow as tuned, and
+    /// rain on the spikes map was thrown faster than free fall with it: docs/rendering.md),
+    /// kStillWallDensity otherwise (resolved_wall_density). 0 in a bare PbfDef.
+    float wall_density = 0.0f;
+    bool auto_wall_density() const { return wall_density == kAutoWallDensity; }
     /// Bed friction band, in spacings, [0, 10]: a particle whose distance to the ground
     /// under it is below this many spacings counts as touching it (the bed friction,
     /// CollisionDef::damping); 0: only particles the collision pushed out of the terrain.

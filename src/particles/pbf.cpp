@@ -371,7 +371,7 @@ void PbfSolver::step(float dt) {
     const float scorr_scale = d.scorr_k * lattice_grad_sum_ > 0.0f ? d.scorr_k / lattice_grad_sum_ : 0.0f;
     const float max_move = 0.5f * d.spacing;  // per iteration: a spawn overlap never explodes
     const bool terrain = collision_.mode != CollisionMode::None;
-    const bool wall = terrain && d.wall_density;
+    const bool wall = terrain && d.wall_density > 0.0f;
 
     // 1. Predict.
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
@@ -411,8 +411,8 @@ void PbfSolver::step(float dt) {
         tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
             for (size_t i = r.begin(); i != r.end(); ++i) {
                 wall_at_[i] = p.position[i];
-                wall_share_[i] = p.active[i] ? wall_share(p.position[i], wall_grad_[i]) : 0.0f;
-                if (!p.active[i]) wall_grad_[i] = Vec3(0.0f);
+                wall_share_[i] = p.active[i] ? d.wall_density * wall_share(p.position[i], wall_grad_[i]) : 0.0f;
+                wall_grad_[i] = p.active[i] ? d.wall_density * wall_grad_[i] : Vec3(0.0f);
             }
         });
     }

@@ -123,6 +123,10 @@ constexpr KeyWords kDampingWords{kAuto, [](S d) { return d.pbf.auto_damping() ? 
                                  [](SceneDef& d, int i) {
                                      if (i == 0) d.pbf.damping = kAutoDamping;
                                  }};
+constexpr KeyWords kWallDensityWords{kAuto, [](S d) { return d.pbf.auto_wall_density() ? 0 : -1; },
+                                     [](SceneDef& d, int i) {
+                                         if (i == 0) d.pbf.wall_density = kAutoWallDensity;
+                                     }};
 constexpr KeyWords kContactBandWords{kAuto, [](S d) { return d.pbf.auto_contact_band() ? 0 : -1; },
                                      [](SceneDef& d, int i) {
                                          if (i == 0) d.pbf.contact_band = kAutoContactBand;
@@ -264,12 +268,12 @@ const SceneKey kKeys[] = {
      .field = MR_FIELD(pbf.damping)},
     {.name = "pbf.damping_speed", .type = K::Float, .unit = "m/s", .range = above(0, 1e3), .readers = kPbf,
      .help = "Speed below which pbf.damping acts fully; none at twice it.", .field = MR_FIELD(pbf.damping_speed)},
-    {.name = "pbf.wall_density", .type = K::Bool, .readers = kPbfContact,
-     .help = "The terrain counts in each particle's density (the share of its kernel under the terrain, a quadrature "
+    {.name = "pbf.wall_density", .type = K::Float, .range = closed(0, 1), .words = kWallDensityWords, .readers = kPbfContact,
+     .help = "Weight of the terrain in each particle's density: the share of its kernel under the terrain (a quadrature "
              "over the heightfield around it: the ground below, a steep wall beside it and the crease at the wall's "
-             "foot) and pushes back through the constraint: water at the bed and banks keeps the rest spacing and a "
-             "pool is level to its shore (false: the ground adds nothing; the still pool's surface rose 4-7 cm towards "
-             "the banks).",
+             "foot) counts as water at rest and pushes back through the constraint, so water at the bed and banks "
+             "keeps the rest spacing and a pool is level to its shore (0: the ground adds nothing; the still pool's "
+             "surface rose 4-7 cm towards the banks). \"auto\": 0 for a river (its flow as tuned), 1 otherwise.",
      .field = MR_FIELD(pbf.wall_density)},
     {.name = "pbf.contact_band", .type = K::Float, .unit = "spacings", .range = closed(0, 10), .words = kContactBandWords,
      .readers = kPbfContact,

@@ -285,6 +285,11 @@ float resolved_damping(const SceneDef& def) {
     return is_river(def) ? 0.0f : kStillDamping;
 }
 
+float resolved_wall_density(const SceneDef& def) {
+    if (!def.pbf.auto_wall_density()) return def.pbf.wall_density;
+    return is_river(def) ? 0.0f : kStillWallDensity;
+}
+
 float resolved_contact_band(const SceneDef& def) {
     if (!def.pbf.auto_contact_band()) return def.pbf.contact_band;
     return is_river(def) ? 0.0f : kStillContactBand;
@@ -405,6 +410,7 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, cons
     resolved.pbf.sleep_threshold = resolved_sleep_threshold(def);
     resolved.pbf.damping = resolved_damping(def);
     resolved.pbf.contact_band = resolved_contact_band(def);
+    resolved.pbf.wall_density = resolved_wall_density(def);
     auto terrain = Terrain::build(map, resolved.terrain);
     if (!terrain) return terrain.error();
     const bool auto_size = def.solver == SolverKind::Pbf && (def.spawn.count == kAutoCount || def.spawn.auto_rate());
