@@ -68,6 +68,25 @@ inline constexpr float kAutoRate = -1.0f;
 /// PbfDef::sleep_threshold: the still-water default, and "auto" (resolved per scene).
 inline constexpr float kSleepThreshold = 0.065f;
 inline constexpr float kAutoSleep = -1.0f;
+/// PbfDef::damping: the still-water default (1/s), and "auto" (resolved per scene).
+inline constexpr float kStillDamping = 1.0f;
+inline constexpr float kAutoDamping = -1.0f;
+/// PbfDef::wall_density: the still-water default (weight), and "auto" (resolved per scene).
+inline constexpr float kStillWallDensity = 1.0f;
+inline constexpr float kAutoWallDensity = -1.0f;
+/// PbfDef::contact_band: the still-water default (spacings), and "auto" (resolved per scene).
+inline constexpr float kStillContactBand = 1.5f;
+inline constexpr float kAutoContactBand = -1.0f;
+/// Time constant (s) of the mean velocity PbfDef::sleep_drift is judged on, and the
+/// default scene's sleep_drift (m/s).
+inline constexpr float kSleepDriftSeconds = 0.5f;
+inline constexpr float kStillSleepDrift = 0.015f;
+
+/// Share of a poly6 kernel (support `h`) that lies beyond a plane at `distance` from its
+/// centre, in [0, 1] (0.5 on the plane, 0 at h or farther, 1 at -h or deeper): the
+/// closed form of what PbfDef::wall_density adds for flat ground (tests check the
+/// heightfield quadrature against it).
+float pbf_wall_share(float distance, float h);
 
 struct SpawnDef {
     int count = 20;                          ///< particle budget, [1, kMaxParticles]; kAutoCount: sized to the terrain (PBF)
@@ -153,6 +172,42 @@ struct PbfDef {
     /// resolves it to 0 for a river and kSleepThreshold otherwise (resolved_sleep_threshold).
     float sleep_threshold = kSleepThreshold;
     bool auto_sleep() const { return sleep_threshold == kAutoSleep; }
+    /// Sleeping also asks for a small mean horizontal velocity, m/s, [0, 1]; 0 = off: a
+    /// particle falls asleep only while the exponential average of its horizontal
+    /// velocity (time constant kSleepDriftSeconds) is slower than this. A slosh's turn
+    /// is slow for a moment, its average is not: without it a pool froze mid-slosh,
+    /// tilted (docs/rendering.md, "Still water that is level"). The default scene's is kStillSleepDrift; 0 in a
+    /// bare PbfDef.
+    float sleep_drift = 0.0f;
+    /// Slow-water damping, 1/s, [0, 100]; 0 = off: every step a particle's velocity is
+    /// scaled by exp(-damping s dt), s = 1 below `damping_speed`, falling linearly to 0
+    /// at twice it (faster water is never damped): a pool's slosh dies out before it
+    /// falls asleep. kAutoDamping (the default scene's): 0 for a river, kStillDamping
+    /// otherwise (resolved_damping in scene.h). 0 in a bare PbfDef.
+    float damping = 0.0f;
+    bool auto_damping() const { return damping == kAutoDamping; }
+    float damping_speed = 1.0f;  ///< m/s, (0, 1000]: full damping below, none above twice it
+    /// The terrain counts in each particle's density: the share of its kernel that lies
+    /// under the terrain (a quadrature over the heightfield around the particle, so a
+    /// steep wall beside it and the crease at a wall's foot count as well as the ground
+    /// below), with its gradient in the constraint. Water at the bed and banks is then
+    /// held at the rest spacing by pressure, and a pool is level to its shore (0:
+    /// SPH's particle deficiency at a wall; the still pool's surface rose 4-7 cm to the
+    /// banks). A weight in [0, 1] on the share (1: the terrain is water at rest).
+    /// kAutoWallDensity (the default scene's): 0 for a river (its flow as tuned, and
+    /// rain on the spikes map was thrown faster than free fall with it: docs/rendering.md),
+    /// kStillWallDensity otherwise (resolved_wall_density). 0 in a bare PbfDef.
+    float wall_density = 0.0f;
+    bool auto_wall_density() const { return wall_density == kAutoWallDensity; }
+    /// Bed friction band, in spacings, [0, 10]: a particle whose distance to the ground
+    /// under it is below this many spacings counts as touching it (the bed friction,
+    /// CollisionDef::damping); 0: only particles the collision pushed out of the terrain.
+    /// With wall_density the bed layer is held off the ground by pressure and is rarely
+    /// pushed out, so without a band the bed loses its friction. kAutoContactBand (the
+    /// default scene's): 0 for a river, kStillContactBand otherwise (resolved_contact_band).
+    /// 0 in a bare PbfDef.
+    float contact_band = 0.0f;
+    bool auto_contact_band() const { return contact_band == kAutoContactBand; }
     /// `spacing = "auto"` (the default scene's): a self-sized river (count or flow_rate
     /// "auto") is resolved at auto_spacing() (scene.h), `spacing` being its value at 1 m
     /// per sample; the lengths sized in spacings scale with it. A number clears it.
@@ -447,6 +502,10 @@ private:
     /// brute force over all active pairs: the twin tests compare them.
     void pbf_densities(std::vector<float>& out);
     void pbf_densities_brute_force(std::vector<float>& out) const;
+    /// The terrain's share of a kernel centred at `x` (PbfDef::wall_density: the
+    /// heightfield quadrature), in [0, 1], and its gradient w.r.t. x (into `grad`); 0
+    /// (and grad 0) where no terrain is within h.
+    float wall_share(const Vec3& x, Vec3& grad) const;
     void init_pbf();
     /// Fluid response: the swept robust query on last -> p, the particle slides along
     /// the ground (normal motion removed, damped), heightfield guard.
@@ -455,8 +514,14 @@ private:
     /// triangle normal to `offset` above it (or back to `fallback` where that fails);
     /// true when it had to.
     bool push_out_of_terrain(Vec3& x, const Vec3& fallback) const;
-    void reset_slot(size_t i) override { slow_steps_[i] = 0; }
-    void swap_slots(size_t i, size_t j) override { std::swap(slow_steps_[i], slow_steps_[j]); }
+    void reset_slot(size_t i) override {
+        slow_steps_[i] = 0;
+        mean_velocity_[i] = Vec3(0.0f);
+    }
+    void swap_slots(size_t i, size_t j) override {
+        std::swap(slow_steps_[i], slow_steps_[j]);
+        std::swap(mean_velocity_[i], mean_velocity_[j]);
+    }
     void permute_slots(std::span<const uint32_t> perm) override;
 
     PbfDef pbf_;
@@ -468,6 +533,12 @@ private:
     /// kSleepAfterSeconds' worth).
     std::vector<uint16_t> slow_steps_;
     std::vector<uint16_t> scratch_slow_;
+    /// Sleeping, per slot: the exponential average of the velocity (PbfDef::sleep_drift).
+    std::vector<Vec3> mean_velocity_, scratch_mean_;
+    /// Wall density, per particle of the step: the terrain's share and its gradient at
+    /// the predicted position `wall_at_` (each iteration extrapolates them linearly).
+    std::vector<float> wall_share_;
+    std::vector<Vec3> wall_grad_, wall_at_;
     std::vector<Vec3> delta_, omega_;
     NeighborLists pbf_lists_;
     bool pbf_lists_on_ = true;

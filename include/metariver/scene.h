@@ -133,6 +133,14 @@ bool is_river(const SceneDef& def);
 /// on a gentle bed: docs/river.md, "A least slope of 2 % and no sleeping river"),
 /// kSleepThreshold otherwise (still water comes to rest).
 float resolved_sleep_threshold(const SceneDef& def);
+/// pbf.damping with "auto" resolved: 0 for a river (its slow reaches must not be held),
+/// kStillDamping otherwise (a pool's slosh dies out before it falls asleep).
+float resolved_damping(const SceneDef& def);
+/// pbf.contact_band with "auto" resolved: 0 for a river (its bed friction as tuned,
+/// docs/river.md), kStillContactBand otherwise (a pool's first slosh stays in its bowl).
+float resolved_contact_band(const SceneDef& def);
+/// pbf.wall_density with "auto" resolved: 0 for a river, kStillWallDensity otherwise.
+float resolved_wall_density(const SceneDef& def);
 /// Neighbourhood radius, metres, for the velocities of a scene's surface vertices
 /// (SceneView::flow_radius): the compact field's support (every surface vertex has a
 /// particle within it), 2 x the metaball radius for the paper's kernels.

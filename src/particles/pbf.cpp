@@ -15,8 +15,24 @@
 //   v = (x* - x) / dt; swept robust terrain collision on x -> x* (the particle slides)
 //   XSPH viscosity v_i += c sum_j (v_j - v_i) W(x_i - x_j) / rho_0 (eq. 17), optional
 //   vorticity confinement (eq. 15, 16)
+//   slow-water damping v *= exp(-damping s dt), s = 1 below damping_speed, 0 above twice it
 //   sleeping (after NVIDIA FleX's sleepThreshold): a particle slower than
-//   sleep_threshold for kSleepAfterSeconds is asleep; its slow steps are undone
+//   sleep_threshold for kSleepAfterSeconds, whose mean horizontal velocity
+//   (sleep_drift) is slow too, is asleep; its slow steps are undone
+//
+// Wall density (PbfDef::wall_density): rho_i also counts the terrain as water at rest,
+// rho_0 times the share of the kernel around x_i that lies under the heightfield, and
+// grad C_i gains that share's gradient (static ground: only lambda_i moves the particle
+// off it). Without it a particle at the bed sees half a neighbourhood (SPH's particle
+// deficiency; Akinci et al. 2012 sample the boundary with particles, Koschier and Bender
+// 2017 precompute its density). The share is a quadrature over vertical columns on a
+// grid of h/4 around the particle: a column at horizontal distance r holds
+// int_{-a}^{min(H - y, a)} W dt (a^2 = h^2 - r^2, closed form for poly6), normalised so
+// all columns in full sum to 1; by the divergence theorem its gradient is
+// -sum_columns W(x - surface point) (-dH/dx, 1, -dH/dz) (the same quadrature). So the
+// ground below, a steep wall beside the particle and the crease at the wall's foot all
+// count with one consistent share; it is computed once per step at the predicted
+// position and extrapolated linearly through the iterations.
 //
 // rho_0 is the kernel sum of a cubic lattice of the rest spacing, so "number density"
 // (no mass) and a perfect lattice has C = 0. eps and s_corr are scaled by a lattice
@@ -96,12 +112,100 @@ void for_each_binned(const NeighborGrid& grid, const NeighborLists* lists, F&& f
     });
 }
 
+/// F(z) = integral_0^z (h^2 - t^2)^4 dt (odd in z): a slab at depth t beyond a plane holds
+/// pi/4 (h^2 - t^2)^4 of the poly6 kernel's integral (times its constant).
+float wall_primitive(float z, float h2) {
+    const float h4 = h2 * h2, z2 = z * z;
+    return z * (h4 * h4 - z2 * (4.0f / 3.0f * h4 * h2 - z2 * (6.0f / 5.0f * h4 - z2 * (4.0f / 7.0f * h2 - z2 / 9.0f))));
+}
+
+/// Wall density quadrature: samples per h along a triangle (the wall density).
+constexpr int kWallSamplesPerH = 4;
+
 }  // namespace
+
+float pbf_wall_share(float distance, float h) {
+    if (!(h > 0.0f)) return 0.0f;
+    const float d = std::clamp(distance, -h, h);
+    const float fh = wall_primitive(h, h * h);
+    return (fh - wall_primitive(d, h * h)) / (2.0f * fh);
+}
+
+float PbfSolver::wall_share(const Vec3& x, Vec3& grad) const {
+    grad = Vec3(0.0f);
+    const int w = terrain_.columns(), r = terrain_.rows();
+    if (w < 2 || r < 2) return 0.0f;
+    const float h = pbf_.kernel_radius, h2 = h * h;
+    const float s = terrain_.area_scale();
+    // The cells the kernel's footprint touches; nothing of the mesh there is higher than
+    // their highest sample: nothing within h, no share.
+    const int j0 = std::clamp(int(std::floor((x.x - h) / s)), 0, w - 2), j1 = std::clamp(int(std::floor((x.x + h) / s)), 0, w - 2);
+    const int i0 = std::clamp(int(std::floor((x.z - h) / s)), 0, r - 2), i1 = std::clamp(int(std::floor((x.z + h) / s)), 0, r - 2);
+    float top = -1e30f;
+    for (int i = i0; i <= i1 + 1; ++i)
+        for (int j = j0; j <= j1 + 1; ++j) top = std::max(top, terrain_.sample(i, j));
+    if (x.y - h >= top) return 0.0f;
+    const float kc = 315.0f / (64.0f * kPi * std::pow(h, 9.0f));  // poly6's constant
+    const float sample_len = h / float(kWallSamplesPerH);
+    float share = 0.0f;
+    Vec3 g(0.0f);
+    // One triangle: midpoints of an m x m subdivision (m from its area, so a steep face,
+    // narrow in x and z, is sampled as densely as flat ground).
+    const auto triangle = [&](const Vec3& a, const Vec3& b, const Vec3& c) {
+        if (std::max({a.y, b.y, c.y}) <= x.y - h) return;  // every column's kernel above it
+        const float dx = std::max({std::min({a.x, b.x, c.x}) - x.x, x.x - std::max({a.x, b.x, c.x}), 0.0f});
+        const float dz = std::max({std::min({a.z, b.z, c.z}) - x.z, x.z - std::max({a.z, b.z, c.z}), 0.0f});
+        if (dx * dx + dz * dz >= h2) return;  // outside the kernel's footprint
+        const Vec3 e1 = b - a, e2 = c - a;
+        const Vec3 cr = glm::cross(e2, e1);  // up: the heightfield's triangles wind so
+        const float area2 = glm::length(cr);
+        if (!(area2 > 0.0f)) return;
+        const Vec3 n = cr / area2;
+        const int m = std::clamp(int(std::ceil(std::sqrt(0.5f * area2) / sample_len)), 1, 16);
+        const float ds = 0.5f * area2 / float(m * m), da = ds * std::abs(n.y);
+        const float inv_m = 1.0f / float(m);
+        const auto sample = [&](float u, float v) {
+            const Vec3 q = a + (u * inv_m) * e1 + (v * inv_m) * e2;
+            const float dx = q.x - x.x, dz = q.z - x.z;
+            const float a2 = h2 - dx * dx - dz * dz;
+            if (a2 <= 0.0f) return;
+            const float t = q.y - x.y, al = std::sqrt(a2);
+            if (t <= -al) return;  // the column's kernel is all above the ground here
+            const float a4 = a2 * a2, pa = 16.0f / 35.0f * a4 * a2 * al;  // P(a)
+            if (t >= al) {         // all under it
+                share += kc * 2.0f * pa * da;
+                return;
+            }
+            // int_{-a}^{t} (a^2 - u^2)^3 du = P(t) + P(a), P(u) = a^6 u - a^4 u^3 + 3/5 a^2 u^5 - u^7 / 7.
+            const float t2 = t * t;
+            share += kc * (t * (a4 * a2 - t2 * (a4 - t2 * (0.6f * a2 - t2 / 7.0f))) + pa) * da;
+            const float qq = a2 - t2;
+            g -= (kc * qq * qq * qq * ds) * n;  // -W n dS
+        };
+        for (int u = 0; u < m; ++u)
+            for (int v = 0; u + v < m; ++v) {
+                sample(float(u) + 1.0f / 3.0f, float(v) + 1.0f / 3.0f);
+                if (u + v + 2 <= m) sample(float(u) + 2.0f / 3.0f, float(v) + 2.0f / 3.0f);
+            }
+    };
+    for (int i = i0; i <= i1; ++i)
+        for (int j = j0; j <= j1; ++j) {
+            const Vec3 p00(float(j) * s, terrain_.sample(i, j), float(i) * s);
+            const Vec3 p01(float(j + 1) * s, terrain_.sample(i, j + 1), float(i) * s);
+            const Vec3 p10(float(j) * s, terrain_.sample(i + 1, j), float(i + 1) * s);
+            const Vec3 p11(float(j + 1) * s, terrain_.sample(i + 1, j + 1), float(i + 1) * s);
+            triangle(p00, p01, p10);  // u + v <= 1 (Terrain::height_mesh)
+            triangle(p11, p10, p01);
+        }
+    grad = g;
+    return std::clamp(share, 0.0f, 1.0f);
+}
 
 PbfSolver::PbfSolver(const Terrain& terrain, const Bvh& bvh, SpawnDef spawn, PbfDef pbf, CollisionDef collision,
                      IntegratorDef integrator, uint32_t seed, SinkDef sink)
     : ParticleSolver(terrain, bvh, spawn, collision, integrator, seed, sink, pbf.spacing), pbf_(pbf) {
     slow_steps_.assign(particles_.size(), 0);
+    mean_velocity_.assign(particles_.size(), Vec3(0.0f));
     init_pbf();
 }
 
@@ -117,6 +221,9 @@ void PbfSolver::permute_slots(std::span<const uint32_t> perm) {
     scratch_slow_.resize(perm.size());
     for (size_t k = 0; k < perm.size(); ++k) scratch_slow_[k] = slow_steps_[perm[k]];
     slow_steps_.swap(scratch_slow_);
+    scratch_mean_.resize(perm.size());
+    for (size_t k = 0; k < perm.size(); ++k) scratch_mean_[k] = mean_velocity_[perm[k]];
+    mean_velocity_.swap(scratch_mean_);
 }
 
 void PbfSolver::init_pbf() {
@@ -264,6 +371,7 @@ void PbfSolver::step(float dt) {
     const float scorr_scale = d.scorr_k * lattice_grad_sum_ > 0.0f ? d.scorr_k / lattice_grad_sum_ : 0.0f;
     const float max_move = 0.5f * d.spacing;  // per iteration: a spawn overlap never explodes
     const bool terrain = collision_.mode != CollisionMode::None;
+    const bool wall = terrain && d.wall_density > 0.0f;
 
     // 1. Predict.
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
@@ -295,6 +403,20 @@ void PbfSolver::step(float dt) {
         return &pbf_lists_;
     };
 
+    // The terrain's share of each kernel at the predicted position (wall density).
+    if (wall) {
+        wall_share_.resize(n);
+        wall_grad_.resize(n);
+        wall_at_.resize(n);
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t i = r.begin(); i != r.end(); ++i) {
+                wall_at_[i] = p.position[i];
+                wall_share_[i] = p.active[i] ? d.wall_density * wall_share(p.position[i], wall_grad_[i]) : 0.0f;
+                wall_grad_[i] = p.active[i] ? d.wall_density * wall_grad_[i] : Vec3(0.0f);
+            }
+        });
+    }
+
     // 3. Density constraint iterations. With lists, the density pass keeps each pair's
     // W and grad factor (positions do not change before the correction pass reads
     // them); W = -1 marks a pair the correction skips (beyond h, or i itself).
@@ -322,8 +444,12 @@ void PbfSolver::step(float dt) {
                 gi += gr;
                 sum_g2 += glm::dot(gr, gr);
             });
+            float C = rho * inv_rho0 - 1.0f;
+            if (wall && (wall_share_[i] > 0.0f || wall_grad_[i] != Vec3(0.0f))) {  // the terrain's share, extrapolated
+                C += std::clamp(wall_share_[i] + glm::dot(wall_grad_[i], xi - wall_at_[i]), 0.0f, 1.0f);
+                gi += wall_grad_[i];
+            }
             sum_g2 += glm::dot(gi, gi);
-            const float C = rho * inv_rho0 - 1.0f;
             density_[i] = C;
             lambda_[i] = -std::max(C, 0.0f) / (sum_g2 + eps);
         });
@@ -355,6 +481,7 @@ void PbfSolver::step(float dt) {
                 });
             }
             dx *= inv_rho0;
+            if (wall) dx += li * wall_grad_[i];  // off the terrain (lambda < 0 when compressed)
             const float len = glm::length(dx);
             if (len > max_move) dx *= max_move / len;
             delta_[i] = dx;
@@ -373,6 +500,20 @@ void PbfSolver::step(float dt) {
     // loses the `damping` share of its motion along the ground (linear drag at the
     // bed). It takes the energy out of a pool's slosh; too much of it holds a shallow
     // river on its bed (docs/river.md has the measured trade-off).
+    // With a contact band (PbfDef::contact_band) a particle that close to the ground
+    // under it counts as held too: with the wall density the bed layer is held off the
+    // ground by pressure and is rarely pushed out.
+    if (terrain && collision_.damping > 0.0f && d.contact_band > 0.0f) {
+        const float band = d.contact_band * d.spacing;
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t i = r.begin(); i != r.end(); ++i) {
+                const Vec3 x = p.position[i];
+                if (p.active[i] && !contact_[i] && terrain_.contains_xz(x.x, x.z) &&
+                    x.y - terrain_.height_mesh(x.x, x.z) < band)
+                    contact_[i] = 1;
+            }
+        });
+    }
     if (terrain && collision_.damping > 0.0f) {
         // The law (CollisionDef::friction_speed): the share is damping, or damping x
         // |dx_t| / (dt friction_speed), the step's speed along the ground over the law's.
@@ -450,7 +591,20 @@ void PbfSolver::step(float dt) {
                 if (p.active[i]) p.velocity[i] = delta_[i];
         });
     }
-    // 6. Sleeping: a particle slower than the threshold for kSleepAfterSeconds is
+    // 6. Slow-water damping: exp(-damping s dt), s = 1 below damping_speed, linearly to
+    // 0 at twice it. A pool's slosh dies out (e-folding 1/damping seconds) before its
+    // water falls asleep; faster water is not touched.
+    if (d.damping > 0.0f) {
+        const float inv_speed = 1.0f / d.damping_speed;
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t i = r.begin(); i != r.end(); ++i) {
+                if (!p.active[i]) continue;
+                const float sp = std::clamp(2.0f - glm::length(p.velocity[i]) * inv_speed, 0.0f, 1.0f);
+                if (sp > 0.0f) p.velocity[i] *= std::exp(-d.damping * sp * dt);
+            }
+        });
+    }
+    // 7. Sleeping: a particle slower than the threshold for kSleepAfterSeconds is
     // asleep, and an asleep particle's slow step is undone (position kept, velocity
     // zero); a faster step wakes it. Judged on the final velocity, after collision and
     // viscosity: a particle at the top of a bounce is slow for a step or two, not for
@@ -462,10 +616,24 @@ void PbfSolver::step(float dt) {
     if (sleep > 0.0f) {
         const float s2 = sleep * sleep;
         const int after = std::clamp(int(std::ceil(kSleepAfterSeconds / dt)), 1, 65535);
+        // The mean horizontal velocity (PbfDef::sleep_drift): an exponential average
+        // over kSleepDriftSeconds of the awake steps; a particle whose mean is not slow
+        // stays awake, so a slosh levels out instead of freezing at its slow turn. Only
+        // the horizontal part: a slosh moves the water sideways, while the vertical
+        // settling of a column (water still packing under its weight) kept the pools
+        // awake past 10 s when it counted (max speed 0.10-0.20 m/s at 10 s).
+        const float drift2 = d.sleep_drift * d.sleep_drift;
+        const float alpha = std::min(1.0f, dt / kSleepDriftSeconds);
         tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
             for (size_t i = r.begin(); i != r.end(); ++i) {
                 if (!p.active[i]) continue;
-                if (glm::dot(p.velocity[i], p.velocity[i]) >= s2) {
+                const bool asleep = slow_steps_[i] >= after;
+                bool drifting = false;
+                if (d.sleep_drift > 0.0f && !asleep) {
+                    mean_velocity_[i] += alpha * (Vec3(p.velocity[i].x, 0.0f, p.velocity[i].z) - mean_velocity_[i]);
+                    drifting = glm::dot(mean_velocity_[i], mean_velocity_[i]) >= drift2;
+                }
+                if (glm::dot(p.velocity[i], p.velocity[i]) >= s2 || drifting) {
                     slow_steps_[i] = 0;  // moving (or woken)
                 } else if (slow_steps_[i] < after) {
                     ++slow_steps_[i];

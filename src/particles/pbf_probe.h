@@ -23,6 +23,8 @@ struct PbfProbe {
     }
     /// The lists of the latest step (their builds() counts rebuilds too).
     static const NeighborLists& neighbor_lists(const PbfSolver& s) { return s.pbf_lists_; }
+    /// The terrain's share of a kernel centred at `x` and its gradient (PbfDef::wall_density).
+    static float wall_share(const PbfSolver& s, const Vec3& x, Vec3& grad) { return s.wall_share(x, grad); }
 };
 
 }  // namespace mr

@@ -99,6 +99,10 @@ SceneDef default_scene() {
     // "Foam and spray": their cost measured there).
     d.foam.enabled = true;
     d.pbf.sleep_threshold = kAutoSleep;  // off for the river, on for still water
+    d.pbf.damping = kAutoDamping;          // the same
+    d.pbf.contact_band = kAutoContactBand; // the same
+    d.pbf.wall_density = kAutoWallDensity; // the same
+    d.pbf.sleep_drift = kStillSleepDrift;  // a pool levels out before it sleeps (a river does not sleep)
     d.pbf.auto_spacing = true;           // 0.5 m at 1 m per sample, sized to the terrain
     return d;
 }

@@ -119,6 +119,18 @@ constexpr KeyWords kSleepWords{kAuto, [](S d) { return d.pbf.auto_sleep() ? 0 : 
                                [](SceneDef& d, int i) {
                                    if (i == 0) d.pbf.sleep_threshold = kAutoSleep;
                                }};
+constexpr KeyWords kDampingWords{kAuto, [](S d) { return d.pbf.auto_damping() ? 0 : -1; },
+                                 [](SceneDef& d, int i) {
+                                     if (i == 0) d.pbf.damping = kAutoDamping;
+                                 }};
+constexpr KeyWords kWallDensityWords{kAuto, [](S d) { return d.pbf.auto_wall_density() ? 0 : -1; },
+                                     [](SceneDef& d, int i) {
+                                         if (i == 0) d.pbf.wall_density = kAutoWallDensity;
+                                     }};
+constexpr KeyWords kContactBandWords{kAuto, [](S d) { return d.pbf.auto_contact_band() ? 0 : -1; },
+                                     [](SceneDef& d, int i) {
+                                         if (i == 0) d.pbf.contact_band = kAutoContactBand;
+                                     }};
 constexpr KeyWords kAreaScaleWords{kAuto, [](S d) { return d.terrain.auto_area_scale ? 0 : -1; },
                                    [](SceneDef& d, int i) {
                                        d.terrain.auto_area_scale = i == 0;
@@ -244,6 +256,32 @@ const SceneKey kKeys[] = {
              "\"auto\": 0 for a river (a flow rate and sink.kind = \"edges\": a slow river on a gentle bed fell asleep "
              "and stopped), 0.065 otherwise (still water comes to rest).",
      .field = MR_FIELD(pbf.sleep_threshold)},
+    {.name = "pbf.sleep_drift", .type = K::Float, .unit = "m/s", .range = closed(0, 1), .readers = kPbf,
+     .help = "0 = off. Sleeping also asks that the particle's mean horizontal velocity (an exponential average over "
+             "0.5 s) be slower than this: a slosh's turn is slow for a moment, its mean is not, so a pool levels out "
+             "before it falls asleep instead of freezing tilted (docs/rendering.md, \"Still water that is level\").",
+     .field = MR_FIELD(pbf.sleep_drift)},
+    {.name = "pbf.damping", .type = K::Float, .unit = "1/s", .range = closed(0, 100), .words = kDampingWords, .readers = kPbf,
+     .help = "Slow-water damping; 0 = off. Each step a particle's velocity is scaled by exp(-damping s dt), s = 1 below "
+             "damping_speed and falling to 0 at twice it: a pool's slosh dies out before it falls asleep, faster water "
+             "is untouched. \"auto\": 0 for a river (a flow rate and sink.kind = \"edges\"), 1 otherwise.",
+     .field = MR_FIELD(pbf.damping)},
+    {.name = "pbf.damping_speed", .type = K::Float, .unit = "m/s", .range = above(0, 1e3), .readers = kPbf,
+     .help = "Speed below which pbf.damping acts fully; none at twice it.", .field = MR_FIELD(pbf.damping_speed)},
+    {.name = "pbf.wall_density", .type = K::Float, .range = closed(0, 1), .words = kWallDensityWords, .readers = kPbfContact,
+     .help = "Weight of the terrain in each particle's density: the share of its kernel under the terrain (a quadrature "
+             "over the heightfield around it: the ground below, a steep wall beside it and the crease at the wall's "
+             "foot) counts as water at rest and pushes back through the constraint, so water at the bed and banks "
+             "keeps the rest spacing and a pool is level to its shore (0: the ground adds nothing; the still pool's "
+             "surface rose 4-7 cm towards the banks). \"auto\": 0 for a river (its flow as tuned), 1 otherwise.",
+     .field = MR_FIELD(pbf.wall_density)},
+    {.name = "pbf.contact_band", .type = K::Float, .unit = "spacings", .range = closed(0, 10), .words = kContactBandWords,
+     .readers = kPbfContact,
+     .help = "A particle closer than this to the ground under it counts as touching it for the bed friction "
+             "(collision.damping); 0: only particles the collision pushed out of the terrain (with pbf.wall_density "
+             "the bed is held off the ground by pressure and rarely pushed out). \"auto\": 0 for a river (its "
+             "friction as tuned), 1.5 otherwise (a pool's first slosh stays in its bowl).",
+     .field = MR_FIELD(pbf.contact_band)},
     // [sink]
     {.name = "sink.kind", .type = K::Choice, .choices = kSinks, .readers = kNotBullet,
      .help = "none: particles respawn only when they leave the terrain's box | box: entering [min, max] | edges: leaving "

@@ -287,6 +287,21 @@ float resolved_sleep_threshold(const SceneDef& def) {
     return is_river(def) ? 0.0f : kSleepThreshold;
 }
 
+float resolved_damping(const SceneDef& def) {
+    if (!def.pbf.auto_damping()) return def.pbf.damping;
+    return is_river(def) ? 0.0f : kStillDamping;
+}
+
+float resolved_wall_density(const SceneDef& def) {
+    if (!def.pbf.auto_wall_density()) return def.pbf.wall_density;
+    return is_river(def) ? 0.0f : kStillWallDensity;
+}
+
+float resolved_contact_band(const SceneDef& def) {
+    if (!def.pbf.auto_contact_band()) return def.pbf.contact_band;
+    return is_river(def) ? 0.0f : kStillContactBand;
+}
+
 namespace {
 /// The spacing the carve and the source's basin are sized for (SceneDef::carve_spacing).
 float carve_spacing_of(const SceneDef& def) { return def.carve_spacing > 0.0f ? def.carve_spacing : def.pbf.spacing; }
@@ -400,6 +415,9 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, cons
     SceneDef resolved = def;
     resolved.terrain.condition = resolved_condition(def);
     resolved.pbf.sleep_threshold = resolved_sleep_threshold(def);
+    resolved.pbf.damping = resolved_damping(def);
+    resolved.pbf.contact_band = resolved_contact_band(def);
+    resolved.pbf.wall_density = resolved_wall_density(def);
     auto terrain = Terrain::build(map, resolved.terrain);
     if (!terrain) return terrain.error();
     const bool auto_size = def.solver == SolverKind::Pbf && (def.spawn.count == kAutoCount || def.spawn.auto_rate());

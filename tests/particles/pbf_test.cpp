@@ -172,6 +172,63 @@ TEST(Pbf, AParticleSlidesDownASteepFaceInsteadOfStickingToIt) {
     EXPECT_EQ(s.counters().tunneled, 0u);
 }
 
+TEST(Pbf, WallShareIsTheKernelShareUnderTheTerrain) {
+    // PbfDef::wall_density's quadrature over the heightfield against the closed form of
+    // a plane: on flat ground at every height, on a 0.3 slope at the distance along the
+    // plane's normal (not the vertical one), and its gradient against finite differences.
+    const std::vector<Vec3> one{Vec3(8, 3, 8)};
+    {
+        World w = make_world(flat_heightmap(17, 17), TerrainDef{.area_scale = 1.0f, .height_scale = 1.0f});
+        auto s = column_solver(w, one);
+        for (float y = -1.1f; y <= 1.1f; y += 0.1f) {
+            Vec3 g;
+            const float share = PbfProbe::wall_share(*s, Vec3(8.3f, y, 7.6f), g);
+            EXPECT_NEAR(share, pbf_wall_share(y, 1.0f), 0.01f) << "height " << y;
+            Vec3 g1, g2;
+            const float e = 1e-3f;
+            const float fd = (PbfProbe::wall_share(*s, Vec3(8.3f, y + e, 7.6f), g1) - PbfProbe::wall_share(*s, Vec3(8.3f, y - e, 7.6f), g2)) / (2 * e);
+            EXPECT_NEAR(g.y, fd, 0.02f) << "height " << y;
+            EXPECT_NEAR(g.x, 0.0f, 1e-5f);
+            EXPECT_NEAR(g.z, 0.0f, 1e-5f);
+        }
+        Vec3 g;
+        EXPECT_EQ(PbfProbe::wall_share(*s, Vec3(8, 1.01f, 8), g), 0.0f);
+        EXPECT_NEAR(PbfProbe::wall_share(*s, Vec3(8, 0, 8), g), 0.5f, 1e-3f);
+    }
+    {
+        Heightmap ramp = flat_heightmap(17, 17);
+        for (int r = 0; r < 17; ++r)
+            for (int c = 0; c < 17; ++c) ramp.samples[size_t(r) * 17 + c] = float(c) / 16.0f;
+        World w = make_world(ramp, TerrainDef{.area_scale = 1.0f, .height_scale = 4.8f});  // slope 0.3
+        auto s = column_solver(w, one);
+        const Vec3 n = glm::normalize(Vec3(-0.3f, 1.0f, 0.0f));
+        for (float v = -0.8f; v <= 1.2f; v += 0.2f) {
+            const Vec3 x(8.3f, 0.3f * 8.3f + v, 7.6f);
+            Vec3 g;
+            const float share = PbfProbe::wall_share(*s, x, g);
+            EXPECT_NEAR(share, pbf_wall_share(v * n.y, 1.0f), 0.01f) << "vertical distance " << v;
+            Vec3 g1, g2;
+            const float e = 1e-3f;
+            const float fx = (PbfProbe::wall_share(*s, x + Vec3(e, 0, 0), g1) - PbfProbe::wall_share(*s, x - Vec3(e, 0, 0), g2)) / (2 * e);
+            EXPECT_NEAR(g.x, fx, 0.02f) << "vertical distance " << v;
+            if (share > 0.01f && share < 0.99f) {  // along the plane's normal, pointing into the ground
+                EXPECT_GT(glm::dot(glm::normalize(g), -n), 0.999f);
+            }
+        }
+    }
+    {
+        // The box's 80-degree wall: beside it (off its foot) the wall counts as well as
+        // the floor, so the share is more than the floor alone gives.
+        World w = make_world(box_map(13, 2), TerrainDef{.area_scale = 1.0f, .height_scale = 6.0f});
+        auto s = column_solver(w, one);
+        Vec3 g;
+        const float crease = PbfProbe::wall_share(*s, Vec3(2.3f, 0.3f, 6.5f), g);
+        EXPECT_GT(crease, pbf_wall_share(0.3f, 1.0f) + 0.05f);
+        EXPECT_LT(g.x, 0.0f) << "the wall is on the -x side: moving toward it adds share";
+        EXPECT_LT(g.y, 0.0f);
+    }
+}
+
 TEST(Pbf, BedFrictionLawsGiveTheirTerminalSpeedsOnASlope) {
     // A particle sliding down a plane of slope 0.1 for 8 s. Each step the bed friction
     // removes the share f of its motion along the ground, gravity adds g sin(a) dt, so
