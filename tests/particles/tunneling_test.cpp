@@ -241,36 +241,46 @@ TEST(Tunneling, RobustModeLosesNothingInTenMillionParticleStepsPaperModeLosesMan
 TEST(Tunneling, PbfWaterOnSpikesAndCliffsLosesNothing) {
     const Worlds ws = worlds();
     uint64_t steps = 0;
-    for (const World& w : ws.all) {
-        if (w.name != "spikes" && w.name != "cliffs" && w.name != "valley") continue;
-        const Aabb b = w.terrain.bounds();
-        const Vec3 mid = b.center();
-        SpawnDef rain{.count = test::scaled(3000), .center = Vec3(mid.x, b.max.y + 3.0f, mid.z),
-                      .half_extent = Vec3(0.4f * b.extent().x, 2.0f, 0.4f * b.extent().z), .interval = 0,
-                      .initial_velocity = Vec3(0.3f, -2.0f, -0.2f)};
-        PbfSolver s(w.terrain, w.bvh, rain, PbfDef{},
-                         CollisionDef{.mode = CollisionMode::Robust, .damping = 0.02f, .offset = 0.005f, .radius = 0.1f,
-                                      .query = CollisionQuery::Heightfield},
-                         IntegratorDef{.gravity = 9.82f, .fixed_dt = 1.0f / 120.0f, .substeps = 1}, 5, SinkDef{});
-        float max_speed = 0.0f;  // any frame's
-        for (int f = 0; f < 360; ++f) {
-            s.step_frame(1.0f / 120.0f);
-            max_speed = std::max(max_speed, s.counters().max_speed);
+    // A river's PBF (a bare PbfDef) and still water's: the terrain counted in the density
+    // (wall_density, whose gradient near a spike's tip once threw rain over the bound
+    // below), the contact band, the slow-water damping and the drift-aware sleep.
+    PbfDef still{};
+    still.wall_density = kStillWallDensity;
+    still.contact_band = kStillContactBand;
+    still.damping = kStillDamping;
+    still.sleep_drift = kStillSleepDrift;
+    for (const PbfDef& pbf : {PbfDef{}, still})
+        for (const World& w : ws.all) {
+            if (w.name != "spikes" && w.name != "cliffs" && w.name != "valley") continue;
+            const Aabb b = w.terrain.bounds();
+            const Vec3 mid = b.center();
+            SpawnDef rain{.count = test::scaled(3000), .center = Vec3(mid.x, b.max.y + 3.0f, mid.z),
+                          .half_extent = Vec3(0.4f * b.extent().x, 2.0f, 0.4f * b.extent().z), .interval = 0,
+                          .initial_velocity = Vec3(0.3f, -2.0f, -0.2f)};
+            PbfSolver s(w.terrain, w.bvh, rain, pbf,
+                        CollisionDef{.mode = CollisionMode::Robust, .damping = 0.02f, .offset = 0.005f, .radius = 0.1f,
+                                     .query = CollisionQuery::Heightfield},
+                        IntegratorDef{.gravity = 9.82f, .fixed_dt = 1.0f / 120.0f, .substeps = 1}, 5, SinkDef{});
+            float max_speed = 0.0f;  // any frame's
+            for (int f = 0; f < 360; ++f) {
+                s.step_frame(1.0f / 120.0f);
+                max_speed = std::max(max_speed, s.counters().max_speed);
+            }
+            const SolverCounters& c = s.counters();
+            const std::string what = w.name + (pbf.wall_density > 0.0f ? " (still water)" : " (river)");
+            std::printf("pbf %-22s %llu steps, tunneled %llu, guarded %llu, respawned %llu, max speed %.1f\n",
+                        what.c_str(), (unsigned long long)c.particle_steps, (unsigned long long)c.tunneled,
+                        (unsigned long long)c.guarded, (unsigned long long)c.respawned, max_speed);
+            EXPECT_EQ(c.tunneled, 0u) << what;
+            EXPECT_EQ(c.guarded, 0u) << what;
+            // Nothing is thrown: free fall from the top of the rain to the lowest ground plus
+            // the inflow speed, + 20 % (a push-out onto a terrace top launched drops at
+            // 70-150 m/s before the cliff-face rule).
+            const float drop = rain.center.y + rain.half_extent.y - b.min.y;
+            const float bound = 1.2f * (std::sqrt(2.0f * 9.82f * drop) + glm::length(rain.initial_velocity));
+            EXPECT_LE(max_speed, bound) << what;
+            steps += c.particle_steps;
         }
-        const SolverCounters& c = s.counters();
-        std::printf("pbf %-8s %llu steps, tunneled %llu, guarded %llu, respawned %llu, max speed %.1f\n", w.name.c_str(),
-                    (unsigned long long)c.particle_steps, (unsigned long long)c.tunneled,
-                    (unsigned long long)c.guarded, (unsigned long long)c.respawned, max_speed);
-        EXPECT_EQ(c.tunneled, 0u) << w.name;
-        EXPECT_EQ(c.guarded, 0u) << w.name;
-        // Nothing is thrown: free fall from the top of the rain to the lowest ground plus
-        // the inflow speed, + 20 % (a push-out onto a terrace top launched drops at
-        // 70-150 m/s before the cliff-face rule).
-        const float drop = rain.center.y + rain.half_extent.y - b.min.y;
-        const float bound = 1.2f * (std::sqrt(2.0f * 9.82f * drop) + glm::length(rain.initial_velocity));
-        EXPECT_LE(max_speed, bound) << w.name;
-        steps += c.particle_steps;
-    }
     EXPECT_GT(double(steps), test::long_scale() * 1e6);
 }
 
