@@ -21,17 +21,13 @@
 
 namespace mr {
 
-enum class KernelType {
-    W1,     ///< max(0, strength / (r^2 + 1e-6 m^2) - subtract): three.js's addBall, the W1 workload
-    Poly6,  ///< amplitude * (1 - r^2 / radius^2)^3 (Wyvill / poly6): smooth, C1 at the support
-};
-
-std::string_view to_string(KernelType k);
-
 /// A radially symmetric kernel that is exactly 0 at distances >= radius (its support).
 /// Build one with w1_kernel() or poly6_kernel(), which fill the fields consistently.
 struct KernelDef {
-    KernelType type = KernelType::Poly6;
+    /// Poly6: amplitude * (1 - r^2 / radius^2)^3 (Wyvill / poly6), smooth, C1 at the
+    /// support; W1: max(0, strength / (r^2 + 1e-6 m^2) - subtract). The dense kernels are
+    /// not compact: validate() refuses them.
+    FieldKernel type = FieldKernel::Poly6;
     float radius = 1.0f;     ///< support radius, metres, > 0: the kernel is 0 where r >= radius
     float amplitude = 1.0f;  ///< Poly6: value at the centre, field units (any finite value)
     float strength = 0.0f;   ///< W1: S, field units x m^2, > 0
@@ -44,17 +40,9 @@ KernelDef w1_kernel(float strength, float subtract);
 KernelDef poly6_kernel(float radius, float amplitude);
 /// The kernel's value at squared distance r2 (m^2); the reference the fast loops follow.
 float kernel_value(const KernelDef& k, float r2);
-/// Error when the kernel's fields are out of range (non-finite, radius <= 0, W1 with S or SUB <= 0).
+/// Error when the kernel is not a compact one (Poly6, W1) or its fields are out of range
+/// (non-finite, radius <= 0, W1 with S or SUB <= 0).
 Status validate(const KernelDef& k);
-
-/// A regular grid of samples: sample (i, j, k) at origin + spacing * (i, j, k), i < nx...
-struct SampleGrid {
-    Vec3 origin{0.0f};     ///< position of sample (0, 0, 0), metres
-    float spacing = 1.0f;  ///< metres between neighbouring samples, > 0
-    int nx = 0, ny = 0, nz = 0;  ///< samples per axis, >= 0
-
-    size_t samples() const { return static_cast<size_t>(nx) * static_cast<size_t>(ny) * static_cast<size_t>(nz); }
-};
 
 /// The paper's domain rule (as compute_field_paper): the balls' bounding box grown by
 /// `offset` metres on every side, `resolution` samples per metre, samples per axis =

@@ -12,17 +12,9 @@
 
 namespace mr {
 
-std::string_view to_string(KernelType k) {
-    switch (k) {
-        case KernelType::W1: return "w1";
-        case KernelType::Poly6: return "poly6";
-    }
-    return "?";
-}
-
 KernelDef w1_kernel(float strength, float subtract) {
     KernelDef k;
-    k.type = KernelType::W1;
+    k.type = FieldKernel::W1;
     k.strength = strength;
     k.subtract = subtract;
     k.radius = std::sqrt(strength / subtract);
@@ -31,7 +23,7 @@ KernelDef w1_kernel(float strength, float subtract) {
 
 KernelDef poly6_kernel(float radius, float amplitude) {
     KernelDef k;
-    k.type = KernelType::Poly6;
+    k.type = FieldKernel::Poly6;
     k.radius = radius;
     k.amplitude = amplitude;
     return k;
@@ -39,7 +31,7 @@ KernelDef poly6_kernel(float radius, float amplitude) {
 
 float kernel_value(const KernelDef& k, float r2) {
     if (!(r2 < k.radius * k.radius)) return 0.0f;
-    if (k.type == KernelType::W1) {
+    if (k.type == FieldKernel::W1) {
         return std::max(0.0f, k.strength / (r2 + 1e-6f) - k.subtract);
     }
     const float q = 1.0f - r2 * (1.0f / (k.radius * k.radius));
@@ -47,10 +39,12 @@ float kernel_value(const KernelDef& k, float r2) {
 }
 
 Status validate(const KernelDef& k) {
+    if (k.type != FieldKernel::Poly6 && k.type != FieldKernel::W1)
+        return Error{"kernel type must be a compact kernel (poly6 or w1), got " + std::string(to_string(k.type))};
     if (!std::isfinite(k.radius) || !(k.radius > 0.0f)) {
         return Error{"kernel radius must be finite and > 0 metres, got " + std::to_string(k.radius)};
     }
-    if (k.type == KernelType::W1) {
+    if (k.type == FieldKernel::W1) {
         if (!std::isfinite(k.strength) || !(k.strength > 0.0f) || !std::isfinite(k.subtract) || !(k.subtract > 0.0f)) {
             return Error{"w1 kernel needs finite strength > 0 and subtract > 0"};
         }

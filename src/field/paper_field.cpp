@@ -15,6 +15,7 @@ std::string_view to_string(FieldKernel k) {
         case FieldKernel::InverseSquare: return "inverse_square";
         case FieldKernel::RadiusOverR: return "radius_over_r";
         case FieldKernel::Poly6: return "poly6";
+        case FieldKernel::W1: return "w1";
     }
     return "?";
 }
@@ -80,9 +81,12 @@ bool compute_field_paper(std::span<const Vec3> balls, const FieldDef& def, Scala
             const float q = 1.0f - r2 * inv_r2;
             return q > 0.0f ? q * q * q : 0.0f;
         });
-    } else {
+    } else if (def.kernel == FieldKernel::RadiusOverR) {
         const float radius = def.radius;
         accumulate(balls, out, scale, [radius](float r2) { return radius / std::sqrt(r2); });
+    } else {  // W1: its strength and subtract are a KernelDef's (the sparse field)
+        out.reset(0, 0, 0, box.min, h);
+        return false;
     }
     return true;
 }

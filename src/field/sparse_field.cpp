@@ -363,7 +363,7 @@ Status SparseField::build(std::span<const Vec3> balls, const SparseFieldDef& def
 #endif
                 splat_block(grid_, balls.data(), list, count, boxes_.data(), sup2, kernel, i0, j0, k0, out);
             };
-            if (kdef.type == KernelType::W1) {
+            if (kdef.type == FieldKernel::W1) {
                 run(W1Eval{kdef.strength, kdef.subtract});
             } else {
                 run(Poly6Eval{kdef.amplitude, 1.0f / (radius * radius)});

@@ -33,7 +33,7 @@ Brute brute_force(std::span<const Vec3> balls, const KernelDef& k, const SampleG
         const double r2 = glm::dot(d, d);
         if (!(r2 < sup2)) continue;
         ++b.terms;
-        if (k.type == KernelType::W1) {
+        if (k.type == FieldKernel::W1) {
             const double s = k.strength / (r2 + 1e-6);
             b.value += std::max(0.0, s - k.subtract);
             b.bound += s + k.subtract;
@@ -119,7 +119,7 @@ TEST(W1Workload, KernelHasIsoAtTheBallRadiusAndTheDocumentedSupport) {
     for (int n : {50, 1000, 10000}) {
         const KernelDef k = w1_kernel_for(n);
         const double r = 0.3 * std::pow(double(n), -1.0 / 3.0);
-        EXPECT_EQ(k.type, KernelType::W1);
+        EXPECT_EQ(k.type, FieldKernel::W1);
         EXPECT_NEAR(k.strength, 92.0 * r * r, 1e-6 * 92.0 * r * r);  // float rounding of S
         EXPECT_FLOAT_EQ(k.subtract, 12.0f);
         EXPECT_NEAR(k.radius, r * std::sqrt(92.0 / 12.0), 1e-6 * r);  // float rounding of sqrt(S/SUB)
@@ -147,6 +147,28 @@ TEST(Kernels, Poly6IsSmoothAndCompact) {
     EXPECT_FALSE(validate(poly6_kernel(0.0f, 1.0f)));
     EXPECT_FALSE(validate(poly6_kernel(NAN, 1.0f)));
     EXPECT_FALSE(validate(w1_kernel(-1.0f, 12.0f)));
+}
+
+// One kernel enum for the field layer: a KernelDef (the sparse field's) takes only the
+// compact kernels, and the dense paper field refuses W1 (its strength and subtract are a
+// KernelDef's) instead of drawing another kernel.
+TEST(Kernels, OneEnumTheCompactOnesForTheSparseFieldTheDenseOnesForThePapers) {
+    KernelDef k = poly6_kernel(1.0f, 1.0f);
+    for (FieldKernel t : {FieldKernel::InverseSquare, FieldKernel::RadiusOverR}) {
+        k.type = t;
+        EXPECT_FALSE(validate(k)) << to_string(t);
+    }
+    EXPECT_TRUE(validate(w1_kernel(2.0f, 12.0f)));
+    EXPECT_EQ(to_string(FieldKernel::W1), "w1");
+    const std::vector<Vec3> balls = {Vec3(1, 2, 3)};
+    ScalarGrid g;
+    EXPECT_FALSE(compute_field_paper(balls, FieldDef{.kernel = FieldKernel::W1}, g));
+    EXPECT_EQ(g.size(), 0u);
+    EXPECT_TRUE(compute_field_paper(balls, FieldDef{.kernel = FieldKernel::RadiusOverR}, g));
+    EXPECT_GT(g.size(), 0u);
+    // ...and one grid: the dense field's grid is a SampleGrid with values.
+    const SampleGrid& geometry = g;
+    EXPECT_EQ(geometry.samples(), g.values.size());
 }
 
 TEST(SparseField, BallBoundsDomainFollowsThePaperRule) {
