@@ -25,11 +25,11 @@
 // grad C_i gains that share's gradient (static ground: only lambda_i moves the particle
 // off it). Without it a particle at the bed sees half a neighbourhood (SPH's particle
 // deficiency; Akinci et al. 2012 sample the boundary with particles, Koschier and Bender
-// 2017 precompute its density). The share is a quadrature over vertical columns on a
-// grid of h/4 around the particle: a column at horizontal distance r holds
-// int_{-a}^{min(H - y, a)} W dt (a^2 = h^2 - r^2, closed form for poly6), normalised so
-// all columns in full sum to 1; by the divergence theorem its gradient is
-// -sum_columns W(x - surface point) (-dH/dx, 1, -dH/dz) (the same quadrature). So the
+// 2017 precompute its density). The share is a quadrature over the heightfield's
+// triangles within the kernel (pbf_wall.cpp): each triangle is subdivided by its area
+// (4 samples per h along it, so a steep face is sampled as densely as flat ground), each
+// sample adds the vertical poly6 column below the surface there (closed form) times its
+// projected area, and the gradient is -sum W n dS (the divergence theorem). So the
 // ground below, a steep wall beside the particle and the crease at the wall's foot all
 // count with one consistent share; it is computed once per step at the predicted
 // position and extrapolated linearly through the iterations.
