@@ -115,22 +115,16 @@ constexpr KeyWords kRateWords{kAuto, [](S d) { return d.spawn.auto_rate() ? 0 : 
                               [](SceneDef& d, int i) {
                                   if (i == 0) d.spawn.flow_rate = kAutoRate;
                               }};
-constexpr KeyWords kSleepWords{kAuto, [](S d) { return d.pbf.auto_sleep() ? 0 : -1; },
-                               [](SceneDef& d, int i) {
-                                   if (i == 0) d.pbf.sleep_threshold = kAutoSleep;
-                               }};
-constexpr KeyWords kDampingWords{kAuto, [](S d) { return d.pbf.auto_damping() ? 0 : -1; },
+/// "auto" for a PBF number whose value `Auto` stands for it (resolved per scene).
+template <float PbfDef::*F, float Auto>
+constexpr KeyWords kPbfAutoWords{kAuto, [](S d) { return d.pbf.*F == Auto ? 0 : -1; },
                                  [](SceneDef& d, int i) {
-                                     if (i == 0) d.pbf.damping = kAutoDamping;
+                                     if (i == 0) d.pbf.*F = Auto;
                                  }};
-constexpr KeyWords kWallDensityWords{kAuto, [](S d) { return d.pbf.auto_wall_density() ? 0 : -1; },
-                                     [](SceneDef& d, int i) {
-                                         if (i == 0) d.pbf.wall_density = kAutoWallDensity;
-                                     }};
-constexpr KeyWords kContactBandWords{kAuto, [](S d) { return d.pbf.auto_contact_band() ? 0 : -1; },
-                                     [](SceneDef& d, int i) {
-                                         if (i == 0) d.pbf.contact_band = kAutoContactBand;
-                                     }};
+constexpr KeyWords kSleepWords = kPbfAutoWords<&PbfDef::sleep_threshold, kAutoSleep>;
+constexpr KeyWords kDampingWords = kPbfAutoWords<&PbfDef::damping, kAutoDamping>;
+constexpr KeyWords kWallDensityWords = kPbfAutoWords<&PbfDef::wall_density, kAutoWallDensity>;
+constexpr KeyWords kContactBandWords = kPbfAutoWords<&PbfDef::contact_band, kAutoContactBand>;
 constexpr KeyWords kAreaScaleWords{kAuto, [](S d) { return d.terrain.auto_area_scale ? 0 : -1; },
                                    [](SceneDef& d, int i) {
                                        d.terrain.auto_area_scale = i == 0;

@@ -282,24 +282,26 @@ SceneView Simulation::view() const {
                      .frame = frame()};
 }
 
+namespace {
+/// A PBF value with "auto" (`automatic`) resolved: 0 for a river, `still` for still water.
+float river_or_still(const SceneDef& def, float value, float automatic, float still) {
+    if (value != automatic) return value;
+    return is_river(def) ? 0.0f : still;
+}
+}  // namespace
+
 float resolved_sleep_threshold(const SceneDef& def) {
-    if (!def.pbf.auto_sleep()) return def.pbf.sleep_threshold;
-    return is_river(def) ? 0.0f : kSleepThreshold;
+    return river_or_still(def, def.pbf.sleep_threshold, kAutoSleep, kSleepThreshold);
 }
 
-float resolved_damping(const SceneDef& def) {
-    if (!def.pbf.auto_damping()) return def.pbf.damping;
-    return is_river(def) ? 0.0f : kStillDamping;
-}
+float resolved_damping(const SceneDef& def) { return river_or_still(def, def.pbf.damping, kAutoDamping, kStillDamping); }
 
 float resolved_wall_density(const SceneDef& def) {
-    if (!def.pbf.auto_wall_density()) return def.pbf.wall_density;
-    return is_river(def) ? 0.0f : kStillWallDensity;
+    return river_or_still(def, def.pbf.wall_density, kAutoWallDensity, kStillWallDensity);
 }
 
 float resolved_contact_band(const SceneDef& def) {
-    if (!def.pbf.auto_contact_band()) return def.pbf.contact_band;
-    return is_river(def) ? 0.0f : kStillContactBand;
+    return river_or_still(def, def.pbf.contact_band, kAutoContactBand, kStillContactBand);
 }
 
 namespace {
