@@ -12,8 +12,6 @@
 #include <climits>
 #include <cmath>
 #include <string>
-#include <type_traits>
-#include <variant>
 
 namespace mr::app {
 
@@ -131,15 +129,8 @@ bool list_widget(const SceneList& l, SceneDef& d) {
         ImGui::TextDisabled("%s[%zu]", std::string(l.name).c_str(), i + 1);
         ImGui::SameLine();
         if (ImGui::SmallButton("remove")) {
-            SceneDef copy = d;  // entries after i move up one place
-            for (size_t j = i + 1; j < l.size(d); ++j)
-                for (const SceneListKey& k : l.keys) {
-                    const FieldRef from = k.item(copy, j), to = k.item(d, j - 1);
-                    std::visit([&](const auto& a) {
-                        using P = std::decay_t<decltype(a)>;
-                        if constexpr (!std::is_same_v<P, EnumRef>) *std::get<P>(to) = *a;
-                    }, from);
-                }
+            for (size_t j = i + 1; j < l.size(d); ++j)  // entries after i move up one place
+                for (const SceneListKey& k : l.keys) copy_field(k.item(d, j), k.item(d, j - 1));
             l.resize(d, l.size(d) - 1);
             ImGui::PopID();
             commit = true;
@@ -154,11 +145,7 @@ bool list_widget(const SceneList& l, SceneDef& d) {
     if (n < l.max && ImGui::SmallButton("add")) {
         l.resize(d, n + 1);
         if (n > 0)
-            for (const SceneListKey& k : l.keys)
-                std::visit([&](const auto& a) {
-                    using P = std::decay_t<decltype(a)>;
-                    if constexpr (!std::is_same_v<P, EnumRef>) *std::get<P>(k.item(d, n)) = *a;
-                }, k.item(d, n - 1));
+            for (const SceneListKey& k : l.keys) copy_field(k.item(d, n - 1), k.item(d, n));
         commit = true;
     }
     ImGui::TreePop();

@@ -130,6 +130,9 @@ std::string key_value_toml(const SceneKey& key, const SceneDef& d);
 /// "" when the key's value in `d` is inside its range (a word always is), else the
 /// message without the key ("must be in (0, 64] (got -2)").
 std::string key_range_error(const SceneKey& key, const SceneDef& d);
+/// Copies the value of field `from` into `to`, the same field of another SceneDef (or
+/// list entry).
+void copy_field(const FieldRef& from, const FieldRef& to);
 /// The same two for a value found elsewhere (a list entry's field; no words).
 std::string field_value_toml(const SceneKey& key, const FieldRef& f);
 std::string field_range_error(const SceneKey& key, const FieldRef& f);

@@ -7,6 +7,8 @@
 
 #include <cmath>
 #include <string>
+#include <type_traits>
+#include <variant>
 
 namespace mr {
 
@@ -108,6 +110,17 @@ std::string field_range_error(const SceneKey& k, const FieldRef& f) {
     else if (auto* p = std::get_if<float*>(&f)) v = **p, got = fmt::format("{}", **p);
     if (k.range.contains(v)) return {};
     return fmt::format("must be {} (got {})", k.range.phrase(), got);
+}
+
+void copy_field(const FieldRef& from, const FieldRef& to) {
+    std::visit(
+        [&](const auto& a) {
+            using P = std::decay_t<decltype(a)>;
+            const P& b = std::get<P>(to);
+            if constexpr (std::is_same_v<P, EnumRef>) b.set(b.field, a.get(a.field));
+            else *b = *a;
+        },
+        from);
 }
 
 std::string list_range_error(const SceneDef& d) {

@@ -10,8 +10,6 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
-#include <type_traits>
-#include <variant>
 
 namespace mr {
 
@@ -25,18 +23,6 @@ bool needs_rebuild(const SceneKey& k, const SceneDef& d) {
         return true;  // the Bullet world is built once from its defs
     return n == "solver" || n == "seed" || n == "particles.count" || n == "particles.prefill" ||
            n == "particles.auto_height" || n == "pbf.spacing" || n == "collision.bvh_leaf_triangles";
-}
-
-/// Copies the value of field `a` into field `b` (the same field of another SceneDef).
-void copy_field(const FieldRef& a, const FieldRef& b) {
-    std::visit(
-        [&](const auto& pa) {
-            using P = std::decay_t<decltype(pa)>;
-            const P& pb = std::get<P>(b);
-            if constexpr (std::is_same_v<P, EnumRef>) pb.set(pb.field, pa.get(pa.field));
-            else *pb = *pa;
-        },
-        a);
 }
 
 /// Copies the value of key `k` from `from` into `to`.
@@ -108,8 +94,8 @@ Status Simulation::move_source(const Vec3& center) {
     requested_.spawn.center = center;
     requested_.spawn.auto_center = requested_.spawn.auto_channel = false;
     solver_->set_spawn_center(center);
-    refresh_channel();
-    measure_main_channel(def_.spawn);
+    if (channel_stale_) refresh_channel();  // builds the network and measures from the new centre
+    else measure_main_channel(def_.spawn);
     return Ok{};
 }
 
