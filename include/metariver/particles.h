@@ -413,6 +413,8 @@ protected:
     bool by_rate() const { return spawn_.has_rate(); }
     /// Source k's volume: centre and half extent (0: the main source).
     std::pair<Vec3, Vec3> source_volume(size_t k) const;
+    /// Particles per second source k asks for (0: the main source), before any cap.
+    float asked_rate(size_t k) const { return k == 0 ? spawn_.particles_per_second() : spawn_.particles_per_second(k - 1); }
     /// Flags particles for respawn (1), a sink box (2) or the outlet-edge sink (3) after a step.
     uint8_t exit_flag(const Vec3& p) const;
     void finish_step(uint64_t steps, const StepCounts& c);

@@ -224,7 +224,7 @@ void ParticleSolver::emit(float dt) {
     // caps the flow. The sources take their turns in order within a step.
     for (size_t k = 0; k < emitters_.size(); ++k) {
         double& credit = emitters_[k].credit;
-        credit += double(k == 0 ? spawn_.particles_per_second() : spawn_.particles_per_second(k - 1)) * dt;
+        credit += double(asked_rate(k)) * dt;
         while (credit >= 1.0) {
             credit -= 1.0;
             if (next_to_activate_ >= particles_.size()) {
@@ -239,7 +239,7 @@ void ParticleSolver::emit(float dt) {
 
 float ParticleSolver::emit_rate(size_t k) const {
     if (k >= source_count()) return 0.0f;
-    const float rate = k == 0 ? spawn_.particles_per_second() : spawn_.particles_per_second(k - 1);
+    const float rate = asked_rate(k);
     const LatticeSource* l = lattice_source(k);
     return l ? std::min(rate, l->max_rate()) : rate;
 }
@@ -266,7 +266,7 @@ std::vector<std::string> ParticleSolver::warnings() const {
     for (size_t k = 0; k < emitters_.size(); ++k) {
         const LatticeSource& l = *emitters_[k].lattice;
         const auto [c, half] = source_volume(k);
-        const float rate = k == 0 ? spawn_.particles_per_second() : spawn_.particles_per_second(k - 1);
+        const float rate = asked_rate(k);
         const std::string centre = k == 0 ? "particles.spawn_center" : fmt::format("particles.source[{}].center", k);
         const std::string extent = k == 0 ? "particles.spawn_half_extent" : fmt::format("particles.source[{}].half_extent", k);
         const std::string flow = k == 0 ? "particles.flow_rate" : fmt::format("particles.source[{}].flow_rate", k);
