@@ -116,15 +116,16 @@ constexpr KeyWords kRateWords{kAuto, [](S d) { return d.spawn.auto_rate() ? 0 : 
                                   if (i == 0) d.spawn.flow_rate = kAutoRate;
                               }};
 /// "auto" for a PBF number whose value `Auto` stands for it (resolved per scene).
-template <float PbfDef::*F, float Auto>
-constexpr KeyWords kPbfAutoWords{kAuto, [](S d) { return d.pbf.*F == Auto ? 0 : -1; },
+/// (The value by address: clang 15 takes no float template argument.)
+template <float PbfDef::*F, const float* Auto>
+constexpr KeyWords kPbfAutoWords{kAuto, [](S d) { return d.pbf.*F == *Auto ? 0 : -1; },
                                  [](SceneDef& d, int i) {
-                                     if (i == 0) d.pbf.*F = Auto;
+                                     if (i == 0) d.pbf.*F = *Auto;
                                  }};
-constexpr KeyWords kSleepWords = kPbfAutoWords<&PbfDef::sleep_threshold, kAutoSleep>;
-constexpr KeyWords kDampingWords = kPbfAutoWords<&PbfDef::damping, kAutoDamping>;
-constexpr KeyWords kWallDensityWords = kPbfAutoWords<&PbfDef::wall_density, kAutoWallDensity>;
-constexpr KeyWords kContactBandWords = kPbfAutoWords<&PbfDef::contact_band, kAutoContactBand>;
+constexpr KeyWords kSleepWords = kPbfAutoWords<&PbfDef::sleep_threshold, &kAutoSleep>;
+constexpr KeyWords kDampingWords = kPbfAutoWords<&PbfDef::damping, &kAutoDamping>;
+constexpr KeyWords kWallDensityWords = kPbfAutoWords<&PbfDef::wall_density, &kAutoWallDensity>;
+constexpr KeyWords kContactBandWords = kPbfAutoWords<&PbfDef::contact_band, &kAutoContactBand>;
 constexpr KeyWords kAreaScaleWords{kAuto, [](S d) { return d.terrain.auto_area_scale ? 0 : -1; },
                                    [](SceneDef& d, int i) {
                                        d.terrain.auto_area_scale = i == 0;
