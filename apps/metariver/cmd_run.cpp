@@ -277,6 +277,7 @@ int run(const RunOptions& o) {
         j["surface_smoothing"] = {{"method", std::string(to_string(d.smoothing.method))},
                                   {"moving_vertices", sm.moving},
                                   {"pinned_vertices", sm.pinned},
+                                  {"hidden_vertices", sm.hidden},
                                   {"mean_weight", sm.mean_weight},
                                   {"volume_change_m3", sm.volume_change}};
         j["field_overflows"] = sim.field_overflows();

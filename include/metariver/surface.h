@@ -144,6 +144,10 @@ struct SmoothingDef {
     float feature_count = 3.0f;
     bool keep_volume = true;    ///< Laplacian: give back the volume the steps took (Taubin: ignored)
     int normal_iterations = 0;  ///< [0, 100] passes that average each normal with its neighbours'
+    /// With a ground (SmoothingGround): false, the vertices below it stay where marching
+    /// cubes put them (the terrain hides them: about half of a river's mesh is its bed);
+    /// true, they are smoothed too.
+    bool smooth_hidden = false;
 };
 
 /// The step sizes smooth_surface uses for `def`, in order (for tests and docs).
@@ -157,11 +161,25 @@ struct SmoothingField {
     float threshold = 0.0f;
 };
 
+/// The ground the water lies on: a heightfield of rows x columns samples, sample (i, j) at
+/// x = j spacing, z = i spacing, its height the y of vertices[i * columns + j] (a Terrain's
+/// vertices), between samples the two triangles per cell of the terrain's rendered mesh
+/// (Terrain::height_mesh). A vertex below it is hidden and, unless
+/// SmoothingDef::smooth_hidden, does not move.
+struct SmoothingGround {
+    const Vec3* vertices = nullptr;
+    int columns = 0, rows = 0;  ///< >= 2 each, else no ground
+    float spacing = 0.0f;       ///< metres between samples, > 0
+    /// The height at (x, z), clamped into the heightfield as Terrain::height_mesh does.
+    float height(float x, float z) const;
+};
+
 /// Numbers from the last smooth_surface, for tests and the bench.
 struct SmoothingStats {
     size_t vertices = 0;
     size_t moving = 0;           ///< vertices that moved (weight > 0, not pinned)
     size_t pinned = 0;           ///< vertices with a weight > 0 on an open boundary (not moved)
+    size_t hidden = 0;           ///< vertices below the ground, kept in place (not read from the field)
     double mean_weight = 0.0;    ///< mean feature weight over the vertices
     size_t triangles = 0;        ///< triangles with a moving corner
     double volume_change = 0.0;  ///< m^3 the steps changed the enclosed volume by, before it was given back (keep_volume; else 0)
@@ -184,6 +202,7 @@ struct SmoothingWorkspace {
     std::vector<uint32_t> tris;          ///< triangles with a moving corner, ascending
     std::vector<uint32_t> ring_start;    ///< per moving vertex + 1: its first corner in next / prev
     std::vector<uint32_t> next, prev;    ///< per corner of a moving vertex: the triangle's next and previous vertex
+    std::vector<uint32_t> fan_counts;    ///< per share of the triangles and moving vertex: corners, then cursors
     std::vector<float> weight;           ///< per vertex: feature weight (0: does not move)
     std::vector<float> moving_weight;    ///< per moving vertex: weight (0: pinned on an open boundary)
     std::vector<float> step_weight;      ///< per moving vertex: weight / degree
@@ -200,9 +219,10 @@ struct SmoothingWorkspace {
 /// where they are, so a mesh clipped by the field's box keeps its rim. Positions and
 /// normals depend only on the mesh and the field, not on the thread count. A mesh without
 /// one normal per vertex gets them (moved vertices from their triangles, the others +y)
-/// and no feature weights.
+/// and no feature weights. `ground` (optional): the vertices below it stay in place
+/// (SmoothingDef::smooth_hidden).
 void smooth_surface(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspace& ws,
-                    const SmoothingField* field = nullptr);
+                    const SmoothingField* field = nullptr, const SmoothingGround* ground = nullptr);
 
 /// The distance from a lone ball's centre to the iso surface of `threshold` (the depth
 /// at which the feature weights read the field), 0 when one ball cannot reach it.

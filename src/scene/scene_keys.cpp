@@ -378,6 +378,10 @@ const SceneKey kKeys[] = {
      .field = MR_FIELD(smoothing.keep_volume)},
     {.name = "surface.normal_iterations", .type = K::Int, .range = closed(0, 100), .readers = kSmoothingOn,
      .help = "Passes that average each recomputed normal with its neighbours'.", .field = MR_FIELD(smoothing.normal_iterations)},
+    {.name = "surface.smooth_hidden", .type = K::Bool, .readers = kSmoothingOn,
+     .help = "Smooth the vertices below the terrain too (the river's bed, about half of its mesh, hidden by the "
+             "ground); false: they stay as extracted.",
+     .field = MR_FIELD(smoothing.smooth_hidden)},
     // [foam]
     {.name = "foam.enabled", .type = K::Bool, .readers = kPbf,
      .help = "Make diffuse particles (on in the default scene, off in the other presets; enabled = false is accepted in "

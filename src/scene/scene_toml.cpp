@@ -335,13 +335,13 @@ void refuse_irrelevant_keys(const toml::table& root, Reader& r, const SceneDef& 
         const SmoothingDef& m = d.smoothing;
         if (!d.surface)
             each("surface", {"method", "steps", "iterations", "lambda", "pass_band", "feature_count", "keep_volume",
-                             "normal_iterations"},
+                             "normal_iterations", "smooth_hidden"},
                  "surface.enabled = false (nothing is smoothed)", "remove it or set enabled = true");
         else if (m.method == SmoothingMethod::None)
-            each("surface", {"steps", "iterations", "lambda", "pass_band", "feature_count", "keep_volume", "normal_iterations"},
+            each("surface", {"steps", "iterations", "lambda", "pass_band", "feature_count", "keep_volume", "normal_iterations", "smooth_hidden"},
                  "surface.method = \"none\" (the mesh as extracted)", "remove it or choose a method");
         else if (m.iterations == 0)
-            each("surface", {"steps", "lambda", "pass_band", "feature_count", "keep_volume", "normal_iterations"},
+            each("surface", {"steps", "lambda", "pass_band", "feature_count", "keep_volume", "normal_iterations", "smooth_hidden"},
                  "surface.iterations = 0 (no smoothing step)", "remove it or give iterations");
         else {
             if (m.method == SmoothingMethod::Taubin)

@@ -16,6 +16,13 @@ namespace mr {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+/// The terrain's rendered surface as the ground of the smoothing: the water's bed below
+/// it is hidden and stays as extracted (surface.smooth_hidden).
+SmoothingGround ground_of(const Terrain& t) {
+    return {.vertices = t.vertices().data(), .columns = t.columns(), .rows = t.rows(), .spacing = t.area_scale()};
+}
+
 double ms_since(Clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
@@ -523,7 +530,8 @@ void Simulation::step(float frame_dt) {
         t0 = Clock::now();
         extract_surface_sparse(sparse_, def_.field.threshold, surface_, surface_ws_);
         const SmoothingField weights{.field = &sparse_, .kernel = sparse_def_.kernel, .threshold = def_.field.threshold};
-        smooth_surface(surface_, def_.smoothing, smooth_ws_, &weights);
+        const SmoothingGround ground = ground_of(terrain_);
+        smooth_surface(surface_, def_.smoothing, smooth_ws_, &weights, &ground);
         timings_.surface_ms = ms_since(t0);
         return;
     }
@@ -536,7 +544,8 @@ void Simulation::step(float frame_dt) {
 
     t0 = Clock::now();
     extract_surface(field_, def_.field.threshold, surface_);
-    smooth_surface(surface_, def_.smoothing, smooth_ws_);  // the paper's kernels: no feature weights
+    const SmoothingGround ground = ground_of(terrain_);
+    smooth_surface(surface_, def_.smoothing, smooth_ws_, nullptr, &ground);  // the paper's kernels: no feature weights
     timings_.surface_ms = ms_since(t0);
 }
 

@@ -10,6 +10,8 @@
 // [a, 2], make the filter that damps that band most evenly; N = 8 on [0.1, 2] damps it
 // to 0.05 or less, where 16 uniform steps of 1 leave its low end at 0.19.
 //
+//   hidden   (parallel, with a ground) A vertex below the ground (the terrain's mesh: the
+//            river's bed, about half of its vertices) keeps its place and reads nothing.
 //   weights  (parallel) The field sampled (trilinear) one lone ball's iso distance inside
 //            the surface, along the normal marching cubes gave the vertex (the field's
 //            gradient): about the fluid behind it, in units of the kernel's centre value.
@@ -19,7 +21,7 @@
 //            no sample is read. Only
 //            the vertices with w > 0 ("moving") cost anything from here on: a frame of
 //            spray and drops costs little more than this pass.
-//   fans     (serial) One pass over the triangles lists those with a moving corner (the
+//   fans     (parallel) One pass over the triangles lists those with a moving corner (the
 //            only ones whose shape changes) and files, under each moving corner, the
 //            triangle's next and previous vertex (a counting sort by moving vertex): on a
 //            closed oriented manifold a vertex's "next" vertices are its neighbours, each
@@ -46,12 +48,16 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/partitioner.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstring>
 #include <numbers>
+#include <optional>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -67,13 +73,11 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
-/// Vertices per parallel task and per partial sum: a mesh of fewer runs on one thread
-/// without the scheduling cost (on two busy cores a parallel_for costs tens of
-/// microseconds). 4096: the default river's sheet (6,500 moving vertices) steps on both
-/// cores (16384 kept it on one: its surface stage 1.59 -> 1.32 ms, `run --stats`). The
-/// field probes cost more per vertex and split at the same size.
+/// Elements per partial sum (fixed, so sums do not depend on the thread count) and the
+/// least number of elements worth splitting over the threads (on two busy cores a
+/// parallel_for costs tens of microseconds).
 constexpr size_t kChunk = 4096;
-constexpr size_t kProbeChunk = 4096;
+constexpr size_t kMinSplit = 2048;
 /// Chebyshev steps come in cycles of at most this many: longer cycles amplify the
 /// middle of the band in between (50x at 20 steps on [0.1, 2]) and with it float error.
 constexpr int kChebyshevCycle = 8;
@@ -83,18 +87,52 @@ constexpr float kMinWeight = 0.05f;
 /// SmoothingWorkspace::moving_index of a vertex that does not move.
 constexpr uint32_t kFixed = 0xffffffffu;
 
-/// f(lo, hi) over [0, n) in chunks of `chunk` (fixed boundaries), in parallel when n > chunk.
+/// f(lo, hi) over [0, n) in chunks of kChunk (fixed boundaries: for partial sums), in
+/// parallel when n > kChunk.
 template <class F>
-void for_chunks(size_t n, F&& f, size_t chunk = kChunk) {
-    if (n <= chunk) {
+void for_chunks(size_t n, F&& f) {
+    if (n <= kChunk) {
         if (n) f(size_t{0}, n);
         return;
     }
-    const size_t chunks = (n + chunk - 1) / chunk;
+    const size_t chunks = (n + kChunk - 1) / kChunk;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, chunks, 1), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t c = r.begin(); c != r.end(); ++c) f(c * chunk, std::min(n, (c + 1) * chunk));
+        for (size_t c = r.begin(); c != r.end(); ++c) f(c * kChunk, std::min(n, (c + 1) * kChunk));
     });
 }
+
+/// f(lo, hi) over [0, n) for work whose elements are independent (no sums): one equal
+/// share per thread, so a few thousand vertices keep both cores busy (fixed chunks of
+/// 4096 left 4,153 moving vertices as 4,096 + 57).
+template <class F>
+void for_split(size_t n, F&& f) {
+    const size_t threads = static_cast<size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
+    if (n < kMinSplit || threads == 1) {
+        if (n) f(size_t{0}, n);
+        return;
+    }
+    const size_t share = (n + threads - 1) / threads;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, share), [&](const tbb::blocked_range<size_t>& r) { f(r.begin(), r.end()); },
+                      tbb::simple_partitioner());
+}
+
+/// [0, n) in equal contiguous shares, one per thread when n is worth splitting (else
+/// one); for passes that count per share and then fill from the counts' offsets, which
+/// come out in element order whatever the number of shares.
+struct Shares {
+    size_t n = 0, count = 1;
+    explicit Shares(size_t n_, size_t min_split = kMinSplit) : n(n_) {
+        const size_t threads = static_cast<size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
+        count = n < min_split ? 1 : std::min<size_t>(threads, 8);
+    }
+    size_t begin(size_t c) const { return n * c / count; }
+    /// f(c, lo, hi) for every share c, in parallel.
+    template <class F>
+    void run(F&& f) const {
+        if (count == 1) return f(size_t{0}, size_t{0}, n);
+        tbb::parallel_for(size_t{0}, count, [&](size_t c) { f(c, begin(c), begin(c + 1)); });
+    }
+};
 
 /// Reads a SparseField at arbitrary points (trilinear; 0 outside the grid and where no
 /// block is stored). Everything it needs is copied out of the field once, so the loop
@@ -163,48 +201,84 @@ float smoothstep01(float x) {
 
 /// Lists the triangles with a moving corner (ws.tris) and builds the fans of the moving
 /// vertices (ring_start per moving index, next, prev). False when an index is out of range.
+/// A counting sort by moving vertex in two parallel passes over shares of the triangles:
+/// each share counts its listed triangles and its corners per moving vertex, and then
+/// fills from offsets that put share 0's corners before share 1's, so every fan and the
+/// list come out in triangle order whatever the number of shares.
 bool build_fans(const SurfaceMesh& m, SmoothingWorkspace& ws) {
     const size_t nv = m.positions.size(), nm = ws.moving.size();
     const uint32_t* idx = m.indices.data();
     const size_t nt = m.indices.size() / 3;
     const uint32_t* mi = ws.moving_index.data();
-    ws.tris.clear();
-    ws.ring_start.assign(nm + 1, 0u);
+    const Shares sh(nt, 2 * kMinSplit);
+    const size_t shares = sh.count;
+    // counts[c * (nm + 1) + k]: share c's corners of moving vertex k, then its cursor;
+    // counts[c * (nm + 1) + nm]: share c's listed triangles, then its cursor into tris.
+    ws.fan_counts.assign(shares * (nm + 1), 0u);
+    std::atomic<bool> bad{false};
+    sh.run([&](size_t c, size_t lo, size_t hi) {
+        uint32_t* cnt = ws.fan_counts.data() + c * (nm + 1);
+        for (size_t t = lo; t < hi; ++t) {
+            const uint32_t a = idx[3 * t], b = idx[3 * t + 1], cc = idx[3 * t + 2];
+            if (a >= nv || b >= nv || cc >= nv) {
+                bad.store(true, std::memory_order_relaxed);
+                return;
+            }
+            const uint32_t ma = mi[a], mb = mi[b], mc = mi[cc];
+            if ((ma & mb & mc) == kFixed) continue;  // no moving corner
+            ++cnt[nm];
+            if (ma != kFixed) ++cnt[ma];
+            if (mb != kFixed) ++cnt[mb];
+            if (mc != kFixed) ++cnt[mc];
+        }
+    });
+    if (bad.load()) return false;
+    // Offsets: vertex by vertex, share by share (each count becomes its share's cursor).
+    ws.ring_start.resize(nm + 1);
     uint32_t* start = ws.ring_start.data();
-    for (size_t t = 0; t < nt; ++t) {
-        const uint32_t a = idx[3 * t], b = idx[3 * t + 1], c = idx[3 * t + 2];
-        if (a >= nv || b >= nv || c >= nv) return false;
-        const uint32_t ma = mi[a], mb = mi[b], mc = mi[c];
-        if ((ma & mb & mc) == kFixed) continue;  // no moving corner
-        ws.tris.push_back(static_cast<uint32_t>(t));
-        start[ma + 1] += ma != kFixed;  // kFixed + 1 wraps to 0: start[0] is reset below
-        start[mb + 1] += mb != kFixed;
-        start[mc + 1] += mc != kFixed;
+    uint32_t at = 0, listed = 0;
+    for (size_t k = 0; k <= nm; ++k) {
+        if (k < nm) start[k] = at;
+        for (size_t c = 0; c < shares; ++c) {
+            uint32_t& x = ws.fan_counts[c * (nm + 1) + k];
+            const uint32_t n = x;
+            if (k < nm) {
+                x = at;
+                at += n;
+            } else {
+                x = listed;
+                listed += n;
+            }
+        }
     }
-    start[0] = 0;
-    for (size_t k = 0; k < nm; ++k) start[k + 1] += start[k];
-    // Fill with start[k] as k's cursor (it ends at k's end, k + 1's beginning), then shift back.
-    ws.next.resize(start[nm]);
-    ws.prev.resize(start[nm]);
+    start[nm] = at;
+    ws.tris.resize(listed);
+    ws.next.resize(at);
+    ws.prev.resize(at);
     uint32_t* next = ws.next.data();
     uint32_t* prev = ws.prev.data();
-    for (const uint32_t t : ws.tris) {
-        const uint32_t a = idx[3 * t], b = idx[3 * t + 1], c = idx[3 * t + 2];
-        if (mi[a] != kFixed) {
-            const uint32_t x = start[mi[a]]++;
-            next[x] = b, prev[x] = c;
+    uint32_t* tris = ws.tris.data();
+    sh.run([&](size_t c, size_t lo, size_t hi) {
+        uint32_t* cur = ws.fan_counts.data() + c * (nm + 1);
+        for (size_t t = lo; t < hi; ++t) {
+            const uint32_t a = idx[3 * t], b = idx[3 * t + 1], cc = idx[3 * t + 2];
+            const uint32_t ma = mi[a], mb = mi[b], mc = mi[cc];
+            if ((ma & mb & mc) == kFixed) continue;
+            tris[cur[nm]++] = static_cast<uint32_t>(t);
+            if (ma != kFixed) {
+                const uint32_t x = cur[ma]++;
+                next[x] = b, prev[x] = cc;
+            }
+            if (mb != kFixed) {
+                const uint32_t x = cur[mb]++;
+                next[x] = cc, prev[x] = a;
+            }
+            if (mc != kFixed) {
+                const uint32_t x = cur[mc]++;
+                next[x] = a, prev[x] = b;
+            }
         }
-        if (mi[b] != kFixed) {
-            const uint32_t x = start[mi[b]]++;
-            next[x] = c, prev[x] = a;
-        }
-        if (mi[c] != kFixed) {
-            const uint32_t x = start[mi[c]]++;
-            next[x] = a, prev[x] = b;
-        }
-    }
-    for (size_t k = nm; k > 0; --k) start[k] = start[k - 1];
-    start[0] = 0;
+    });
     return true;
 }
 
@@ -230,7 +304,7 @@ void laplacian_step(const SmoothingWorkspace& ws, const P4* src, P4* dst, float 
     const uint32_t* next = ws.next.data();
     const float* wd = ws.step_weight.data();
     const float* w = ws.moving_weight.data();
-    for_chunks(ws.moving.size(), [&](size_t lo, size_t hi) {
+    for_split(ws.moving.size(), [&](size_t lo, size_t hi) {
         for (size_t k = lo; k < hi; ++k) {
             const uint32_t v = moving[k];
             const uint32_t b = start[k], e = start[k + 1];
@@ -328,6 +402,27 @@ void fill_step_sizes(const SmoothingDef& def, std::vector<float>& s) {
 
 }  // namespace
 
+float SmoothingGround::height(float x, float z) const {
+    // Terrain::height_mesh's cell and triangle, without its library (and with the floor of
+    // a non-negative number as a truncation: floorf is a call in the portable build, and
+    // this runs once per vertex).
+    const auto cell = [s = spacing](float x, int n, int& k, float& f) {
+        float u = x / s;
+        u = !(u >= 0.0f) ? 0.0f : std::min(u, float(n - 1));  // NaN: 0
+        k = std::min(static_cast<int>(u), n - 2);
+        f = std::min(u - float(k), 1.0f);
+    };
+    int j = 0, i = 0;
+    float u = 0.0f, v = 0.0f;
+    cell(x, columns, j, u);
+    cell(z, rows, i, v);
+    const Vec3* r0 = vertices + size_t(i) * size_t(columns) + size_t(j);
+    const Vec3* r1 = r0 + columns;
+    const float h00 = r0[0].y, h01 = r0[1].y, h10 = r1[0].y, h11 = r1[1].y;
+    if (u + v <= 1.0f) return h00 + u * (h01 - h00) + v * (h10 - h00);
+    return h11 + (1.0f - u) * (h10 - h11) + (1.0f - v) * (h01 - h11);
+}
+
 std::vector<float> smoothing_step_sizes(const SmoothingDef& def) {
     std::vector<float> s;
     fill_step_sizes(def, s);
@@ -349,14 +444,15 @@ float lone_ball_iso_distance(const KernelDef& k, float threshold) {
 
 size_t SmoothingWorkspace::capacity_bytes() const {
     return (ring_start.capacity() + next.capacity() + prev.capacity() + moving.capacity() + moving_index.capacity() +
-            tris.capacity()) *
+            tris.capacity() + fan_counts.capacity()) *
                sizeof(uint32_t) +
            (weight.capacity() + moving_weight.capacity() + step_weight.capacity()) * sizeof(float) + (a.capacity() + b.capacity()) * sizeof(P4) +
            area_normal.capacity() * sizeof(Vec3) + partial.capacity() * sizeof(double) +
            step_sizes.capacity() * sizeof(float);
 }
 
-void smooth_surface(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspace& ws, const SmoothingField* field) {
+void smooth_surface(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspace& ws, const SmoothingField* field,
+                    const SmoothingGround* ground) {
     using Clock = std::chrono::steady_clock;
     ws.stats = SmoothingStats{};
     if (def.method == SmoothingMethod::None) return;
@@ -377,27 +473,56 @@ void smooth_surface(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspa
     const Vec3* pos = mesh.positions.data();
     const Vec3* nrm = mesh.normals.data();
     float* weight = ws.weight.data();
-    if (!use_field) {
-        std::fill(weight, weight + nv, 1.0f);
-    } else {
-        const FieldProbe probe(*f);
-        const float floor = half * unit;  // at or below it, w = 0: only that much is read
-        for_chunks(nv, [&, depth, unit, half, inv_span, floor](size_t lo, size_t hi) {
-            for (size_t v = lo; v < hi; ++v) {
-                const float value = probe.at(pos[v] - depth * nrm[v], floor);
-                const float w = smoothstep01((value / unit - half) * inv_span);
-                weight[v] = w < kMinWeight ? 0.0f : w;
+    // Hidden vertices (below the ground) get weight -1 here, 0 in the end: they neither
+    // move nor read the field.
+    const SmoothingGround* gr = ground && ground->vertices && ground->columns >= 2 && ground->rows >= 2 &&
+                                        ground->spacing > 0.0f && !def.smooth_hidden
+                                    ? ground
+                                    : nullptr;
+    const auto hidden = [gr](const Vec3& p) { return gr && p.y < gr->height(p.x, p.z); };
+    // Per share: its moving vertices, then (offsets) where they go in ws.moving.
+    const Shares sh(nv);
+    size_t share_moving[8] = {}, share_hidden[8] = {};
+    std::optional<FieldProbe> probe;
+    if (use_field) probe.emplace(*f);
+    const float floor = half * unit;  // at or below it, w = 0: only that much is read
+    sh.run([&, depth, unit, half, inv_span, floor](size_t c, size_t lo, size_t hi) {
+        size_t moving = 0, hid = 0;
+        for (size_t v = lo; v < hi; ++v) {
+            float w = 1.0f;
+            if (hidden(pos[v])) {
+                w = 0.0f;
+                ++hid;
+            } else if (use_field) {
+                const float value = probe->at(pos[v] - depth * nrm[v], floor);
+                w = smoothstep01((value / unit - half) * inv_span);
+                if (w < kMinWeight) w = 0.0f;
             }
-        }, kProbeChunk);
-    }
-    ws.moving.clear();
-    ws.moving.reserve(nv);
-    ws.moving_index.assign(nv, kFixed);
-    for (size_t v = 0; v < nv; ++v)
-        if (ws.weight[v] > 0.0f) {
-            ws.moving_index[v] = static_cast<uint32_t>(ws.moving.size());
-            ws.moving.push_back(static_cast<uint32_t>(v));
+            weight[v] = w;
+            moving += w > 0.0f;
         }
+        share_moving[c] = moving, share_hidden[c] = hid;
+    });
+    size_t total = 0;
+    for (size_t c = 0; c < sh.count; ++c) {
+        const size_t n = share_moving[c];
+        share_moving[c] = total;
+        total += n;
+        ws.stats.hidden += share_hidden[c];
+    }
+    ws.moving.resize(total);
+    ws.moving_index.resize(nv);
+    sh.run([&](size_t c, size_t lo, size_t hi) {
+        uint32_t at = static_cast<uint32_t>(share_moving[c]);
+        for (size_t v = lo; v < hi; ++v) {
+            if (weight[v] > 0.0f) {
+                ws.moving_index[v] = at;
+                ws.moving[at++] = static_cast<uint32_t>(v);
+            } else {
+                ws.moving_index[v] = kFixed;
+            }
+        }
+    });
     ws.stats.ms_weights = ms_since(t0);
     if (ws.moving.empty()) return;  // nothing moves: the mesh keeps its normals too
 
@@ -408,7 +533,7 @@ void smooth_surface(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspa
     const size_t nm = ws.moving.size();
     ws.moving_weight.resize(nm);
     ws.step_weight.resize(nm);
-    for_chunks(nm, [&](size_t lo, size_t hi) {
+    for_split(nm, [&](size_t lo, size_t hi) {
         for (size_t k = lo; k < hi; ++k) {
             const float w = fan_closed(ws, k) ? ws.weight[ws.moving[k]] : 0.0f;
             ws.moving_weight[k] = w;
@@ -456,7 +581,7 @@ void smooth_surface(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspa
     t0 = Clock::now();
     if (mesh.normals.size() != nv) mesh.normals.resize(nv, Vec3(0.0f, 1.0f, 0.0f));  // a mesh made elsewhere
     ws.area_normal.resize(nm);
-    for_chunks(nm, [&](size_t lo, size_t hi) {
+    for_split(nm, [&](size_t lo, size_t hi) {
         for (size_t k = lo; k < hi; ++k) {
             const uint32_t v = ws.moving[k];
             const Vec3 pv(src[v].x, src[v].y, src[v].z);
@@ -475,7 +600,7 @@ void smooth_surface(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspa
         for (size_t k = 0; k < nm; ++k) wa += double(ws.moving_weight[k]) * double(glm::length(ws.area_normal[k])) / 6.0;
         if (wa > 0.0 && std::isfinite(ws.stats.volume_change)) d = static_cast<float>(-ws.stats.volume_change / wa);
     }
-    for_chunks(nm, [&](size_t lo, size_t hi) {
+    for_split(nm, [&](size_t lo, size_t hi) {
         for (size_t k = lo; k < hi; ++k) {
             const uint32_t v = ws.moving[k];
             const Vec3 s = ws.area_normal[k];
@@ -485,7 +610,7 @@ void smooth_surface(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspa
         }
     });
     for (int it = 0; it < def.normal_iterations; ++it) {
-        for_chunks(nm, [&](size_t lo, size_t hi) {
+        for_split(nm, [&](size_t lo, size_t hi) {
             for (size_t k = lo; k < hi; ++k) {
                 const uint32_t v = ws.moving[k];
                 Vec3 s = mesh.normals[v];
@@ -494,7 +619,7 @@ void smooth_surface(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspa
                 ws.area_normal[k] = len > 0.0f && std::isfinite(len) ? s / len : mesh.normals[v];
             }
         });
-        for_chunks(nm, [&](size_t lo, size_t hi) {
+        for_split(nm, [&](size_t lo, size_t hi) {
             for (size_t k = lo; k < hi; ++k) mesh.normals[ws.moving[k]] = ws.area_normal[k];
         });
     }

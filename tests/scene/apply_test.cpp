@@ -109,6 +109,7 @@ TEST(Apply, EachEditTakesEffect) {
         {"field.threshold", [](SceneDef& d) { d.field.threshold = 0.6f; }, true},
         {"field.radius", [](SceneDef& d) { d.field.radius = 1.4f; }, true},
         {"surface.iterations", [](SceneDef& d) { d.smoothing.iterations = 1; }, true},
+        {"surface.smooth_hidden", [](SceneDef& d) { d.smoothing.smooth_hidden = true; }, true},
     };
     for (const Edit& e : edits) {
         SCOPED_TRACE(e.key);

@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <tuple>
 #include <type_traits>
 
@@ -99,6 +102,39 @@ TEST(Simulation, DefaultRiverFoamIsTheSameForAnyThreadCount) {
     };
     const auto one = run(1);
     EXPECT_EQ(run(2), one);
+}
+
+// The smoothing's ground is the terrain's rendered mesh (SmoothingGround::height is
+// Terrain::height_mesh without the terrain library), and the default river's bed under it
+// is kept as extracted: a large share of its vertices, none of them smoothed.
+TEST(Simulation, TheSmoothingGroundIsTheTerrainsMeshAndHidesTheRiversBed) {
+    auto sim = Simulation::create(default_scene());
+    ASSERT_TRUE(sim.ok());
+    Simulation& s = *sim.value();
+    const Terrain& t = s.terrain();
+    const SmoothingGround ground{.vertices = t.vertices().data(), .columns = t.columns(), .rows = t.rows(), .spacing = t.area_scale()};
+    const Aabb b = t.bounds();
+    uint32_t state = 7u;
+    const auto next = [&] {
+        state = state * 1664525u + 1013904223u;
+        return float(state >> 8) / float(1u << 24);
+    };
+    float worst = 0.0f;
+    for (int n = 0; n < 20000; ++n) {  // inside and up to 10 % outside the terrain
+        const float x = b.min.x + (1.2f * next() - 0.1f) * (b.max.x - b.min.x);
+        const float z = b.min.z + (1.2f * next() - 0.1f) * (b.max.z - b.min.z);
+        worst = std::max(worst, std::abs(ground.height(x, z) - t.height_mesh(x, z)));
+    }
+    EXPECT_LT(worst, 1e-4f) << "metres";
+    for (int f = 0; f < 240; ++f) s.step(1.0f / 60.0f);
+    const SmoothingStats& st = s.smoothing_stats();
+    size_t below = 0;
+    for (const Vec3& p : s.surface().positions) below += p.y < t.height_mesh(p.x, p.z);
+    std::printf("default river at 4 s: %zu of %zu surface vertices hidden under the terrain, %zu move\n", st.hidden,
+                st.vertices, st.moving);
+    EXPECT_GT(st.hidden, st.vertices / 4);
+    EXPECT_LE(st.hidden, below) << "a hidden vertex does not move, so it is still below";
+    EXPECT_GT(st.moving, 0u);
 }
 
 TEST(Simulation, SurfaceCanBeTurnedOff) {

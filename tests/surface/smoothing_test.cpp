@@ -358,6 +358,54 @@ TEST(Smoothing, AnOpenRimStaysWhereItIs) {
     EXPECT_GT(ws.stats.moving, mesh.vertex_count() / 2);
 }
 
+// The ground hides the water's bed (about half of a river's mesh): those vertices stay
+// exactly as extracted and cost nothing past the ground test; the rest is smoothed as
+// without a ground. smooth_hidden = true smooths everything, as with no ground.
+TEST(Smoothing, VerticesBelowTheGroundStayWhereMarchingCubesPutThem) {
+    constexpr float kGround = 0.6f;  // the pool's balls span y 0 to 1.65, its mesh about -0.5 to 2.1
+    const std::vector<Vec3> corners = {{0, kGround, 0}, {100, kGround, 0}, {0, kGround, 100}, {100, kGround, 100}};
+    const SmoothingGround ground{.vertices = corners.data(), .columns = 2, .rows = 2, .spacing = 100.0f};
+    Built b;
+    build(jittered_pool(), b);
+    const SurfaceMesh raw = b.mesh;
+    const SmoothingField w = b.weights();
+    SmoothingWorkspace ws;
+    SurfaceMesh all = raw, kept = raw, forced = raw;
+    smooth_surface(all, default_smoothing(), ws, &w);
+    const size_t moving_all = ws.stats.moving;
+    EXPECT_EQ(ws.stats.hidden, 0u) << "no ground, nothing hidden";
+    smooth_surface(kept, default_smoothing(), ws, &w, &ground);
+    const SmoothingStats st = ws.stats;
+    size_t below = 0, moved_below = 0, moved_above = 0;
+    for (size_t v = 0; v < raw.vertex_count(); ++v) {
+        if (raw.positions[v].y < kGround) {
+            ++below;
+            moved_below += kept.positions[v] != raw.positions[v] || kept.normals[v] != raw.normals[v];
+        } else {
+            moved_above += kept.positions[v] != raw.positions[v];
+        }
+    }
+    std::printf("pool over a ground at y = %.1f: %zu of %zu vertices hidden, %zu move (%zu without the ground)\n",
+                kGround, st.hidden, raw.vertex_count(), st.moving, moving_all);
+    EXPECT_EQ(st.hidden, below);
+    EXPECT_GT(below, raw.vertex_count() / 4);
+    EXPECT_EQ(moved_below, 0u);
+    EXPECT_GT(moved_above, raw.vertex_count() / 4);
+    EXPECT_LT(st.moving, moving_all - below / 2);
+    // The visible top is as flat as without the ground, and the body keeps its volume.
+    const Flatness f = flatness(kept);
+    EXPECT_LE(f.tilt_rms, 2.0);
+    EXPECT_LE(f.height_std, 0.02);
+    EXPECT_NEAR(test::check_mesh(kept).volume / test::check_mesh(raw).volume, 1.0, 0.05);
+    EXPECT_TRUE(test::check_mesh(kept).closed_oriented_manifold());
+    // smooth_hidden: the ground is not read.
+    SmoothingDef def = default_smoothing();
+    def.smooth_hidden = true;
+    smooth_surface(forced, def, ws, &w, &ground);
+    EXPECT_EQ(ws.stats.hidden, 0u);
+    EXPECT_EQ(forced.positions, all.positions);
+}
+
 TEST(Smoothing, SameResultForAnyThreadCount) {
     Built b;
     build(load_xyz("dense_river_f600.xyz"), b);
