@@ -140,6 +140,17 @@ class ChannelMap {
 public:
     static ChannelMap build(const Terrain& t);
 
+    /// The map of `t` after its samples in rows [i0, i1] x columns [j0, j1] changed (a
+    /// sculpt stroke or its undo; this map was built or updated for `t` before them), the
+    /// same cell for cell as build(t) (tested). Only what the change reaches is redone:
+    /// the filled heights of the changed cells and of those whose fill came through them,
+    /// the receivers around cells whose fill changed, the accumulation along the old and
+    /// new flow paths below changed receivers, the distances around cells that joined or
+    /// left the channel (the head and the outlets are found again: a scan of the cells).
+    /// A change of the terrain's lowest or highest sample (the fill's epsilon follows
+    /// them) builds the map again. Returns the number of cells it wrote (stats, bench).
+    size_t update(const Terrain& t, int i0, int i1, int j0, int j1);
+
     int rows() const { return rows_; }
     int columns() const { return columns_; }
     uint32_t accumulation(int i, int j) const { return acc_[size_t(i) * columns_ + j]; }
@@ -177,6 +188,14 @@ private:
     std::vector<uint32_t> acc_;
     std::vector<int32_t> receiver_;  ///< D8 receiver cell index, -1 at outlets
     std::vector<float> dist_;
+    // What update() needs from the build: the filled heights, the fill's epsilon and the
+    // terrain's height range it came from, and for the fill and the distances the
+    // neighbour each cell's value came through (-1: its own).
+    std::vector<double> filled_;
+    double eps_ = 0.0, lo_ = 0.0, hi_ = 0.0;
+    std::vector<int32_t> fill_from_, dist_from_;
+
+    void find_head_and_outlets();
     std::pair<int, int> head_{0, 0};
     std::vector<Outlet> outlets_;
 };

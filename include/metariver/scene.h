@@ -418,9 +418,10 @@ public:
     /// FNV-1a hash of the particles' positions and velocities (determinism checks).
     uint64_t state_hash() const;
     /// The terrain's drainage network (automatic source, wet-channel measure). After a
-    /// sculpt() or restore() it is built again when it is next read (here, by
-    /// main_channel(), wet_fraction() or channel_coverage()): the network is global (a
-    /// dam reroutes its whole upstream basin), so a drag of many strokes builds it once.
+    /// sculpt() or restore() it is updated when it is next read (here, by main_channel(),
+    /// wet_fraction() or channel_coverage()), over the rectangle of samples the edits since
+    /// changed (ChannelMap::update: only the cells the change reaches), so a drag of many
+    /// strokes updates it once.
     const ChannelMap& channel() const {
         refresh_channel();
         return channel_;
@@ -473,12 +474,14 @@ private:
     uint64_t field_overflows_ = 0;
     uint64_t terrain_lifts_ = 0;
     std::string field_overflow_message_;
-    // The drainage network and what is measured on it; rebuilt when read after a
-    // terrain edit (channel_stale_: refresh_channel()).
+    // The drainage network and what is measured on it; updated when read after a
+    // terrain edit (channel_stale_: the samples stale_rows_ x stale_columns_ changed since
+    // it was last updated; refresh_channel()).
     mutable ChannelMap channel_;
     mutable std::vector<std::pair<int, int>> main_path_;
     mutable ChannelCoverage coverage_;
     mutable bool channel_stale_ = false;
+    mutable std::pair<int, int> stale_rows_{0, -1}, stale_columns_{0, -1};
     std::optional<RiverSize> sizing_;
     std::optional<FoamSystem> foam_;
     size_t prefilled_ = 0;

@@ -38,6 +38,96 @@ constexpr int kDi[8] = {-1, -1, -1, 0, 0, 1, 1, 1};
 constexpr int kDj[8] = {-1, 0, 1, -1, 1, -1, 0, 1};
 }  // namespace
 
+namespace {
+
+constexpr float kDiagonal = 1.41421356f;
+
+/// The receiver of cell (i, j) on the filled surface: the neighbour of steepest descent
+/// (the first in kDi/kDj order on ties), -1 where none is lower.
+int32_t receiver_of(const std::vector<double>& filled, int R, int C, int i, int j) {
+    const size_t c = size_t(i) * size_t(C) + size_t(j);
+    double best = 0.0;
+    int32_t r = -1;
+    for (int k = 0; k < 8; ++k) {
+        const int a = i + kDi[k], b = j + kDj[k];
+        if (a < 0 || b < 0 || a >= R || b >= C) continue;
+        const size_t n = size_t(a) * size_t(C) + size_t(b);
+        const double drop = (filled[c] - filled[n]) / ((kDi[k] && kDj[k]) ? 1.41421356 : 1.0);
+        if (drop > best) {
+            best = drop;
+            r = int32_t(n);
+        }
+    }
+    return r;
+}
+
+/// f(n) for the 8 neighbours n of cell c (a R x C grid, row-major).
+template <class F>
+void for_neighbours(int R, int C, size_t c, F&& f) {
+    const int i = int(c / size_t(C)), j = int(c % size_t(C));
+    for (int k = 0; k < 8; ++k) {
+        const int a = i + kDi[k], b = j + kDj[k];
+        if (a < 0 || b < 0 || a >= R || b >= C) continue;
+        f(size_t(a) * size_t(C) + size_t(b), (kDi[k] && kDj[k]) != 0);
+    }
+}
+
+/// Settles again, after the cells `seeds` changed, a system whose solution is the fixed
+/// point val(n) = min(own(n), min over the neighbours m of reach(val(m), n, diagonal))
+/// with reach(x, ...) > x (the fill: reach = max(h(n), x + eps), own = h at the border;
+/// the distances: reach = x + step, own = 0 on the channel): its solution is unique, so
+/// what it settles to is what a build from scratch gives. Every seed and every cell whose
+/// value came through one (`from`, the neighbour that gave it) is reset to its own value
+/// and to the best its other neighbours give; then Dijkstra from them, which also lowers
+/// any other cell a lower value now reaches. `mark`: n zero bytes (zero again on return).
+/// Returns the cells whose value or `from` it wrote (with repeats).
+template <class T, class Own, class Reach>
+std::vector<uint32_t> settle(int R, int C, std::vector<T>& val, std::vector<int32_t>& from, std::vector<uint32_t> seeds,
+                             Own&& own, Reach&& reach, std::vector<uint8_t>& mark) {
+    std::vector<uint32_t>& reset = seeds;  // grows by the cells whose value came through a reset one
+    size_t kept = 0;
+    for (const uint32_t c : seeds)
+        if (!mark[c]) mark[c] = 1, reset[kept++] = c;
+    reset.resize(kept);
+    for (size_t q = 0; q < reset.size(); ++q)
+        for_neighbours(R, C, reset[q], [&](size_t n, bool) {
+            if (!mark[n] && from[n] == int32_t(reset[q])) mark[n] = 1, reset.push_back(uint32_t(n));
+        });
+    using Item = std::pair<T, uint32_t>;
+    std::priority_queue<Item, std::vector<Item>, std::greater<Item>> open;
+    for (const uint32_t c : reset) {
+        val[c] = own(c);
+        from[c] = -1;
+        for_neighbours(R, C, c, [&](size_t m, bool diagonal) {
+            if (mark[m]) return;
+            const T x = reach(val[m], c, diagonal);
+            if (x < val[c]) val[c] = x, from[c] = int32_t(m);
+        });
+    }
+    for (const uint32_t c : reset) {
+        mark[c] = 0;
+        if (val[c] < std::numeric_limits<T>::infinity()) open.emplace(val[c], c);
+    }
+    std::vector<uint32_t> written = std::move(reset);
+    while (!open.empty()) {
+        const T v = open.top().first;  // not a structured binding: clang 15 cannot capture one
+        const uint32_t c = open.top().second;
+        open.pop();
+        if (v != val[c]) continue;  // lowered since it was queued
+        for_neighbours(R, C, c, [&](size_t n, bool diagonal) {
+            const T x = reach(v, uint32_t(n), diagonal);
+            if (x < val[n]) {
+                val[n] = x, from[n] = int32_t(c);
+                open.emplace(x, uint32_t(n));
+                written.push_back(uint32_t(n));
+            }
+        });
+    }
+    return written;
+}
+
+}  // namespace
+
 ChannelMap ChannelMap::build(const Terrain& t) {
     ChannelMap m;
     const int R = t.rows(), C = t.columns();
@@ -48,12 +138,15 @@ ChannelMap ChannelMap::build(const Terrain& t) {
     auto idx = [C](int i, int j) { return size_t(i) * size_t(C) + size_t(j); };
 
     // Priority flood from the border (double heights: the epsilon must survive large heights).
-    std::vector<double> filled(n);
+    std::vector<double>& filled = m.filled_;
+    filled.resize(n);
     for (int i = 0; i < R; ++i)
         for (int j = 0; j < C; ++j) filled[idx(i, j)] = t.sample(i, j);
-    double lo = *std::min_element(filled.begin(), filled.end()), hi = *std::max_element(filled.begin(), filled.end());
-    const double eps = std::max(1e-9, (hi - lo) * 1e-7);
+    m.lo_ = *std::min_element(filled.begin(), filled.end());
+    m.hi_ = *std::max_element(filled.begin(), filled.end());
+    const double eps = m.eps_ = std::max(1e-9, (m.hi_ - m.lo_) * 1e-7);
     std::vector<uint8_t> closed(n, 0);
+    m.fill_from_.assign(n, -1);
     using Item = std::tuple<double, size_t>;  // (height, index): ties broken by index (deterministic)
     std::priority_queue<Item, std::vector<Item>, std::greater<Item>> open;
     for (int i = 0; i < R; ++i)
@@ -70,25 +163,17 @@ ChannelMap ChannelMap::build(const Terrain& t) {
             const int a = i + kDi[k], b = j + kDj[k];
             if (a < 0 || b < 0 || a >= R || b >= C || closed[idx(a, b)]) continue;
             closed[idx(a, b)] = 1;
+            // The first neighbour to reach a cell is its lowest (the flood rises): its fill
+            // is max(own height, that neighbour's + eps), update()'s fixed point.
             filled[idx(a, b)] = std::max(filled[idx(a, b)], h + eps);
+            m.fill_from_[idx(a, b)] = int32_t(c);
             open.emplace(filled[idx(a, b)], idx(a, b));
         }
     }
     // D8 receivers: steepest descent on the filled surface; none at the border's pits.
-    m.receiver_.assign(n, -1);
+    m.receiver_.resize(n);
     for (int i = 0; i < R; ++i)
-        for (int j = 0; j < C; ++j) {
-            double best = 0.0;
-            for (int k = 0; k < 8; ++k) {
-                const int a = i + kDi[k], b = j + kDj[k];
-                if (a < 0 || b < 0 || a >= R || b >= C) continue;
-                const double drop = (filled[idx(i, j)] - filled[idx(a, b)]) / ((kDi[k] && kDj[k]) ? 1.41421356 : 1.0);
-                if (drop > best) {
-                    best = drop;
-                    m.receiver_[idx(i, j)] = int32_t(idx(a, b));
-                }
-            }
-        }
+        for (int j = 0; j < C; ++j) m.receiver_[idx(i, j)] = receiver_of(filled, R, C, i, j);
     // Accumulation, highest cells first.
     std::vector<uint32_t> order(n);
     std::iota(order.begin(), order.end(), 0u);
@@ -100,6 +185,7 @@ ChannelMap ChannelMap::build(const Terrain& t) {
 
     // Distance to the nearest channel cell (Dijkstra on the 8-neighbour grid, metres).
     m.dist_.assign(n, std::numeric_limits<float>::infinity());
+    m.dist_from_.assign(n, -1);
     using DItem = std::pair<float, size_t>;
     std::priority_queue<DItem, std::vector<DItem>, std::greater<DItem>> q;
     for (size_t c = 0; c < n; ++c)
@@ -115,15 +201,24 @@ ChannelMap ChannelMap::build(const Terrain& t) {
         for (int k = 0; k < 8; ++k) {
             const int a = i + kDi[k], b = j + kDj[k];
             if (a < 0 || b < 0 || a >= R || b >= C) continue;
-            const float nd = d + m.area_scale_ * ((kDi[k] && kDj[k]) ? 1.41421356f : 1.0f);
+            const float nd = d + m.area_scale_ * ((kDi[k] && kDj[k]) ? kDiagonal : 1.0f);
             if (nd < m.dist_[idx(a, b)]) {
                 m.dist_[idx(a, b)] = nd;
+                m.dist_from_[idx(a, b)] = int32_t(c);
                 q.emplace(nd, idx(a, b));
             }
         }
     }
+    m.find_head_and_outlets();
+    return m;
+}
+
+void ChannelMap::find_head_and_outlets() {
+    const int R = rows_, C = columns_;
+    const size_t n = acc_.size();
+    auto idx = [C](int i, int j) { return size_t(i) * size_t(C) + size_t(j); };
     // Head of the main channel.
-    size_t cur = size_t(std::max_element(m.acc_.begin(), m.acc_.end()) - m.acc_.begin());
+    size_t cur = size_t(std::max_element(acc_.begin(), acc_.end()) - acc_.begin());
     for (;;) {
         const int i = int(cur / size_t(C)), j = int(cur % size_t(C));
         size_t next = cur;
@@ -132,24 +227,121 @@ ChannelMap ChannelMap::build(const Terrain& t) {
             const int a = i + kDi[k], b = j + kDj[k];
             if (a < 0 || b < 0 || a >= R || b >= C) continue;
             const size_t c = idx(a, b);
-            if (m.receiver_[c] == int32_t(cur) && m.acc_[c] >= m.threshold_ && m.acc_[c] > best) {
-                best = m.acc_[c];
+            if (receiver_[c] == int32_t(cur) && acc_[c] >= threshold_ && acc_[c] > best) {
+                best = acc_[c];
                 next = c;
             }
         }
         if (next == cur) break;
         cur = next;
     }
-    m.head_ = {int(cur / size_t(C)), int(cur % size_t(C))};
+    head_ = {int(cur / size_t(C)), int(cur % size_t(C))};
     // Outlets: channel cells on the border whose flow leaves the terrain.
+    outlets_.clear();
     for (size_t c = 0; c < n; ++c) {
         const int i = int(c / size_t(C)), j = int(c % size_t(C));
-        if ((i == 0 || j == 0 || i == R - 1 || j == C - 1) && m.receiver_[c] < 0 && m.acc_[c] >= m.threshold_)
-            m.outlets_.push_back(Outlet{.row = i, .column = j, .accumulation = m.acc_[c]});
+        if ((i == 0 || j == 0 || i == R - 1 || j == C - 1) && receiver_[c] < 0 && acc_[c] >= threshold_)
+            outlets_.push_back(Outlet{.row = i, .column = j, .accumulation = acc_[c]});
     }
-    std::stable_sort(m.outlets_.begin(), m.outlets_.end(),
+    std::stable_sort(outlets_.begin(), outlets_.end(),
                      [](const Outlet& a, const Outlet& b) { return a.accumulation > b.accumulation; });
-    return m;
+}
+
+size_t ChannelMap::update(const Terrain& t, int i0, int i1, int j0, int j1) {
+    const int R = rows_, C = columns_;
+    const size_t n = size_t(R) * size_t(C);
+    if (t.rows() != R || t.columns() != C || t.area_scale() != area_scale_ || filled_.size() != n) {
+        *this = build(t);
+        return n;
+    }
+    i0 = std::max(i0, 0), j0 = std::max(j0, 0), i1 = std::min(i1, R - 1), j1 = std::min(j1, C - 1);
+    if (i1 < i0 || j1 < j0) return 0;
+    // The fill's epsilon comes from the height range: if it moved, every fill did.
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (const Vec3& v : t.vertices()) lo = std::min(lo, double(v.y)), hi = std::max(hi, double(v.y));
+    if (lo != lo_ || hi != hi_) {
+        *this = build(t);
+        return n;
+    }
+    const auto h = [&](uint32_t c) { return double(t.sample(int(c / size_t(C)), int(c % size_t(C)))); };
+    const auto border = [&](uint32_t c) {
+        const int i = int(c / size_t(C)), j = int(c % size_t(C));
+        return i == 0 || j == 0 || i == R - 1 || j == C - 1;
+    };
+    std::vector<uint8_t> mark(n, 0);
+
+    // 1. The fill: the changed cells are the seeds.
+    std::vector<uint32_t> seeds;
+    for (int i = i0; i <= i1; ++i)
+        for (int j = j0; j <= j1; ++j) seeds.push_back(uint32_t(size_t(i) * size_t(C) + size_t(j)));
+    const double eps = eps_;
+    const auto fill_written = settle<double>(
+        R, C, filled_, fill_from_, seeds,
+        [&](uint32_t c) { return border(c) ? h(c) : std::numeric_limits<double>::infinity(); },
+        [&](double x, uint32_t c, bool) { return border(c) ? std::numeric_limits<double>::infinity() : std::max(h(c), x + eps); },
+        mark);
+
+    // 2. Receivers of the cells whose fill may have changed and of their neighbours.
+    std::vector<uint32_t> changed;            // cells whose receiver changed
+    std::vector<int32_t> old_receiver;        // their receiver before
+    const auto recompute = [&](uint32_t c) {
+        if (mark[c]) return;
+        mark[c] = 1;
+        const int32_t r = receiver_of(filled_, R, C, int(c / size_t(C)), int(c % size_t(C)));
+        if (r != receiver_[c]) changed.push_back(c), old_receiver.push_back(receiver_[c]), receiver_[c] = r;
+    };
+    std::vector<uint32_t> visited;
+    for (const uint32_t c : fill_written) {
+        if (!mark[c]) visited.push_back(c);
+        recompute(c);
+        for_neighbours(R, C, c, [&](size_t m, bool) {
+            if (!mark[m]) visited.push_back(uint32_t(m));
+            recompute(uint32_t(m));
+        });
+    }
+    for (const uint32_t c : visited) mark[c] = 0;
+
+    // 3. Accumulation along the old and the new paths below every changed receiver (a cell
+    // above none of them keeps its count), upstream first: a receiver is filled lower.
+    std::vector<uint32_t> down(changed);
+    for (const uint32_t c : changed) mark[c] = 1;
+    const auto walk = [&](int32_t c) {
+        for (; c >= 0 && !mark[size_t(c)]; c = receiver_[size_t(c)]) {
+            mark[size_t(c)] = 1;
+            down.push_back(uint32_t(c));
+        }
+    };
+    // Past its first step a path runs through cells whose receiver did not change (a walk
+    // stops at a changed one: its own paths are walked) or were walked already.
+    for (size_t k = 0; k < changed.size(); ++k) {
+        walk(old_receiver[k]);
+        walk(receiver_[changed[k]]);
+    }
+    for (const uint32_t c : down) mark[c] = 0;
+    std::stable_sort(down.begin(), down.end(), [&](uint32_t a, uint32_t b) { return filled_[a] > filled_[b]; });
+    std::vector<uint32_t> flipped;  // cells that joined or left the channel
+    for (const uint32_t c : down) {
+        const bool was = acc_[c] >= threshold_;
+        uint32_t a = 1;
+        for_neighbours(R, C, c, [&](size_t u, bool) {
+            if (receiver_[u] == int32_t(c)) a += acc_[u];
+        });
+        acc_[c] = a;
+        if ((a >= threshold_) != was) flipped.push_back(c);
+    }
+
+    // 4. Distances from the cells that joined or left the channel.
+    size_t written = fill_written.size() + visited.size() + down.size();
+    if (!flipped.empty()) {
+        const float s = area_scale_;
+        written += settle<float>(
+                       R, C, dist_, dist_from_, flipped,
+                       [&](uint32_t c) { return acc_[c] >= threshold_ ? 0.0f : std::numeric_limits<float>::infinity(); },
+                       [&](float x, uint32_t, bool diagonal) { return x + s * (diagonal ? kDiagonal : 1.0f); }, mark)
+                       .size();
+    }
+    find_head_and_outlets();
+    return written;
 }
 
 std::vector<std::pair<int, int>> ChannelMap::path_from(int i, int j) const {

@@ -187,7 +187,8 @@ void Simulation::measure_main_channel(const SpawnDef& asked) const {
 void Simulation::refresh_channel() const {
     if (!channel_stale_) return;
     channel_stale_ = false;
-    channel_ = ChannelMap::build(terrain_);
+    channel_.update(terrain_, stale_rows_.first, stale_rows_.second, stale_columns_.first, stale_columns_.second);
+    stale_rows_ = stale_columns_ = {0, -1};
     measure_main_channel(def_.spawn);
 }
 

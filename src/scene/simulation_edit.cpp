@@ -127,7 +127,15 @@ void Simulation::restore(const TerrainEdit& edit) {
 void Simulation::after_terrain_edit(const TerrainEdit& e) {
     if (e.empty()) return;
     bvh_.refit_heights(terrain_);
-    channel_stale_ = true;  // built again when next read (refresh_channel)
+    // The network is updated over the changed samples when next read (refresh_channel).
+    if (channel_stale_) {
+        stale_rows_ = {std::min(stale_rows_.first, e.i0), std::max(stale_rows_.second, e.i1)};
+        stale_columns_ = {std::min(stale_columns_.first, e.j0), std::max(stale_columns_.second, e.j1)};
+    } else {
+        stale_rows_ = {e.i0, e.i1};
+        stale_columns_ = {e.j0, e.j1};
+    }
+    channel_stale_ = true;
     auto& ps = static_cast<ParticleSolver&>(*solver_);
     // The triangles of the cells around the changed samples moved: particles over them
     // that are now under the ground (plus the collision's clearance) go up onto it, with
