@@ -179,19 +179,6 @@ Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh, std::optio
     }
 }
 
-void Simulation::measure_main_channel(const SpawnDef& asked) const {
-    main_path_ = detail::main_channel_path(terrain_, channel_, asked, def_.spawn.center);
-    coverage_ = ChannelCoverage(terrain_, main_path_);
-}
-
-void Simulation::refresh_channel() const {
-    if (!channel_stale_) return;
-    channel_stale_ = false;
-    channel_.update(terrain_, stale_rows_.first, stale_rows_.second, stale_columns_.first, stale_columns_.second);
-    stale_rows_ = stale_columns_ = {0, -1};
-    measure_main_channel(def_.spawn);
-}
-
 void Simulation::configure_field() {
     // Compact kernel: the sparse field over the particles' box or the terrain's.
     sparse_def_.kernel = poly6_kernel(def_.field.radius, 1.0f);

@@ -84,6 +84,19 @@ Result<ApplyResult> Simulation::apply(const SceneDef& next) {
     return r;
 }
 
+void Simulation::measure_main_channel(const SpawnDef& asked) const {
+    main_path_ = detail::main_channel_path(terrain_, channel_, asked, def_.spawn.center);
+    coverage_ = ChannelCoverage(terrain_, main_path_);
+}
+
+void Simulation::refresh_channel() const {
+    if (!channel_stale_) return;
+    channel_stale_ = false;
+    channel_.update(terrain_, stale_rows_.first, stale_rows_.second, stale_columns_.first, stale_columns_.second);
+    stale_rows_ = stale_columns_ = {0, -1};
+    measure_main_channel(def_.spawn);
+}
+
 Status Simulation::move_source(const Vec3& center) {
     SceneDef moved = def_;
     moved.spawn.center = center;
