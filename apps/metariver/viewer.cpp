@@ -363,8 +363,8 @@ void Viewer::markers(int win_w, int win_h) {
         dl->AddText(q[6], colour, label.c_str());
     };
     const SpawnDef& sp = def_.spawn;
-    auto extent = [&](const Vec3& h) {  // as the emitters read it
-        return sp.shape == SourceShape::Point ? Vec3(0.2f) : sp.shape == SourceShape::Disc ? Vec3(h.x, h.y, h.x) : h;
+    auto extent = [&](const Vec3& h) {  // as the emitters read it, at least 0.2 m (a point is drawn as a small box)
+        return glm::max(source_half_size(sp.shape, h), Vec3(0.2f));
     };
     box(sp.center - extent(sp.half_extent), sp.center + extent(sp.half_extent), IM_COL32(80, 230, 255, 255), "source");
     for (size_t k = 0; k < sp.sources.size(); ++k) {

@@ -14,6 +14,7 @@
 
 #include <cstdint>
 #include <span>
+#include <string>
 #include <string_view>
 #include <utility>
 #include <vector>
@@ -76,6 +77,17 @@ struct SourceDef {
     float flow_rate = 0.0f;      ///< [0, 1e7]
     bool operator==(const SourceDef&) const = default;
 };
+
+/// The scene key of a field of source k, for messages: k = 0 the main source
+/// ("particles.spawn_center", "particles.spawn_half_extent", "particles.flow_rate"), k >= 1
+/// the list's entry k, 1-based as the reader counts ("particles.source[k].center", ...).
+enum class SourceField { Center, HalfExtent, FlowRate };
+std::string source_key(size_t k, SourceField f);
+
+/// The half sizes of a source volume along x, y, z as the emitters fill it: a box its
+/// half_extent, a disc half_extent.x across both horizontal axes, a point none. The one
+/// rule the lattice, the terrain checks (validate_on_terrain) and the viewer's outlines read.
+Vec3 source_half_size(SourceShape shape, const Vec3& half_extent);
 
 /// A fluid source that never overlaps water: its volume (box, disc, or the single point
 /// of a point source) is cut into a cubic lattice at the fluid's rest spacing, lattice

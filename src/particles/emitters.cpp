@@ -11,6 +11,7 @@
 #include <limits>
 #include <numeric>
 #include <queue>
+#include <string>
 #include <tuple>
 
 namespace mr {
@@ -31,6 +32,22 @@ std::string_view to_string(SinkKind s) {
         case SinkKind::Edges: return "edges";
     }
     return "?";
+}
+
+std::string source_key(size_t k, SourceField f) {
+    const char* main[] = {"particles.spawn_center", "particles.spawn_half_extent", "particles.flow_rate"};
+    const char* entry[] = {"center", "half_extent", "flow_rate"};
+    if (k == 0) return main[int(f)];
+    return "particles.source[" + std::to_string(k) + "]." + entry[int(f)];
+}
+
+Vec3 source_half_size(SourceShape shape, const Vec3& h) {
+    switch (shape) {
+        case SourceShape::Box: return h;
+        case SourceShape::Disc: return Vec3(h.x, h.y, h.x);
+        case SourceShape::Point: return Vec3(0.0f);
+    }
+    return h;
 }
 
 namespace {

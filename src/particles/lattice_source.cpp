@@ -25,8 +25,7 @@ LatticeSource LatticeSource::build(const Def& def, const Terrain& terrain) {
     if (def.shape == SourceShape::Point) {
         cand.push_back(def.center);
     } else {
-        const Vec3 he = def.shape == SourceShape::Disc ? Vec3(def.half_extent.x, def.half_extent.y, def.half_extent.x)
-                                                       : def.half_extent;
+        const Vec3 he = source_half_size(def.shape, def.half_extent);
         const auto [nx, ox] = axis(he.x);
         const auto [ny, oy] = axis(he.y);
         const auto [nz, oz] = axis(he.z);

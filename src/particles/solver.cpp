@@ -267,9 +267,8 @@ std::vector<std::string> ParticleSolver::warnings() const {
         const LatticeSource& l = *emitters_[k].lattice;
         const auto [c, half] = source_volume(k);
         const float rate = asked_rate(k);
-        const std::string centre = k == 0 ? "particles.spawn_center" : fmt::format("particles.source[{}].center", k);
-        const std::string extent = k == 0 ? "particles.spawn_half_extent" : fmt::format("particles.source[{}].half_extent", k);
-        const std::string flow = k == 0 ? "particles.flow_rate" : fmt::format("particles.source[{}].flow_rate", k);
+        const std::string centre = source_key(k, SourceField::Center), extent = source_key(k, SourceField::HalfExtent),
+                          flow = source_key(k, SourceField::FlowRate);
         if (l.slots().empty())
             w.push_back(fmt::format("{}: the source volume at [{}, {}, {}] has no lattice slot above the terrain "
                                     "(spacing pbf.spacing = {} m): it cannot emit; raise the source or widen {}",

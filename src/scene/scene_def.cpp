@@ -308,13 +308,8 @@ Status validate_on_terrain(const SceneDef& d, const Terrain& t) {
     for (size_t k = 0; k < sources; ++k) {
         const Vec3 c = k == 0 ? d.spawn.center : d.spawn.sources[k - 1].center;
         const Vec3 half = k == 0 ? d.spawn.half_extent : d.spawn.sources[k - 1].half_extent;
-        const std::string centre = k == 0 ? "particles.spawn_center" : fmt::format("particles.source[{}].center", k);
-        const std::string extent = k == 0 ? "particles.spawn_half_extent" : fmt::format("particles.source[{}].half_extent", k);
-        // The source's half sizes as the emitters read them: a point has none (its
-        // half extent is not read), a disc is half_extent.x across both axes.
-        const Vec3 he = d.spawn.shape == SourceShape::Point  ? Vec3(0.0f)
-                        : d.spawn.shape == SourceShape::Disc ? Vec3(half.x, half.y, half.x)
-                                                             : half;
+        const std::string centre = source_key(k, SourceField::Center), extent = source_key(k, SourceField::HalfExtent);
+        const Vec3 he = source_half_size(d.spawn.shape, half);  // as the emitters read it
         if (!t.contains_xz(c.x, c.z))
             return Error{fmt::format("{}: the source at [{}, {}, {}] is outside the terrain's rectangle "
                                      "x in [0, {}], z in [0, {}]",

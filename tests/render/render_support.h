@@ -72,6 +72,16 @@ inline SceneDef small_valley() {
     return d;
 }
 
+/// The simulation of `def` after `frames` frames of 1/60 s, or null after a test failure
+/// that names create()'s error (callers ASSERT_TRUE on it).
+inline std::unique_ptr<Simulation> stepped(const SceneDef& def, int frames) {
+    auto sim = Simulation::create(def);
+    EXPECT_TRUE(sim.ok()) << (sim.ok() ? "" : sim.error().message);
+    if (!sim.ok()) return nullptr;
+    for (int i = 0; i < frames; ++i) sim.value()->step(1.0f / 60.0f);
+    return std::move(sim.value());
+}
+
 /// Pixels where two images differ by more than `by` in some channel.
 inline size_t pixels_differing(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b, int by) {
     size_t n = 0;

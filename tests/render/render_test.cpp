@@ -23,6 +23,7 @@ namespace fs = std::filesystem;
 using namespace mr;
 using test::pixels_differing;
 using test::small_valley;
+using test::stepped;
 
 namespace {
 
@@ -33,19 +34,17 @@ struct Rendered {
 
 Rendered render_scene(const SceneDef& def, int frames, int width, int height, const render::RenderSettings& settings,
                       const std::optional<std::string>& camera = std::nullopt) {
-    auto sim = Simulation::create(def);
-    EXPECT_TRUE(sim.ok()) << (sim.ok() ? "" : sim.error().message);
+    auto sim = stepped(def, frames);
     auto renderer = render::Renderer::create();
     EXPECT_TRUE(renderer.ok()) << (renderer.ok() ? "" : renderer.error().message);
     Rendered out;
-    if (!sim.ok() || !renderer.ok()) return out;
-    for (int i = 0; i < frames; ++i) sim.value()->step(1.0f / 60.0f);
-    render::Camera cam = render::frame_terrain(sim.value()->terrain());
+    if (!sim || !renderer.ok()) return out;
+    render::Camera cam = render::frame_terrain(sim->terrain());
     if (camera) {
         EXPECT_TRUE(render::parse_camera(*camera, cam).ok());
     }
-    render::fit_clip_planes(cam, sim.value()->terrain());
-    renderer.value()->set_scene(sim.value()->view());
+    render::fit_clip_planes(cam, sim->terrain());
+    renderer.value()->set_scene(sim->view());
     renderer.value()->draw(cam, width, height, settings);
     renderer.value()->read_rgb(out.rgb);
     out.width = width;
@@ -146,31 +145,30 @@ TEST(RenderGolden, StrictTerrainOnlyFromAbove) {
 
 TEST(Renderer, NoGlObjectsPerFrameAndUploadsOnlyWhatChanged) {
     REQUIRE_GL();
-    auto sim = Simulation::create(small_valley());
-    ASSERT_TRUE(sim.ok());
+    auto sim = stepped(small_valley(), 30);
+    ASSERT_TRUE(sim);
     auto r = render::Renderer::create();
     ASSERT_TRUE(r.ok()) << r.error().message;
     render::Renderer& renderer = *r.value();
-    for (int i = 0; i < 30; ++i) sim.value()->step(1.0f / 60.0f);
-    renderer.set_scene(sim.value()->view());
-    const render::Camera cam = render::frame_terrain(sim.value()->terrain());
+    renderer.set_scene(sim->view());
+    const render::Camera cam = render::frame_terrain(sim->terrain());
     render::RenderSettings s;
     s.particles = true;
     s.bvh = true;
     renderer.draw(cam, 96, 64, s);
     const uint64_t objects = renderer.stats().gl_objects_created;
     for (int i = 0; i < 20; ++i) {
-        sim.value()->step(1.0f / 60.0f);
-        renderer.update(sim.value()->view());
+        sim->step(1.0f / 60.0f);
+        renderer.update(sim->view());
         EXPECT_GT(renderer.stats().last_upload_bytes, 0u) << "the water moved: it must be sent";
         renderer.draw(cam, 96, 64, s);
     }
     EXPECT_EQ(renderer.stats().gl_objects_created, objects) << "draw()/update() must reuse GL objects";
     // Nothing moved: nothing is sent.
-    renderer.update(sim.value()->view());
+    renderer.update(sim->view());
     EXPECT_EQ(renderer.stats().last_upload_bytes, 0u);
     // An incomplete view (no particles) is refused, not read: the last upload stands.
-    SceneView partial = sim.value()->view();
+    SceneView partial = sim->view();
     partial.particles = nullptr;
     partial.frame += 1;
     renderer.update(partial);
@@ -212,16 +210,16 @@ TEST(Renderer, TerrainTextureChecksItsBufferAndTheGlLimit) {
 }
 
 TEST(Camera, PickingRayHitsTheTerrainUnderTheScreenCentre) {
-    auto sim = Simulation::create(small_valley());
-    ASSERT_TRUE(sim.ok());
-    const Terrain& t = sim.value()->terrain();
+    auto sim = stepped(small_valley(), 0);
+    ASSERT_TRUE(sim);
+    const Terrain& t = sim->terrain();
     render::Camera cam = render::frame_terrain(t);
     // Aim at a point on the ground; the centre pixel's ray must come back to it.
     const float x = 10.0f, z = 20.0f;
     cam.target = Vec3(x, t.height_mesh(x, z), z);
     cam.distance = 30.0f;
     render::fit_clip_planes(cam, t);
-    auto hit = render::pick_terrain(cam, 320.0f, 240.0f, 640, 480, t, sim.value()->bvh());
+    auto hit = render::pick_terrain(cam, 320.0f, 240.0f, 640, 480, t, sim->bvh());
     ASSERT_TRUE(hit.has_value());
     // Tolerance: float rounding of the unprojection over ~30 m (about 1e-5 relative).
     EXPECT_NEAR(hit->x, x, 1e-2f);
@@ -230,7 +228,7 @@ TEST(Camera, PickingRayHitsTheTerrainUnderTheScreenCentre) {
     // A ray into the sky misses.
     cam.pitch_deg = -30.0f;  // eye below the target, looking up
     cam.target.y += 200.0f;
-    EXPECT_FALSE(render::pick_terrain(cam, 320.0f, 240.0f, 640, 480, t, sim.value()->bvh()).has_value());
+    EXPECT_FALSE(render::pick_terrain(cam, 320.0f, 240.0f, 640, 480, t, sim->bvh()).has_value());
 }
 
 TEST(Camera, ParseCameraChecksItsInput) {
@@ -284,9 +282,9 @@ TEST(Camera, TheDefaultFramingSeesTheBottomOfADeepBowl) {
     SceneDef d = small_valley();
     d.source = {.kind = TerrainSource::Bowl, .heightmap = {}, .width = 33, .height = 33, .seed = 7};
     d.terrain.height_scale = 24.0f;
-    auto sim = Simulation::create(d);
-    ASSERT_TRUE(sim.ok()) << sim.error().message;
-    const Terrain& t = sim.value()->terrain();
+    auto sim = stepped(d, 0);
+    ASSERT_TRUE(sim);
+    const Terrain& t = sim->terrain();
     const render::Camera cam = render::frame_terrain(t);
     const Vec3 bottom(16.0f, t.height_mesh(16.0f, 16.0f), 16.0f);
     const int w = 640, h = 360;
@@ -294,15 +292,15 @@ TEST(Camera, TheDefaultFramingSeesTheBottomOfADeepBowl) {
     ASSERT_GT(c.w, 0.0f);
     const float px = (c.x / c.w * 0.5f + 0.5f) * float(w), py = (0.5f - c.y / c.w * 0.5f) * float(h);
     ASSERT_TRUE(px >= 0.0f && px < float(w) && py >= 0.0f && py < float(h)) << "the bottom is outside the image";
-    auto hit = render::pick_terrain(cam, px, py, w, h, t, sim.value()->bvh());
+    auto hit = render::pick_terrain(cam, px, py, w, h, t, sim->bvh());
     ASSERT_TRUE(hit.has_value());
     EXPECT_LT(glm::length(*hit - bottom), 1.0f) << "the ray to the bottom hits the rim at (" << hit->x << ", " << hit->y
                                                 << ", " << hit->z << ")";
     SceneDef flat = small_valley();
     flat.terrain.height_scale = 2.0f;
-    auto low = Simulation::create(flat);
-    ASSERT_TRUE(low.ok());
-    EXPECT_FLOAT_EQ(render::frame_terrain(low.value()->terrain()).pitch_deg, 32.0f) << "ordinary relief";
+    auto low = stepped(flat, 0);
+    ASSERT_TRUE(low);
+    EXPECT_FLOAT_EQ(render::frame_terrain(low->terrain()).pitch_deg, 32.0f) << "ordinary relief";
 }
 
 /// A splash: 1500 PBF particles thrown down into the procedural bowl (the default
@@ -317,10 +315,9 @@ SceneDef splash_scene() {
 
 TEST(Renderer, FoamAppearsWhiteOnTheWaterAndCanBeTurnedOff) {
     REQUIRE_GL();
-    auto sim = Simulation::create(splash_scene());
-    ASSERT_TRUE(sim.ok()) << sim.error().message;
-    Simulation& s = *sim.value();
-    for (int i = 0; i < 45; ++i) s.step(1.0f / 60.0f);
+    auto sim = stepped(splash_scene(), 45);
+    ASSERT_TRUE(sim);
+    Simulation& s = *sim;
     ASSERT_NE(s.foam(), nullptr);
     const FoamStats& fs = s.foam()->stats();
     ASSERT_GT(fs.foam + fs.spray, 50u) << "the splash must make foam or spray";
@@ -388,11 +385,10 @@ TEST(Renderer, FlowDetailMovesOnFlowingWaterAndLeavesStillWaterAlone) {
     // Flowing: the splash thrown sideways across the bowl, 30 frames in (metres per second).
     SceneDef flowing = splash_scene();
     flowing.foam.enabled = false;
-    auto f = Simulation::create(flowing);
-    ASSERT_TRUE(f.ok()) << f.error().message;
-    for (int i = 0; i < 30; ++i) f.value()->step(1.0f / 60.0f);
-    ASSERT_GT(f.value()->counters().max_speed, 2.0f * render::kFlowDetailFullSpeed) << "the splash must be fast";
-    const TwoTimes fl = draw_at_two_times(*f.value(), 2.0f, 2.35f);  // the same particles, 0.35 s apart
+    auto f = stepped(flowing, 30);
+    ASSERT_TRUE(f);
+    ASSERT_GT(f->counters().max_speed, 2.0f * render::kFlowDetailFullSpeed) << "the splash must be fast";
+    const TwoTimes fl = draw_at_two_times(*f, 2.0f, 2.35f);  // the same particles, 0.35 s apart
     const size_t moved = pixels_differing(fl.on0, fl.on1, 6);
     std::printf("flowing: %zu of %d pixels change between the two times with flow detail\n", moved, 320 * 200);
     EXPECT_GT(moved, 500u) << "the texture must move along the flow";
@@ -402,16 +398,16 @@ TEST(Renderer, FlowDetailMovesOnFlowingWaterAndLeavesStillWaterAlone) {
     // Still: a small pool settled until every particle sleeps (velocity exactly 0).
     SceneDef still = test::bowl_drop(700, Vec3(16, 1.5f, 16), Vec3(2.5f, 0.5f, 2.5f));
     still.foam.enabled = false;
-    auto p = Simulation::create(still);
-    ASSERT_TRUE(p.ok()) << p.error().message;
+    auto p = stepped(still, 0);
+    ASSERT_TRUE(p);
     int frames = 0;
     for (; frames < 1200; ++frames) {
-        p.value()->step(1.0f / 60.0f);
-        if (frames > 60 && p.value()->counters().max_speed < render::kFlowDetailMinSpeed) break;
+        p->step(1.0f / 60.0f);
+        if (frames > 60 && p->counters().max_speed < render::kFlowDetailMinSpeed) break;
     }
-    std::printf("still pool: max speed %.4f m/s after %d frames\n", p.value()->counters().max_speed, frames + 1);
-    ASSERT_LT(p.value()->counters().max_speed, render::kFlowDetailMinSpeed) << "the pool must come to rest";
-    const TwoTimes st = draw_at_two_times(*p.value(), 2.0f, 2.35f);
+    std::printf("still pool: max speed %.4f m/s after %d frames\n", p->counters().max_speed, frames + 1);
+    ASSERT_LT(p->counters().max_speed, render::kFlowDetailMinSpeed) << "the pool must come to rest";
+    const TwoTimes st = draw_at_two_times(*p, 2.0f, 2.35f);
     EXPECT_EQ(st.on0, st.on1) << "still water: the flow detail adds nothing, at any time";
     EXPECT_EQ(st.on0, st.off0) << "still water with flow detail is the water without it (a mirror stays a mirror)";
 }

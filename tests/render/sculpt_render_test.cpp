@@ -16,6 +16,7 @@
 using namespace mr;
 using test::pixels_differing;
 using test::small_valley;
+using test::stepped;
 
 namespace {
 
@@ -23,10 +24,9 @@ namespace {
 // true) re-uploads the terrain, and undo draws the same image as before it.
 TEST(Renderer, ASculptedHillShowsAndUndoDrawsTheSameImage) {
     REQUIRE_GL();
-    auto sim = Simulation::create(small_valley());
-    ASSERT_TRUE(sim.ok()) << sim.error().message;
-    Simulation& s = *sim.value();
-    for (int i = 0; i < 30; ++i) s.step(1.0f / 60.0f);
+    auto sim = stepped(small_valley(), 30);
+    ASSERT_TRUE(sim);
+    Simulation& s = *sim;
     auto r = render::Renderer::create();
     ASSERT_TRUE(r.ok()) << r.error().message;
     render::Renderer& renderer = *r.value();
@@ -61,10 +61,9 @@ TEST(Renderer, ASculptedHillShowsAndUndoDrawsTheSameImage) {
 // draws: a stroke inside, one over a corner (the skirts), the tree boxes drawn, undo.
 TEST(Renderer, AnIncrementalTerrainUploadDrawsWhatAWholeOneDraws) {
     REQUIRE_GL();
-    auto sim = Simulation::create(small_valley());
-    ASSERT_TRUE(sim.ok()) << sim.error().message;
-    Simulation& s = *sim.value();
-    for (int i = 0; i < 10; ++i) s.step(1.0f / 60.0f);
+    auto sim = stepped(small_valley(), 10);
+    ASSERT_TRUE(sim);
+    Simulation& s = *sim;
     auto ra = render::Renderer::create(), rb = render::Renderer::create();
     ASSERT_TRUE(ra.ok() && rb.ok());
     render::Renderer &inc = *ra.value(), &whole = *rb.value();
@@ -112,9 +111,9 @@ TEST(Renderer, AnIncrementalTerrainUploadDrawsWhatAWholeOneDraws) {
 // nothing tunnels; images before, at and after (written to the test's temp folder).
 TEST(Renderer, ADamAcrossTheRiverDriesItsChannelAndTheWaterFindsAnotherWay) {
     REQUIRE_GL();
-    auto sim = Simulation::create(default_scene());
-    ASSERT_TRUE(sim.ok()) << sim.error().message;
-    Simulation& s = *sim.value();
+    auto sim = stepped(default_scene(), 0);
+    ASSERT_TRUE(sim);
+    Simulation& s = *sim;
     const float dt = 1.0f / 60.0f;
     for (int f = 0; f < test::scaled(1200, 300); ++f) s.step(dt);
     // A copy: the dam changes the main channel (Simulation::sculpt measures it again).

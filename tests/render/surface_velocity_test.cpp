@@ -6,6 +6,7 @@
 #include <metariver/scene.h>
 
 #include "bowl_drop.h"
+#include "render_support.h"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -84,10 +85,9 @@ TEST(SurfaceVelocity, RealSurfaceMatchesTwinAndIsTheSameForAnyThreadCount) {
     SceneDef d = test::bowl_drop(1200, Vec3(16, 6, 16), Vec3(2.5f, 1.0f, 2.5f));
     d.spawn.initial_velocity = Vec3(3.0f, -6.0f, 0.0f);
     d.foam.enabled = false;
-    auto sim = Simulation::create(d);
-    ASSERT_TRUE(sim.ok()) << sim.error().message;
-    for (int i = 0; i < 30; ++i) sim.value()->step(1.0f / 60.0f);
-    const SurfaceMesh& m = sim.value()->surface();
+    auto sim = test::stepped(d, 30);
+    ASSERT_TRUE(sim);
+    const SurfaceMesh& m = sim->surface();
     ASSERT_GT(m.positions.size(), 1000u);
     const float radius = flow_radius(d);
     EXPECT_EQ(radius, d.field.radius) << "poly6 field: its support";
@@ -95,13 +95,13 @@ TEST(SurfaceVelocity, RealSurfaceMatchesTwinAndIsTheSameForAnyThreadCount) {
     render::SurfaceVelocityWorkspace ws;
     {
         tbb::global_control gc(tbb::global_control::max_allowed_parallelism, 1);
-        render::surface_velocities(m.positions, sim.value()->particles(), radius, ws, one);
+        render::surface_velocities(m.positions, sim->particles(), radius, ws, one);
     }
     {
         tbb::global_control gc(tbb::global_control::max_allowed_parallelism, 2);
-        render::surface_velocities(m.positions, sim.value()->particles(), radius, ws, two);
+        render::surface_velocities(m.positions, sim->particles(), radius, ws, two);
     }
-    render::surface_velocities_brute(m.positions, sim.value()->particles(), radius, slow);
+    render::surface_velocities_brute(m.positions, sim->particles(), radius, slow);
     EXPECT_EQ(one, two) << "per-vertex gathers in the grid's fixed order";
     EXPECT_LT(max_difference(one, slow), 1e-4f) << "float rounding of speeds up to ~10 m/s";
     size_t moving = 0, none = 0;
