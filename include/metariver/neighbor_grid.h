@@ -47,6 +47,14 @@ public:
     /// (including p's own particle if binned). Order is deterministic.
     template <class F>
     void for_each_candidate(const Vec3& p, F&& f) const {
+        for_each_candidate_slot(p, [&](uint32_t k) { f(order_[k]); });
+    }
+
+    /// The same walk by slot: f(k) for each position k in order() (the particle is
+    /// order()[k], its position at build time sorted_x/y/z()[k]: contiguous per cell, where
+    /// the particle arrays are read at random).
+    template <class F>
+    void for_each_candidate_slot(const Vec3& p, F&& f) const {
         const int cx = cell_coord(p.x, origin_.x), cy = cell_coord(p.y, origin_.y), cz = cell_coord(p.z, origin_.z);
         uint32_t seen[27];
         int nseen = 0;
@@ -63,7 +71,7 @@ public:
                         if (dup) continue;
                         seen[nseen++] = ub;
                     }
-                    for (uint32_t k = start_[ub]; k < start_[ub + 1]; ++k) f(order_[k]);
+                    for (uint32_t k = start_[ub]; k < start_[ub + 1]; ++k) f(k);
                 }
     }
 

@@ -160,20 +160,24 @@ void FoamSystem::resize(size_t n) {
 
 void FoamSystem::classify_all(const Particles& fluid) {
     const float h = h_, h2 = h * h;
+    // The fluid's positions from the grid's sorted copies (grid_ was built this step, on
+    // these positions): contiguous per cell.
+    const auto order = grid_.order();
+    const auto sx = grid_.sorted_x(), sy = grid_.sorted_y(), sz = grid_.sorted_z();
     tbb::parallel_for(tbb::blocked_range<size_t>(0, p_.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t i = r.begin(); i < r.end(); ++i) {
             const Vec3 x = p_.position[i];
             int count = 0;
             float wsum = 0.0f;
             Vec3 vsum(0.0f);
-            grid_.for_each_candidate(x, [&](uint32_t j) {
-                const Vec3 d = x - fluid.position[j];
+            grid_.for_each_candidate_slot(x, [&](uint32_t k) {
+                const Vec3 d(x.x - sx[k], x.y - sy[k], x.z - sz[k]);
                 const float r2 = glm::dot(d, d);
                 if (r2 >= h2) return;
                 const float w = 1.0f - std::sqrt(r2) / h;  // W~, the paper's weighting
                 ++count;
                 wsum += w;
-                vsum += w * fluid.velocity[j];
+                vsum += w * fluid.velocity[order[k]];
             });
             p_.kind[i] = uint8_t(classify(count, def_));
             p_.neighbours[i] = uint16_t(std::min(count, 65535));

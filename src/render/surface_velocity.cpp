@@ -37,19 +37,20 @@ void surface_velocities(std::span<const Vec3> vertices, const Particles& particl
     }
     ws.grid.build(particles.position, particles.active, radius);
     const float r2 = radius * radius, inv_r2 = 1.0f / r2;
-    const Vec3* pos = particles.position.data();
     const Vec3* vel = particles.velocity.data();
+    const auto order = ws.grid.order();
+    const auto sx = ws.grid.sorted_x(), sy = ws.grid.sorted_y(), sz = ws.grid.sorted_z();
     tbb::parallel_for(tbb::blocked_range<size_t>(0, vertices.size(), 512), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t i = r.begin(); i != r.end(); ++i) {
             const Vec3 x = vertices[i];
             Vec3 sum(0.0f);
             float weight = 0.0f;
-            ws.grid.for_each_candidate(x, [&](uint32_t j) {
-                const Vec3 d = x - pos[j];
+            ws.grid.for_each_candidate_slot(x, [&](uint32_t k) {  // positions from the sorted copies
+                const Vec3 d(x.x - sx[k], x.y - sy[k], x.z - sz[k]);
                 const float d2 = glm::dot(d, d);
                 if (d2 >= r2) return;  // hashed buckets and the 27 cells hold farther ones
                 const float w = poly6(d2, inv_r2);
-                sum += w * vel[j];
+                sum += w * vel[order[k]];
                 weight += w;
             });
             out[i] = normalised(sum, weight);

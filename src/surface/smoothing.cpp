@@ -50,7 +50,6 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/partitioner.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -104,19 +103,10 @@ void for_chunks(size_t n, F&& f) {
 }
 
 /// f(lo, hi) over [0, n) for work whose elements are independent (no sums): one equal
-/// share per thread, so a few thousand vertices keep both cores busy (fixed chunks of
-/// 4096 left 4,153 moving vertices as 4,096 + 57).
+/// share per thread (Shares below), so a few thousand vertices keep both cores busy
+/// (fixed chunks of 4096 left 4,153 moving vertices as 4,096 + 57).
 template <class F>
-void for_split(size_t n, F&& f) {
-    const size_t threads = static_cast<size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
-    if (n < kMinSplit || threads == 1) {
-        if (n) f(size_t{0}, n);
-        return;
-    }
-    const size_t share = (n + threads - 1) / threads;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, share), [&](const tbb::blocked_range<size_t>& r) { f(r.begin(), r.end()); },
-                      tbb::simple_partitioner());
-}
+void for_split(size_t n, F&& f);
 
 /// [0, n) in equal contiguous shares, one per thread when n is worth splitting (else
 /// one); for passes that count per share and then fill from the counts' offsets, which
@@ -128,13 +118,23 @@ struct Shares {
         count = n < min_split ? 1 : std::min<size_t>(threads, 8);
     }
     size_t begin(size_t c) const { return n * c / count; }
-    /// f(c, lo, hi) for every share c, in parallel.
+    /// f(c, lo, hi) for every share c, in parallel (a blocked_range of shares: the one
+    /// parallel_for form metariver calls, which the TSan build annotates).
     template <class F>
     void run(F&& f) const {
         if (count == 1) return f(size_t{0}, size_t{0}, n);
-        tbb::parallel_for(size_t{0}, count, [&](size_t c) { f(c, begin(c), begin(c + 1)); });
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 1), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t c = r.begin(); c != r.end(); ++c) f(c, begin(c), begin(c + 1));
+        });
     }
 };
+
+template <class F>
+void for_split(size_t n, F&& f) {
+    Shares(n).run([&](size_t, size_t lo, size_t hi) {
+        if (lo < hi) f(lo, hi);
+    });
+}
 
 float smoothstep01(float x) {
     x = std::clamp(x, 0.0f, 1.0f);
