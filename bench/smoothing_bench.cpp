@@ -36,8 +36,7 @@ void BM_RiverSurface(benchmark::State& state) {
     if (state.range(1) >= 0) def.iterations = int(state.range(1));
     const mr::SmoothingField weights{.field = &s.sparse_field(), .kernel = mr::poly6_kernel(s.def().field.radius, 1.0f),
                                      .threshold = s.def().field.threshold};
-    const mr::Terrain& t = s.terrain();
-    const mr::SmoothingGround ground{.vertices = t.vertices().data(), .columns = t.columns(), .rows = t.rows(), .spacing = t.area_scale()};
+    const mr::SmoothingGround ground = mr::smoothing_ground(s.terrain());
     mr::SurfaceMesh mesh;
     mr::SurfaceWorkspace ws;
     mr::SmoothingWorkspace sws;

@@ -14,6 +14,7 @@
 #include <metariver/terrain.h>
 
 #include <array>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
@@ -141,6 +142,9 @@ float resolved_damping(const SceneDef& def);
 float resolved_contact_band(const SceneDef& def);
 /// pbf.wall_density with "auto" resolved: 0 for a river, kStillWallDensity otherwise.
 float resolved_wall_density(const SceneDef& def);
+/// The terrain's rendered mesh as the ground of the surface smoothing (a view of its
+/// heights: the water's bed below it stays as extracted, surface.smooth_hidden).
+SmoothingGround smoothing_ground(const Terrain& t);
 /// Neighbourhood radius, metres, for the velocities of a scene's surface vertices
 /// (SceneView::flow_radius): the compact field's support (every surface vertex has a
 /// particle within it), 2 x the metaball radius for the paper's kernels.
@@ -475,13 +479,15 @@ private:
     uint64_t terrain_lifts_ = 0;
     std::string field_overflow_message_;
     // The drainage network and what is measured on it; updated when read after a
-    // terrain edit (channel_stale_: the samples stale_rows_ x stale_columns_ changed since
-    // it was last updated; refresh_channel()).
+    // terrain edit (refresh_channel()) over the samples changed since (empty: current).
+    struct SampleRect {
+        int i0 = std::numeric_limits<int>::max(), i1 = -1, j0 = std::numeric_limits<int>::max(), j1 = -1;
+        bool empty() const { return i1 < i0 || j1 < j0; }
+    };
     mutable ChannelMap channel_;
     mutable std::vector<std::pair<int, int>> main_path_;
     mutable ChannelCoverage coverage_;
-    mutable bool channel_stale_ = false;
-    mutable std::pair<int, int> stale_rows_{0, -1}, stale_columns_{0, -1};
+    mutable SampleRect channel_stale_;
     std::optional<RiverSize> sizing_;
     std::optional<FoamSystem> foam_;
     size_t prefilled_ = 0;

@@ -301,20 +301,17 @@ size_t ChannelMap::update(const Terrain& t, int i0, int i1, int j0, int j1) {
     // 2. Receivers of the cells whose fill may have changed and of their neighbours.
     std::vector<uint32_t> changed;            // cells whose receiver changed
     std::vector<int32_t> old_receiver;        // their receiver before
+    std::vector<uint32_t> visited;           // cells whose receiver was recomputed (marked)
     const auto recompute = [&](uint32_t c) {
         if (mark[c]) return;
         mark[c] = 1;
+        visited.push_back(c);
         const int32_t r = receiver_of(filled_, R, C, int(c / size_t(C)), int(c % size_t(C)));
         if (r != receiver_[c]) changed.push_back(c), old_receiver.push_back(receiver_[c]), receiver_[c] = r;
     };
-    std::vector<uint32_t> visited;
     for (const uint32_t c : fill_written) {
-        if (!mark[c]) visited.push_back(c);
         recompute(c);
-        for_neighbours(R, C, c, [&](size_t m, bool) {
-            if (!mark[m]) visited.push_back(uint32_t(m));
-            recompute(uint32_t(m));
-        });
+        for_neighbours(R, C, c, [&](size_t m, bool) { recompute(uint32_t(m)); });
     }
     for (const uint32_t c : visited) mark[c] = 0;
 

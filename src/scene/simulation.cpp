@@ -17,12 +17,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-/// The terrain's rendered surface as the ground of the smoothing: the water's bed below
-/// it is hidden and stays as extracted (surface.smooth_hidden).
-SmoothingGround ground_of(const Terrain& t) {
-    return {.vertices = t.vertices().data(), .columns = t.columns(), .rows = t.rows(), .spacing = t.area_scale()};
-}
-
 double ms_since(Clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
@@ -277,6 +271,10 @@ SceneView Simulation::view() const {
                      .frame = frame()};
 }
 
+SmoothingGround smoothing_ground(const Terrain& t) {
+    return {.vertices = t.vertices().data(), .columns = t.columns(), .rows = t.rows(), .spacing = t.area_scale()};
+}
+
 namespace {
 /// A PBF value with "auto" (`automatic`) resolved: 0 for a river, `still` for still water.
 float river_or_still(const SceneDef& def, float value, float automatic, float still) {
@@ -518,7 +516,7 @@ void Simulation::step(float frame_dt) {
         t0 = Clock::now();
         extract_surface_sparse(sparse_, def_.field.threshold, surface_, surface_ws_);
         const SmoothingField weights{.field = &sparse_, .kernel = sparse_def_.kernel, .threshold = def_.field.threshold};
-        const SmoothingGround ground = ground_of(terrain_);
+        const SmoothingGround ground = smoothing_ground(terrain_);
         smooth_surface(surface_, def_.smoothing, smooth_ws_, &weights, &ground);
         timings_.surface_ms = ms_since(t0);
         return;
@@ -532,7 +530,7 @@ void Simulation::step(float frame_dt) {
 
     t0 = Clock::now();
     extract_surface(field_, def_.field.threshold, surface_);
-    const SmoothingGround ground = ground_of(terrain_);
+    const SmoothingGround ground = smoothing_ground(terrain_);
     smooth_surface(surface_, def_.smoothing, smooth_ws_, nullptr, &ground);  // the paper's kernels: no feature weights
     timings_.surface_ms = ms_since(t0);
 }

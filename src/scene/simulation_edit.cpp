@@ -90,10 +90,10 @@ void Simulation::measure_main_channel(const SpawnDef& asked) const {
 }
 
 void Simulation::refresh_channel() const {
-    if (!channel_stale_) return;
-    channel_stale_ = false;
-    channel_.update(terrain_, stale_rows_.first, stale_rows_.second, stale_columns_.first, stale_columns_.second);
-    stale_rows_ = stale_columns_ = {0, -1};
+    if (channel_stale_.empty()) return;
+    const SampleRect r = channel_stale_;
+    channel_stale_ = {};
+    channel_.update(terrain_, r.i0, r.i1, r.j0, r.j1);
     measure_main_channel(def_.spawn);
 }
 
@@ -107,7 +107,7 @@ Status Simulation::move_source(const Vec3& center) {
     requested_.spawn.center = center;
     requested_.spawn.auto_center = requested_.spawn.auto_channel = false;
     solver_->set_spawn_center(center);
-    if (channel_stale_) refresh_channel();  // builds the network and measures from the new centre
+    if (!channel_stale_.empty()) refresh_channel();  // updates the network and measures from the new centre
     else measure_main_channel(def_.spawn);
     return Ok{};
 }
@@ -141,14 +141,8 @@ void Simulation::after_terrain_edit(const TerrainEdit& e) {
     if (e.empty()) return;
     bvh_.refit_heights(terrain_);
     // The network is updated over the changed samples when next read (refresh_channel).
-    if (channel_stale_) {
-        stale_rows_ = {std::min(stale_rows_.first, e.i0), std::max(stale_rows_.second, e.i1)};
-        stale_columns_ = {std::min(stale_columns_.first, e.j0), std::max(stale_columns_.second, e.j1)};
-    } else {
-        stale_rows_ = {e.i0, e.i1};
-        stale_columns_ = {e.j0, e.j1};
-    }
-    channel_stale_ = true;
+    SampleRect& r = channel_stale_;
+    r = {std::min(r.i0, e.i0), std::max(r.i1, e.i1), std::min(r.j0, e.j0), std::max(r.j1, e.j1)};
     auto& ps = static_cast<ParticleSolver&>(*solver_);
     // The triangles of the cells around the changed samples moved: particles over them
     // that are now under the ground (plus the collision's clearance) go up onto it, with

@@ -102,20 +102,15 @@ void for_chunks(size_t n, F&& f) {
     });
 }
 
-/// f(lo, hi) over [0, n) for work whose elements are independent (no sums): one equal
-/// share per thread (Shares below), so a few thousand vertices keep both cores busy
-/// (fixed chunks of 4096 left 4,153 moving vertices as 4,096 + 57).
-template <class F>
-void for_split(size_t n, F&& f);
-
 /// [0, n) in equal contiguous shares, one per thread when n is worth splitting (else
 /// one); for passes that count per share and then fill from the counts' offsets, which
 /// come out in element order whatever the number of shares.
 struct Shares {
+    static constexpr size_t kMax = 8;  ///< shares at most (callers keep per-share counts in arrays of it)
     size_t n = 0, count = 1;
     explicit Shares(size_t n_, size_t min_split = kMinSplit) : n(n_) {
         const size_t threads = static_cast<size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
-        count = n < min_split ? 1 : std::min<size_t>(threads, 8);
+        count = n < min_split ? 1 : std::min(threads, kMax);
     }
     size_t begin(size_t c) const { return n * c / count; }
     /// f(c, lo, hi) for every share c, in parallel (a blocked_range of shares: the one
@@ -129,6 +124,9 @@ struct Shares {
     }
 };
 
+/// f(lo, hi) over [0, n) for work whose elements are independent (no sums): one equal
+/// share per thread, so a few thousand vertices keep both cores busy (fixed chunks of
+/// 4096 left 4,153 moving vertices as 4,096 + 57).
 template <class F>
 void for_split(size_t n, F&& f) {
     Shares(n).run([&](size_t, size_t lo, size_t hi) {
@@ -415,8 +413,7 @@ void smooth_surface(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspa
     const Vec3* pos = mesh.positions.data();
     const Vec3* nrm = mesh.normals.data();
     float* weight = ws.weight.data();
-    // Hidden vertices (below the ground) get weight -1 here, 0 in the end: they neither
-    // move nor read the field.
+    // Hidden vertices (below the ground) get weight 0 without reading the field.
     const SmoothingGround* gr = ground && ground->vertices && ground->columns >= 2 && ground->rows >= 2 &&
                                         ground->spacing > 0.0f && !def.smooth_hidden
                                     ? ground
@@ -424,7 +421,7 @@ void smooth_surface(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspa
     const auto hidden = [gr](const Vec3& p) { return gr && p.y < gr->height(p.x, p.z); };
     // Per share: its moving vertices, then (offsets) where they go in ws.moving.
     const Shares sh(nv);
-    size_t share_moving[8] = {}, share_hidden[8] = {};
+    size_t share_moving[Shares::kMax] = {}, share_hidden[Shares::kMax] = {};
     std::optional<FieldProbe> probe;
     if (use_field) probe.emplace(*f);
     const float floor = half * unit;  // at or below it, w = 0: only that much is read

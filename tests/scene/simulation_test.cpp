@@ -112,7 +112,7 @@ TEST(Simulation, TheSmoothingGroundIsTheTerrainsMeshAndHidesTheRiversBed) {
     ASSERT_TRUE(sim.ok());
     Simulation& s = *sim.value();
     const Terrain& t = s.terrain();
-    const SmoothingGround ground{.vertices = t.vertices().data(), .columns = t.columns(), .rows = t.rows(), .spacing = t.area_scale()};
+    const SmoothingGround ground = smoothing_ground(t);
     const Aabb b = t.bounds();
     uint32_t state = 7u;
     const auto next = [&] {
