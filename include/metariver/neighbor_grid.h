@@ -269,6 +269,9 @@ public:
     size_t entries() const { return count_ ? start_[count_] : 0; }
     /// Builds since construction (tests and benches read it).
     uint64_t builds() const { return builds_; }
+    /// Build with AVX2 where the CPU has it (true, the default) or with the scalar loops
+    /// (false): the same lists, entry for entry (the tests build both).
+    void set_simd(bool on) { simd_ = on; }
 
 private:
     size_t count_ = 0;
@@ -276,6 +279,7 @@ private:
     std::vector<uint32_t> index_;
     std::vector<float> rx_, ry_, rz_;  // positions at the build
     uint64_t builds_ = 0;
+    bool simd_ = true;
 };
 
 }  // namespace mr
