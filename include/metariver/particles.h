@@ -545,7 +545,10 @@ private:
     NeighborLists pbf_lists_;
     bool pbf_lists_on_ = true;
     float pbf_list_skin_ = kPbfListSkin;
-    std::vector<float> pair_cache_;  ///< per list entry, W and the grad factor of the density pass
+    bool pbf_simd_on_ = true;  ///< the list passes with AVX2 where the CPU has it (pbf_simd.h)
+    /// Per list entry, W and the grad factor of the density pass (SIMD: W and the
+    /// gradient's x, y, z in pair_g_, pair_gy_, pair_gz_).
+    std::vector<float> pair_w_, pair_g_, pair_gy_, pair_gz_;
 };
 
 }  // namespace mr

@@ -50,6 +50,7 @@
 #include <metariver/particles.h>
 
 #include "grid_runs.h"
+#include "pbf_simd.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -287,6 +288,9 @@ void PbfSolver::step(float dt) {
     const float max_move = 0.5f * d.spacing;  // per iteration: a spawn overlap never explodes
     const bool terrain = collision_.mode != CollisionMode::None;
     const bool wall = terrain && d.wall_density > 0.0f;
+    // The list passes eight entries at a time (pbf_simd.h) where the CPU has AVX2.
+    const bool simd_on = pbf_simd_on_ && pbf_simd::available();
+    const pbf_simd::KernelConsts kc{k.h, k.h2, k.poly6, k.spiky};
 
     // 1. Predict.
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
@@ -337,28 +341,45 @@ void PbfSolver::step(float dt) {
     // them); W = -1 marks a pair the correction skips (beyond h, or i itself).
     for (int it = 0; it < d.iterations; ++it) {
         const NeighborLists* const nl = lists(2);  // the density and correction passes
-        float* const cache = nl ? (pair_cache_.resize(2 * nl->entries()), pair_cache_.data()) : nullptr;
+        const bool simd = nl && simd_on;
+        if (nl) {
+            pair_w_.resize(nl->entries());
+            pair_g_.resize(nl->entries());
+            if (simd) {  // the SIMD passes keep the gradient's three components
+                pair_gy_.resize(nl->entries());
+                pair_gz_.resize(nl->entries());
+            }
+        }
+        float* const cache_w = nl ? pair_w_.data() : nullptr;
+        float* const cache_g = nl ? pair_g_.data() : nullptr;
+        float* const cache_grad[3] = {cache_g, pair_gy_.data(), pair_gz_.data()};
         for_each_binned(grid_, nl, [&](uint32_t i, auto&& each) {
             const Vec3 xi = p.position[i];
             float rho = 0.0f, sum_g2 = 0.0f;
             Vec3 gi(0.0f);
-            each([&](uint32_t j, uint32_t e) {
-                const Vec3 dd = xi - p.position[j];
-                const float r2 = glm::dot(dd, dd);
-                if (r2 >= k.h2) {
-                    if (cache) cache[2 * e] = -1.0f;
-                    return;
-                }
-                const float w = k.W(r2), g = k.grad_factor(std::sqrt(r2));
-                if (cache) {
-                    cache[2 * e] = j == i ? -1.0f : w;
-                    cache[2 * e + 1] = g;
-                }
-                rho += w;
-                const Vec3 gr = (g * dd) * inv_rho0;
-                gi += gr;
-                sum_g2 += glm::dot(gr, gr);
-            });
+            if (simd) {
+                const pbf_simd::DensitySums s = pbf_simd::density(kc, inv_rho0, xi, i, nl->index(), nl->first(i),
+                                                                  nl->first(i + 1), p.position.data(), cache_w, cache_grad);
+                rho = s.rho, gi = s.grad, sum_g2 = s.grad2;
+            } else {
+                each([&](uint32_t j, uint32_t e) {
+                    const Vec3 dd = xi - p.position[j];
+                    const float r2 = glm::dot(dd, dd);
+                    if (r2 >= k.h2) {
+                        if (cache_w) cache_w[e] = -1.0f;
+                        return;
+                    }
+                    const float w = k.W(r2), g = k.grad_factor(std::sqrt(r2));
+                    if (cache_w) {
+                        cache_w[e] = j == i ? -1.0f : w;
+                        cache_g[e] = g;
+                    }
+                    rho += w;
+                    const Vec3 gr = (g * dd) * inv_rho0;
+                    gi += gr;
+                    sum_g2 += glm::dot(gr, gr);
+                });
+            }
             float C = rho * inv_rho0 - 1.0f;
             if (wall && (wall_share_[i] > 0.0f || wall_grad_[i] != Vec3(0.0f))) {  // the terrain's share, extrapolated
                 C += std::clamp(wall_share_[i] + glm::dot(wall_grad_[i], xi - wall_at_[i]), 0.0f, 1.0f);
@@ -379,12 +400,15 @@ void PbfSolver::step(float dt) {
             const Vec3 xi = p.position[i];
             const float li = lambda_[i];
             Vec3 dx(0.0f);
-            if (cache) {  // the density pass's W and grad factor, the same values
+            if (simd) {
+                dx = pbf_simd::correction(li, nl->index(), nl->first(i), nl->first(i + 1), lambda_.data(), cache_w,
+                                          cache_grad, scorr_scale, inv_wdq, d.scorr_n);
+            } else if (cache_w) {  // the density pass's W and grad factor, the same values
                 each([&](uint32_t j, uint32_t e) {
-                    const float wc = cache[2 * e];
+                    const float wc = cache_w[e];
                     if (wc < 0.0f) return;
                     const Vec3 dd = xi - p.position[j];
-                    dx += (li + lambda_[j] - scorr_scale * scorr(wc * inv_wdq)) * (cache[2 * e + 1] * dd);
+                    dx += (li + lambda_[j] - scorr_scale * scorr(wc * inv_wdq)) * (cache_g[e] * dd);
                 });
             } else {
                 each([&](uint32_t j, uint32_t) {
@@ -487,13 +511,18 @@ void PbfSolver::step(float dt) {
         for_each_binned(grid_, nl, [&](uint32_t i, auto&& each) {
             const Vec3 xi = p.position[i], vi = p.velocity[i];
             Vec3 visc(0.0f), eta(0.0f);
-            each([&](uint32_t j, uint32_t) {
-                const Vec3 dd = xi - p.position[j];
-                const float r2 = glm::dot(dd, dd);
-                if (r2 >= k.h2) return;
-                visc += (p.velocity[j] - vi) * k.W(r2);
-                if (d.vorticity > 0.0f) eta += glm::length(omega_[j]) * k.grad(dd, std::sqrt(r2));
-            });
+            if (nl && simd_on && d.vorticity <= 0.0f) {
+                visc = pbf_simd::viscosity(kc, xi, vi, nl->index(), nl->first(i), nl->first(i + 1), p.position.data(),
+                                           p.velocity.data());
+            } else {
+                each([&](uint32_t j, uint32_t) {
+                    const Vec3 dd = xi - p.position[j];
+                    const float r2 = glm::dot(dd, dd);
+                    if (r2 >= k.h2) return;
+                    visc += (p.velocity[j] - vi) * k.W(r2);
+                    if (d.vorticity > 0.0f) eta += glm::length(omega_[j]) * k.grad(dd, std::sqrt(r2));
+                });
+            }
             Vec3 v = vi + d.xsph * inv_rho0 * visc;
             if (d.vorticity > 0.0f) {
                 const float el = glm::length(eta);

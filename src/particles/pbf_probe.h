@@ -21,6 +21,10 @@ struct PbfProbe {
         s.pbf_lists_on_ = on;
         s.pbf_list_skin_ = skin;
     }
+    /// The list passes' sums eight entries at a time with AVX2 (true, the default, where
+    /// the CPU has it: pbf_simd.h) or one at a time (false: their twin, the same pairs and
+    /// formulas, summed in another order).
+    static void set_simd(PbfSolver& s, bool on) { s.pbf_simd_on_ = on; }
     /// The lists of the latest step (their builds() counts rebuilds too).
     static const NeighborLists& neighbor_lists(const PbfSolver& s) { return s.pbf_lists_; }
     /// The terrain's share of a kernel centred at `x` and its gradient (PbfDef::wall_density).

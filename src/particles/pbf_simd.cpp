@@ -1,0 +1,165 @@
+// AVX2 sums of the PBF solver's density and correction passes (pbf_simd.h): eight list
+// entries at a time, the neighbours' positions gathered from the solver's array.
+#include "pbf_simd.h"
+
+#include <cstdlib>
+
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#define METARIVER_PBF_AVX2 1
+#endif
+
+namespace mr::pbf_simd {
+
+#if METARIVER_PBF_AVX2
+
+bool available() {
+    static const bool yes = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
+                            std::getenv("METARIVER_NO_AVX2") == nullptr;
+    return yes;
+}
+
+namespace {
+
+#define MR_AVX2 __attribute__((target("avx2,fma")))
+
+/// Lanes [0, n) set (n in [0, 8]).
+MR_AVX2 inline __m256i lanes_below(uint32_t n) {
+    return _mm256_cmpgt_epi32(_mm256_set1_epi32(int(n)), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+}
+
+/// The sum of the eight lanes, in a fixed order.
+MR_AVX2 inline float sum8(__m256 v) {
+    const __m128 s = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
+    const __m128 t = _mm_add_ps(s, _mm_movehl_ps(s, s));
+    return _mm_cvtss_f32(_mm_add_ss(t, _mm_shuffle_ps(t, t, 1)));
+}
+
+/// Eight list entries from `at` (the lanes beyond `valid` read index 0 and are masked by
+/// the caller): their indices and the neighbours' x, y, z gathered from `pos`.
+struct Gathered {
+    __m256i j;
+    __m256 x, y, z;
+};
+MR_AVX2 inline Gathered gather(const uint32_t* at, __m256i valid, const float* pos) {
+    Gathered g;
+    g.j = _mm256_maskload_epi32(reinterpret_cast<const int*>(at), valid);
+    const __m256i j3 = _mm256_add_epi32(g.j, _mm256_add_epi32(g.j, g.j));
+    g.x = _mm256_i32gather_ps(pos, j3, 4);
+    g.y = _mm256_i32gather_ps(pos + 1, j3, 4);
+    g.z = _mm256_i32gather_ps(pos + 2, j3, 4);
+    return g;
+}
+
+}  // namespace
+
+MR_AVX2 DensitySums density(const KernelConsts& k, float inv_rho0, const Vec3& xi, uint32_t i, const uint32_t* index,
+                            uint32_t b, uint32_t e, const Vec3* pos, float* cache_w, float* const cache_g[3]) {
+    const float* const p = &pos[0].x;
+    const __m256 px = _mm256_set1_ps(xi.x), py = _mm256_set1_ps(xi.y), pz = _mm256_set1_ps(xi.z);
+    const __m256 h = _mm256_set1_ps(k.h), h2 = _mm256_set1_ps(k.h2), poly6 = _mm256_set1_ps(k.poly6);
+    const __m256 spiky = _mm256_set1_ps(k.spiky), tiny = _mm256_set1_ps(1e-9f), inv = _mm256_set1_ps(inv_rho0);
+    const __m256 minus1 = _mm256_set1_ps(-1.0f);
+    const __m256i self = _mm256_set1_epi32(int(i));
+    __m256 rho = _mm256_setzero_ps(), gx = rho, gy = rho, gz = rho, g2 = rho;
+    for (uint32_t q = b; q < e; q += 8) {
+        const __m256i valid = lanes_below(e - q);
+        const Gathered n = gather(index + q, valid, p);
+        const __m256 dx = _mm256_sub_ps(px, n.x), dy = _mm256_sub_ps(py, n.y), dz = _mm256_sub_ps(pz, n.z);
+        const __m256 r2 = _mm256_fmadd_ps(dz, dz, _mm256_fmadd_ps(dy, dy, _mm256_mul_ps(dx, dx)));
+        const __m256 in = _mm256_and_ps(_mm256_cmp_ps(r2, h2, _CMP_LT_OQ), _mm256_castsi256_ps(valid));
+        const __m256 d = _mm256_sub_ps(h2, r2);
+        const __m256 w = _mm256_and_ps(in, _mm256_mul_ps(_mm256_mul_ps(poly6, d), _mm256_mul_ps(d, d)));
+        const __m256 r = _mm256_sqrt_ps(r2);
+        const __m256 a = _mm256_sub_ps(h, r);
+        const __m256 grad_ok = _mm256_and_ps(in, _mm256_and_ps(_mm256_cmp_ps(r, tiny, _CMP_GT_OQ),
+                                                                _mm256_cmp_ps(r, h, _CMP_LT_OQ)));
+        const __m256 g = _mm256_and_ps(grad_ok, _mm256_div_ps(_mm256_mul_ps(spiky, _mm256_mul_ps(a, a)), r));
+        // W for the correction: -1 beyond h and for i itself.
+        const __m256 not_self = _mm256_castsi256_ps(
+            _mm256_xor_si256(_mm256_cmpeq_epi32(n.j, self), _mm256_set1_epi32(-1)));
+        const __m256 wc = _mm256_blendv_ps(minus1, w, _mm256_and_ps(in, not_self));
+        const __m256 gdx = _mm256_mul_ps(g, dx), gdy = _mm256_mul_ps(g, dy), gdz = _mm256_mul_ps(g, dz);
+        _mm256_maskstore_ps(cache_w + q, valid, wc);
+        _mm256_maskstore_ps(cache_g[0] + q, valid, gdx);
+        _mm256_maskstore_ps(cache_g[1] + q, valid, gdy);
+        _mm256_maskstore_ps(cache_g[2] + q, valid, gdz);
+        rho = _mm256_add_ps(rho, w);
+        const __m256 grx = _mm256_mul_ps(gdx, inv), gry = _mm256_mul_ps(gdy, inv), grz = _mm256_mul_ps(gdz, inv);
+        gx = _mm256_add_ps(gx, grx);
+        gy = _mm256_add_ps(gy, gry);
+        gz = _mm256_add_ps(gz, grz);
+        g2 = _mm256_fmadd_ps(grz, grz, _mm256_fmadd_ps(gry, gry, _mm256_fmadd_ps(grx, grx, g2)));
+    }
+    DensitySums s;
+    s.rho = sum8(rho);
+    s.grad = Vec3(sum8(gx), sum8(gy), sum8(gz));
+    s.grad2 = sum8(g2);
+    return s;
+}
+
+MR_AVX2 Vec3 correction(float li, const uint32_t* index, uint32_t b, uint32_t e, const float* lambda,
+                        const float* cache_w, const float* const cache_g[3], float scorr_scale, float inv_wdq,
+                        int scorr_n) {
+    const __m256 l = _mm256_set1_ps(li), sk = _mm256_set1_ps(scorr_scale), iw = _mm256_set1_ps(inv_wdq);
+    const __m256 one = _mm256_set1_ps(1.0f), zero = _mm256_setzero_ps();
+    __m256 sx = zero, sy = zero, sz = zero;
+    for (uint32_t q = b; q < e; q += 8) {
+        const __m256i valid = lanes_below(e - q);
+        const __m256 wc = _mm256_maskload_ps(cache_w + q, valid);
+        const __m256 use = _mm256_and_ps(_mm256_cmp_ps(wc, zero, _CMP_GE_OQ), _mm256_castsi256_ps(valid));
+        const __m256i j = _mm256_maskload_epi32(reinterpret_cast<const int*>(index + q), valid);
+        const __m256 lj = _mm256_mask_i32gather_ps(zero, lambda, j, use, 4);
+        const __m256 x = _mm256_mul_ps(wc, iw);
+        __m256 sc = one;
+        for (int m = 0; m < scorr_n; ++m) sc = _mm256_mul_ps(sc, x);
+        const __m256 c = _mm256_and_ps(use, _mm256_sub_ps(_mm256_add_ps(l, lj), _mm256_mul_ps(sk, sc)));
+        sx = _mm256_fmadd_ps(c, _mm256_maskload_ps(cache_g[0] + q, valid), sx);
+        sy = _mm256_fmadd_ps(c, _mm256_maskload_ps(cache_g[1] + q, valid), sy);
+        sz = _mm256_fmadd_ps(c, _mm256_maskload_ps(cache_g[2] + q, valid), sz);
+    }
+    return Vec3(sum8(sx), sum8(sy), sum8(sz));
+}
+
+MR_AVX2 Vec3 viscosity(const KernelConsts& k, const Vec3& xi, const Vec3& vi, const uint32_t* index, uint32_t b,
+                       uint32_t e, const Vec3* pos, const Vec3* vel) {
+    const __m256 px = _mm256_set1_ps(xi.x), py = _mm256_set1_ps(xi.y), pz = _mm256_set1_ps(xi.z);
+    const __m256 ux = _mm256_set1_ps(vi.x), uy = _mm256_set1_ps(vi.y), uz = _mm256_set1_ps(vi.z);
+    const __m256 h2 = _mm256_set1_ps(k.h2), poly6 = _mm256_set1_ps(k.poly6);
+    __m256 sx = _mm256_setzero_ps(), sy = sx, sz = sx;
+    for (uint32_t q = b; q < e; q += 8) {
+        const __m256i valid = lanes_below(e - q);
+        const Gathered n = gather(index + q, valid, &pos[0].x);
+        const __m256 dx = _mm256_sub_ps(px, n.x), dy = _mm256_sub_ps(py, n.y), dz = _mm256_sub_ps(pz, n.z);
+        const __m256 r2 = _mm256_fmadd_ps(dz, dz, _mm256_fmadd_ps(dy, dy, _mm256_mul_ps(dx, dx)));
+        const __m256 in = _mm256_and_ps(_mm256_cmp_ps(r2, h2, _CMP_LT_OQ), _mm256_castsi256_ps(valid));
+        const __m256 d = _mm256_sub_ps(h2, r2);
+        const __m256 w = _mm256_and_ps(in, _mm256_mul_ps(_mm256_mul_ps(poly6, d), _mm256_mul_ps(d, d)));
+        const __m256i j3 = _mm256_add_epi32(n.j, _mm256_add_epi32(n.j, n.j));
+        const float* v = &vel[0].x;
+        sx = _mm256_fmadd_ps(_mm256_sub_ps(_mm256_i32gather_ps(v, j3, 4), ux), w, sx);
+        sy = _mm256_fmadd_ps(_mm256_sub_ps(_mm256_i32gather_ps(v + 1, j3, 4), uy), w, sy);
+        sz = _mm256_fmadd_ps(_mm256_sub_ps(_mm256_i32gather_ps(v + 2, j3, 4), uz), w, sz);
+    }
+    return Vec3(sum8(sx), sum8(sy), sum8(sz));
+}
+
+#else
+
+bool available() { return false; }
+DensitySums density(const KernelConsts&, float, const Vec3&, uint32_t, const uint32_t*, uint32_t, uint32_t, const Vec3*,
+                    float*, float* const*) {
+    return {};
+}
+Vec3 correction(float, const uint32_t*, uint32_t, uint32_t, const float*, const float*, const float* const*, float, float,
+                int) {
+    return Vec3(0.0f);
+}
+Vec3 viscosity(const KernelConsts&, const Vec3&, const Vec3&, const uint32_t*, uint32_t, uint32_t, const Vec3*,
+               const Vec3*) {
+    return Vec3(0.0f);
+}
+
+#endif
+
+}  // namespace mr::pbf_simd

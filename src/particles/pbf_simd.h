@@ -1,0 +1,48 @@
+// metariver particles, private: the PBF solver's per-particle sums over its neighbour
+// lists, eight list entries at a time with AVX2 (pbf_simd.cpp), picked at run time.
+//
+// The scalar loops in pbf.cpp are their twin: the same pairs and the same formulas, but
+// eight partial sums per particle (added up in a fixed order) and fused multiply-adds,
+// so the results agree to float rounding, not bit for bit (tests/particles/pbf_test.cpp
+// compares them). Each particle's sums run in a fixed order, so a step is the same for
+// any thread count.
+#pragma once
+
+#include <metariver/core.h>
+
+#include <cstdint>
+
+namespace mr::pbf_simd {
+
+/// AVX2 and FMA on this CPU, unless METARIVER_NO_AVX2 is set.
+bool available();
+
+/// The kernels of pbf.cpp: poly6 W(r2) = poly6 (h2 - r2)^3 below h2, spiky gradient
+/// factor spiky (h - r)^2 / r for 1e-9 < r < h.
+struct KernelConsts {
+    float h, h2, poly6, spiky;
+};
+
+struct DensitySums {
+    float rho = 0.0f;     ///< sum of W over the entries within h (i itself included)
+    Vec3 grad{0.0f};      ///< sum of grad W / rho0
+    float grad2 = 0.0f;   ///< sum of |grad W / rho0|^2
+};
+
+/// The density pass of particle i (position xi) over its list entries [b, e) of `index`:
+/// per entry, cache_w[e] = W (or -1 beyond h and for i itself) and cache_g[0..2][e] = the
+/// kernel gradient's x, y, z (grad factor times x_i - x_j), for the correction pass.
+DensitySums density(const KernelConsts& k, float inv_rho0, const Vec3& xi, uint32_t i, const uint32_t* index,
+                    uint32_t b, uint32_t e, const Vec3* pos, float* cache_w, float* const cache_g[3]);
+
+/// The correction pass's sum of (li + lambda_j - scorr) grad W over the entries with
+/// cache_w >= 0 (not yet divided by rho0), from the density pass's cache (the positions
+/// have not moved since): scorr = scorr_scale (cache_w inv_wdq)^scorr_n.
+Vec3 correction(float li, const uint32_t* index, uint32_t b, uint32_t e, const float* lambda, const float* cache_w,
+                const float* const cache_g[3], float scorr_scale, float inv_wdq, int scorr_n);
+
+/// XSPH's sum of (v_j - v_i) W over i's list entries [b, e) within h (not yet scaled).
+Vec3 viscosity(const KernelConsts& k, const Vec3& xi, const Vec3& vi, const uint32_t* index, uint32_t b, uint32_t e,
+               const Vec3* pos, const Vec3* vel);
+
+}  // namespace mr::pbf_simd
