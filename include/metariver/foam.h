@@ -112,9 +112,13 @@ public:
 
     /// Classification rule (exposed for tests).
     static DiffuseKind classify(int neighbours, const FoamDef& def);
+    /// The potentials' neighbour sums eight at a time with AVX2 where the CPU has it
+    /// (true, the default) or one at a time (false: the twin; equal to float rounding).
+    void set_simd(bool on) { simd_ = on; }
 
 private:
     void potentials(const Particles& fluid);
+    void potentials_simd(const Particles& fluid);
     void advect(const Terrain& terrain, float dt);
     void emit(const Particles& fluid, float dt, uint64_t frame);
     /// Every diffuse particle's fluid neighbours within h, kind and averaged fluid velocity.
@@ -138,6 +142,8 @@ private:
     FoamStats stats_;
     std::vector<Vec3> normal_;
     std::vector<float> ta_, wc_, ek_;
+    std::vector<float> sorted_;  ///< potentials_simd: velocities and normals in the grid's order
+    bool simd_ = true;
     std::vector<uint32_t> emit_count_, emit_first_;
     std::vector<uint8_t> keep_;
 };

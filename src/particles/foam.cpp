@@ -5,6 +5,7 @@
 #include <metariver/foam.h>
 
 #include "grid_runs.h"
+#include "pbf_simd.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -193,6 +194,10 @@ void FoamSystem::potentials(const Particles& fluid) {
     wc_.assign(n, 0.0f);
     ek_.assign(n, 0.0f);
     const float h = h_;
+    if (simd_ && pbf_simd::available()) {
+        potentials_simd(fluid);
+        return;
+    }
     // Pass 1: surface normals n_i = sum_j x_ij W~ (zero where the neighbourhood is full).
     for_each_fluid(grid_, h, [&](uint32_t i, auto&& each) {
         Vec3 s(0.0f);
@@ -218,6 +223,46 @@ void FoamSystem::potentials(const Particles& fluid) {
             // Convex only: the neighbour lies behind i along i's normal (x^_ji . n_i < 0).
             if (glm::dot(-xh, ni) < 0.0f) curv += (1.0f - glm::dot(ni, normal_[j])) * w;
         });
+        const bool along_normal = speed > 1e-6f && glm::dot(vi / speed, ni) >= 0.6f;
+        ta_[i] = ta;
+        wc_[i] = along_normal ? curv : 0.0f;
+    });
+}
+
+void FoamSystem::potentials_simd(const Particles& fluid) {
+    // The same two passes eight candidates at a time (pbf_simd.h) over cell-ordered
+    // copies: the grid's positions, the velocities gathered into its order once, and the
+    // first pass's normals written in that order for the second.
+    const auto order = grid_.order();
+    const size_t m = order.size();
+    const float h = h_;
+    sorted_.resize(6 * m);
+    float* const v = sorted_.data();
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, m, 4096), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t k = r.begin(); k != r.end(); ++k) {
+            const Vec3 u = fluid.velocity[order[k]];
+            v[k] = u.x, v[m + k] = u.y, v[2 * m + k] = u.z;
+        }
+    });
+    const pbf_simd::FoamArrays a{grid_.sorted_x().data(), grid_.sorted_y().data(), grid_.sorted_z().data(), v, v + m,
+                                 v + 2 * m, v + 3 * m, v + 4 * m, v + 5 * m};
+    float* const n = v + 3 * m;
+    for_each_run(grid_, [&](uint32_t k, const Ranges& rg) {
+        Vec3 sum(0.0f);
+        for (int q = 0; q < rg.n; ++q) sum += pbf_simd::foam_normal_sum(a, k, rg.s[q], rg.e[q], h);
+        const float len = glm::length(sum);
+        const Vec3 nk = len > kSurfaceNormalMin ? sum / len : Vec3(0.0f);
+        normal_[order[k]] = nk;
+        n[k] = nk.x, n[m + k] = nk.y, n[2 * m + k] = nk.z;
+    });
+    for_each_run(grid_, [&](uint32_t k, const Ranges& rg) {
+        const uint32_t i = order[k];
+        const Vec3 vi = fluid.velocity[i], ni = normal_[i];
+        const float speed = glm::length(vi);
+        ek_[i] = 0.5f * speed * speed;
+        if (ek_[i] <= def_.energy_min) return;
+        float ta = 0.0f, curv = 0.0f;
+        for (int q = 0; q < rg.n; ++q) pbf_simd::foam_potential_sums(a, k, vi, ni, rg.s[q], rg.e[q], h, ta, curv);
         const bool along_normal = speed > 1e-6f && glm::dot(vi / speed, ni) >= 0.6f;
         ta_[i] = ta;
         wc_[i] = along_normal ? curv : 0.0f;

@@ -47,6 +47,10 @@
 // has moved 0.45 skin), the same pairs in the same order, and the density pass keeps
 // each pair's W and grad factor for the correction pass at the same positions: the
 // same step bit for bit as the 27-cell twin (set_pbf_neighbor_lists(false); tested).
+// Where the CPU has AVX2 and FMA the list passes (density, correction, XSPH without
+// vorticity) sum eight entries at a time (pbf_simd.h; the density pass keeps the kernel
+// gradient's three components, so the correction gathers no positions): the scalar list
+// loops are their twin, equal to float rounding (PbfProbe::set_simd; tested).
 #include <metariver/particles.h>
 
 #include "grid_runs.h"
@@ -508,28 +512,39 @@ void PbfSolver::step(float dt) {
                 omega_[i] = w * inv_rho0;
             });
         }
-        for_each_binned(grid_, nl, [&](uint32_t i, auto&& each) {
-            const Vec3 xi = p.position[i], vi = p.velocity[i];
-            Vec3 visc(0.0f), eta(0.0f);
-            if (nl && simd_on && d.vorticity <= 0.0f) {
-                visc = pbf_simd::viscosity(kc, xi, vi, nl->index(), nl->first(i), nl->first(i + 1), p.position.data(),
-                                           p.velocity.data());
-            } else {
-                each([&](uint32_t j, uint32_t) {
-                    const Vec3 dd = xi - p.position[j];
-                    const float r2 = glm::dot(dd, dd);
-                    if (r2 >= k.h2) return;
-                    visc += (p.velocity[j] - vi) * k.W(r2);
-                    if (d.vorticity > 0.0f) eta += glm::length(omega_[j]) * k.grad(dd, std::sqrt(r2));
-                });
-            }
-            Vec3 v = vi + d.xsph * inv_rho0 * visc;
-            if (d.vorticity > 0.0f) {
-                const float el = glm::length(eta);
-                if (el > 1e-12f) v += dt * d.vorticity * glm::cross(eta / el, omega_[i]);
-            }
-            delta_[i] = v;
-        });
+        if (simd_on && d.vorticity <= 0.0f && !nl) {  // stale lists: the 27 cells' ranges, eight at a time
+            for_each_run(grid_, [&](uint32_t i, const Ranges& rg) {
+                const Vec3 xi = p.position[i], vi = p.velocity[i];
+                Vec3 visc(0.0f);
+                for (int q = 0; q < rg.n; ++q)
+                    visc += pbf_simd::viscosity(kc, xi, vi, nullptr, rg.s[q], rg.e[q], p.position.data(),
+                                                p.velocity.data());
+                delta_[i] = vi + d.xsph * inv_rho0 * visc;
+            });
+        } else {
+            for_each_binned(grid_, nl, [&](uint32_t i, auto&& each) {
+                const Vec3 xi = p.position[i], vi = p.velocity[i];
+                Vec3 visc(0.0f), eta(0.0f);
+                if (nl && simd_on && d.vorticity <= 0.0f) {
+                    visc = pbf_simd::viscosity(kc, xi, vi, nl->index(), nl->first(i), nl->first(i + 1),
+                                               p.position.data(), p.velocity.data());
+                } else {
+                    each([&](uint32_t j, uint32_t) {
+                        const Vec3 dd = xi - p.position[j];
+                        const float r2 = glm::dot(dd, dd);
+                        if (r2 >= k.h2) return;
+                        visc += (p.velocity[j] - vi) * k.W(r2);
+                        if (d.vorticity > 0.0f) eta += glm::length(omega_[j]) * k.grad(dd, std::sqrt(r2));
+                    });
+                }
+                Vec3 v = vi + d.xsph * inv_rho0 * visc;
+                if (d.vorticity > 0.0f) {
+                    const float el = glm::length(eta);
+                    if (el > 1e-12f) v += dt * d.vorticity * glm::cross(eta / el, omega_[i]);
+                }
+                delta_[i] = v;
+            });
+        }
         tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
             for (size_t i = r.begin(); i != r.end(); ++i)
                 if (p.active[i]) p.velocity[i] = delta_[i];

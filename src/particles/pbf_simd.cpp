@@ -35,15 +35,18 @@ MR_AVX2 inline float sum8(__m256 v) {
     return _mm_cvtss_f32(_mm_add_ss(t, _mm_shuffle_ps(t, t, 1)));
 }
 
-/// Eight list entries from `at` (the lanes beyond `valid` read index 0 and are masked by
-/// the caller): their indices and the neighbours' x, y, z gathered from `pos`.
+/// Eight list entries from q (the lanes beyond `valid` read index 0 and are masked by
+/// the caller): their indices (index[q + lane], or q + lane without an index: a range of
+/// the cell-ordered arrays) and the neighbours' x, y, z gathered from `pos`.
 struct Gathered {
     __m256i j;
     __m256 x, y, z;
 };
-MR_AVX2 inline Gathered gather(const uint32_t* at, __m256i valid, const float* pos) {
+MR_AVX2 inline Gathered gather(const uint32_t* index, uint32_t q, __m256i valid, const float* pos) {
     Gathered g;
-    g.j = _mm256_maskload_epi32(reinterpret_cast<const int*>(at), valid);
+    g.j = index ? _mm256_maskload_epi32(reinterpret_cast<const int*>(index + q), valid)
+                : _mm256_and_si256(valid, _mm256_add_epi32(_mm256_set1_epi32(int(q)),
+                                                           _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)));
     const __m256i j3 = _mm256_add_epi32(g.j, _mm256_add_epi32(g.j, g.j));
     g.x = _mm256_i32gather_ps(pos, j3, 4);
     g.y = _mm256_i32gather_ps(pos + 1, j3, 4);
@@ -64,7 +67,7 @@ MR_AVX2 DensitySums density(const KernelConsts& k, float inv_rho0, const Vec3& x
     __m256 rho = _mm256_setzero_ps(), gx = rho, gy = rho, gz = rho, g2 = rho;
     for (uint32_t q = b; q < e; q += 8) {
         const __m256i valid = lanes_below(e - q);
-        const Gathered n = gather(index + q, valid, p);
+        const Gathered n = gather(index, q, valid, p);
         const __m256 dx = _mm256_sub_ps(px, n.x), dy = _mm256_sub_ps(py, n.y), dz = _mm256_sub_ps(pz, n.z);
         const __m256 r2 = _mm256_fmadd_ps(dz, dz, _mm256_fmadd_ps(dy, dy, _mm256_mul_ps(dx, dx)));
         const __m256 in = _mm256_and_ps(_mm256_cmp_ps(r2, h2, _CMP_LT_OQ), _mm256_castsi256_ps(valid));
@@ -129,7 +132,7 @@ MR_AVX2 Vec3 viscosity(const KernelConsts& k, const Vec3& xi, const Vec3& vi, co
     __m256 sx = _mm256_setzero_ps(), sy = sx, sz = sx;
     for (uint32_t q = b; q < e; q += 8) {
         const __m256i valid = lanes_below(e - q);
-        const Gathered n = gather(index + q, valid, &pos[0].x);
+        const Gathered n = gather(index, q, valid, &pos[0].x);
         const __m256 dx = _mm256_sub_ps(px, n.x), dy = _mm256_sub_ps(py, n.y), dz = _mm256_sub_ps(pz, n.z);
         const __m256 r2 = _mm256_fmadd_ps(dz, dz, _mm256_fmadd_ps(dy, dy, _mm256_mul_ps(dx, dx)));
         const __m256 in = _mm256_and_ps(_mm256_cmp_ps(r2, h2, _CMP_LT_OQ), _mm256_castsi256_ps(valid));
@@ -142,6 +145,83 @@ MR_AVX2 Vec3 viscosity(const KernelConsts& k, const Vec3& xi, const Vec3& vi, co
         sz = _mm256_fmadd_ps(_mm256_sub_ps(_mm256_i32gather_ps(v + 2, j3, 4), uz), w, sz);
     }
     return Vec3(sum8(sx), sum8(sy), sum8(sz));
+}
+
+namespace {
+
+/// Per lane over candidates j0 .. j0 + 7 of [s, e): the offset x_k - x_j, r, W~ = 1 - r / h
+/// and the mask of 1e-12 < r^2 < h^2, j != k, j < e.
+struct FoamPair {
+    __m256 dx, dy, dz, r, w, ok;
+};
+MR_AVX2 inline FoamPair foam_pair(const FoamArrays& a, __m256 px, __m256 py, __m256 pz, uint32_t k, uint32_t j0,
+                                  uint32_t e, __m256 h2, __m256 inv_h, __m256i& valid) {
+    FoamPair q;
+    valid = lanes_below(e - j0);
+    const __m256i j = _mm256_add_epi32(_mm256_set1_epi32(int(j0)), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+    const __m256i not_k = _mm256_xor_si256(_mm256_cmpeq_epi32(j, _mm256_set1_epi32(int(k))), _mm256_set1_epi32(-1));
+    valid = _mm256_and_si256(valid, not_k);
+    q.dx = _mm256_sub_ps(px, _mm256_maskload_ps(a.x + j0, valid));
+    q.dy = _mm256_sub_ps(py, _mm256_maskload_ps(a.y + j0, valid));
+    q.dz = _mm256_sub_ps(pz, _mm256_maskload_ps(a.z + j0, valid));
+    const __m256 r2 = _mm256_fmadd_ps(q.dz, q.dz, _mm256_fmadd_ps(q.dy, q.dy, _mm256_mul_ps(q.dx, q.dx)));
+    q.ok = _mm256_and_ps(_mm256_castsi256_ps(valid),
+                         _mm256_and_ps(_mm256_cmp_ps(r2, h2, _CMP_LT_OQ),
+                                       _mm256_cmp_ps(r2, _mm256_set1_ps(1e-12f), _CMP_GT_OQ)));
+    q.r = _mm256_sqrt_ps(r2);
+    q.w = _mm256_fnmadd_ps(q.r, inv_h, _mm256_set1_ps(1.0f));
+    return q;
+}
+
+}  // namespace
+
+MR_AVX2 Vec3 foam_normal_sum(const FoamArrays& a, uint32_t k, uint32_t s, uint32_t e, float h) {
+    const __m256 px = _mm256_set1_ps(a.x[k]), py = _mm256_set1_ps(a.y[k]), pz = _mm256_set1_ps(a.z[k]);
+    const __m256 h2 = _mm256_set1_ps(h * h), inv_h = _mm256_set1_ps(1.0f / h);
+    __m256 sx = _mm256_setzero_ps(), sy = sx, sz = sx;
+    for (uint32_t j0 = s; j0 < e; j0 += 8) {
+        __m256i valid;
+        const FoamPair q = foam_pair(a, px, py, pz, k, j0, e, h2, inv_h, valid);
+        const __m256 f = _mm256_and_ps(q.ok, _mm256_div_ps(q.w, q.r));  // W~ / r
+        sx = _mm256_fmadd_ps(q.dx, f, sx);
+        sy = _mm256_fmadd_ps(q.dy, f, sy);
+        sz = _mm256_fmadd_ps(q.dz, f, sz);
+    }
+    return Vec3(sum8(sx), sum8(sy), sum8(sz));
+}
+
+MR_AVX2 void foam_potential_sums(const FoamArrays& a, uint32_t k, const Vec3& v, const Vec3& n, uint32_t s, uint32_t e,
+                                 float h, float& ta, float& curv) {
+    const __m256 px = _mm256_set1_ps(a.x[k]), py = _mm256_set1_ps(a.y[k]), pz = _mm256_set1_ps(a.z[k]);
+    const __m256 ux = _mm256_set1_ps(v.x), uy = _mm256_set1_ps(v.y), uz = _mm256_set1_ps(v.z);
+    const __m256 nx = _mm256_set1_ps(n.x), ny = _mm256_set1_ps(n.y), nz = _mm256_set1_ps(n.z);
+    const __m256 h2 = _mm256_set1_ps(h * h), inv_h = _mm256_set1_ps(1.0f / h), zero = _mm256_setzero_ps();
+    const __m256 one = _mm256_set1_ps(1.0f), tiny = _mm256_set1_ps(1e-6f);
+    __m256 t = zero, c = zero;
+    for (uint32_t j0 = s; j0 < e; j0 += 8) {
+        __m256i valid;
+        const FoamPair q = foam_pair(a, px, py, pz, k, j0, e, h2, inv_h, valid);
+        if (_mm256_testz_ps(q.ok, q.ok)) continue;
+        const __m256 inv_r = _mm256_div_ps(one, q.r);
+        const __m256 xx = _mm256_mul_ps(q.dx, inv_r), xy = _mm256_mul_ps(q.dy, inv_r), xz = _mm256_mul_ps(q.dz, inv_r);
+        // Trapped air: |v_kj| - v_kj . x^_kj = |v_kj| (1 - v^_kj . x^_kj).
+        const __m256 vx = _mm256_sub_ps(ux, _mm256_maskload_ps(a.vx + j0, valid));
+        const __m256 vy = _mm256_sub_ps(uy, _mm256_maskload_ps(a.vy + j0, valid));
+        const __m256 vz = _mm256_sub_ps(uz, _mm256_maskload_ps(a.vz + j0, valid));
+        const __m256 vl = _mm256_sqrt_ps(_mm256_fmadd_ps(vz, vz, _mm256_fmadd_ps(vy, vy, _mm256_mul_ps(vx, vx))));
+        const __m256 along = _mm256_fmadd_ps(vz, xz, _mm256_fmadd_ps(vy, xy, _mm256_mul_ps(vx, xx)));
+        const __m256 ta_ok = _mm256_and_ps(q.ok, _mm256_cmp_ps(vl, tiny, _CMP_GT_OQ));
+        t = _mm256_add_ps(t, _mm256_and_ps(ta_ok, _mm256_mul_ps(_mm256_sub_ps(vl, along), q.w)));
+        // Convex curvature: the neighbour lies behind k along k's normal.
+        const __m256 behind = _mm256_fmadd_ps(xz, nz, _mm256_fmadd_ps(xy, ny, _mm256_mul_ps(xx, nx)));
+        const __m256 cv_ok = _mm256_and_ps(q.ok, _mm256_cmp_ps(behind, zero, _CMP_GT_OQ));
+        const __m256 nn = _mm256_fmadd_ps(nz, _mm256_maskload_ps(a.nz + j0, valid),
+                                          _mm256_fmadd_ps(ny, _mm256_maskload_ps(a.ny + j0, valid),
+                                                          _mm256_mul_ps(nx, _mm256_maskload_ps(a.nx + j0, valid))));
+        c = _mm256_add_ps(c, _mm256_and_ps(cv_ok, _mm256_mul_ps(_mm256_sub_ps(one, nn), q.w)));
+    }
+    ta += sum8(t);
+    curv += sum8(c);
 }
 
 #else
@@ -159,6 +239,9 @@ Vec3 viscosity(const KernelConsts&, const Vec3&, const Vec3&, const uint32_t*, u
                const Vec3*) {
     return Vec3(0.0f);
 }
+Vec3 foam_normal_sum(const FoamArrays&, uint32_t, uint32_t, uint32_t, float) { return Vec3(0.0f); }
+void foam_potential_sums(const FoamArrays&, uint32_t, const Vec3&, const Vec3&, uint32_t, uint32_t, float, float&,
+                         float&) {}
 
 #endif
 

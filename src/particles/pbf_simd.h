@@ -41,8 +41,25 @@ DensitySums density(const KernelConsts& k, float inv_rho0, const Vec3& xi, uint3
 Vec3 correction(float li, const uint32_t* index, uint32_t b, uint32_t e, const float* lambda, const float* cache_w,
                 const float* const cache_g[3], float scorr_scale, float inv_wdq, int scorr_n);
 
-/// XSPH's sum of (v_j - v_i) W over i's list entries [b, e) within h (not yet scaled).
+/// XSPH's sum of (v_j - v_i) W over i's list entries [b, e) within h (not yet scaled);
+/// without an index, over the particles [b, e) (a range of the cell-ordered arrays).
 Vec3 viscosity(const KernelConsts& k, const Vec3& xi, const Vec3& vi, const uint32_t* index, uint32_t b, uint32_t e,
                const Vec3* pos, const Vec3* vel);
+
+/// Sorted (cell-ordered) copies of the fluid for the foam's potentials (foam.cpp): x, y, z,
+/// then the velocity's and (after the first pass) the surface normal's components.
+struct FoamArrays {
+    const float *x, *y, *z, *vx, *vy, *vz, *nx, *ny, *nz;
+};
+
+/// The foam's first pass for sorted particle k at (x, y, z) over candidates [s, e): the
+/// sum of x^_kj W~ = (x_k - x_j) / r (1 - r / h) over j != k with 1e-12 < r^2 < h^2.
+Vec3 foam_normal_sum(const FoamArrays& a, uint32_t k, uint32_t s, uint32_t e, float h);
+
+/// The foam's second pass for sorted particle k (velocity v, normal n) over candidates
+/// [s, e): the trapped-air sum |v_kj| (1 - v^_kj . x^_kj) W~ (|v_kj| > 1e-6) and the
+/// convex curvature sum (1 - n_k . n_j) W~ (x^_kj . n_k > 0), added to ta and curv.
+void foam_potential_sums(const FoamArrays& a, uint32_t k, const Vec3& v, const Vec3& n, uint32_t s, uint32_t e,
+                         float h, float& ta, float& curv);
 
 }  // namespace mr::pbf_simd
