@@ -143,9 +143,9 @@ PlotDef bench_plot(const std::vector<ScenarioResult>& results, const json& peers
     PlotDef plot{.title = "metariver bench: ms per frame (median) vs particles",
                  .budget_ms = 1000.0 / 60.0,
                  .budget_label = "16.7 ms = 60 fps"};
-    const char* colors[] = {"#1f77b4", "#2ca02c", "#9467bd", "#000000"};
-    const char* stages[] = {"simulate", "field", "surface", "total"};
-    for (int k = 0; k < 4; ++k) {
+    const char* colors[] = {"#1f77b4", "#8c564b", "#2ca02c", "#9467bd", "#000000"};
+    const char* stages[] = {"simulate", "foam", "field", "surface", "total"};
+    for (int k = 0; k < 5; ++k) {
         PlotSeries s{.name = fmt::format("PBF river {}", stages[k]), .color = colors[k]};
         for (const auto& r : results)
             if (r.name.rfind("pbf ", 0) == 0 && r.stage_ms.count(stages[k]))
