@@ -1,10 +1,11 @@
 // metariver particles, private: the PBF solver's per-particle sums over its neighbour
-// lists, eight list entries at a time with AVX2 (pbf_simd.cpp), picked at run time.
+// lists (and the foam's potentials over its grid's cell ranges), eight entries at a time
+// with AVX2 (pbf_simd.cpp), picked at run time.
 //
-// The scalar loops in pbf.cpp are their twin: the same pairs and the same formulas, but
+// The scalar loops in pbf.cpp and foam.cpp are their twins: the same pairs and formulas, but
 // eight partial sums per particle (added up in a fixed order) and fused multiply-adds,
-// so the results agree to float rounding, not bit for bit (tests/particles/pbf_test.cpp
-// compares them). Each particle's sums run in a fixed order, so a step is the same for
+// so the results agree to float rounding, not bit for bit (pbf_test.cpp and foam_test.cpp
+// compare them). Each particle's sums run in a fixed order, so a step is the same for
 // any thread count.
 #pragma once
 
