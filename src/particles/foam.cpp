@@ -38,6 +38,19 @@ constexpr float kSurfaceNormalMin = 1.0f;
 
 float phi(float i, float lo, float hi) { return (std::min(i, hi) - std::min(i, lo)) / (hi - lo); }
 
+/// A particle's surface normal from its sum of x^_ij W~: a lone pair or a thin sheet still
+/// gets a direction; a full neighbourhood sums to (near) zero and has no surface.
+Vec3 surface_normal(const Vec3& sum) {
+    const float len = glm::length(sum);
+    return len > kSurfaceNormalMin ? sum / len : Vec3(0.0f);
+}
+
+/// The wave-crest potential from the convex curvature sum: only where the particle moves
+/// along its normal.
+float crest_potential(const Vec3& v, float speed, const Vec3& n, float curv) {
+    return speed > 1e-6f && glm::dot(v / speed, n) >= 0.6f ? curv : 0.0f;
+}
+
 /// For every binned fluid particle i, in parallel over the grid's cell runs: calls
 /// f(i, each), where each(g) calls g(j, x^_ij, W~(r_ij)) for every neighbour j != i
 /// within h in a fixed order. Positions come from the grid's sorted copies and each
@@ -202,10 +215,7 @@ void FoamSystem::potentials(const Particles& fluid) {
     for_each_fluid(grid_, h, [&](uint32_t i, auto&& each) {
         Vec3 s(0.0f);
         each([&](uint32_t, const Vec3& xh, float w) { s += xh * w; });
-        // A lone pair or a thin sheet still gets a direction; a full neighbourhood
-        // sums to (near) zero and has no surface.
-        const float len = glm::length(s);
-        normal_[i] = len > kSurfaceNormalMin ? s / len : Vec3(0.0f);
+        normal_[i] = surface_normal(s);
     });
     // Pass 2: the three potentials.
     for_each_fluid(grid_, h, [&](uint32_t i, auto&& each) {
@@ -223,9 +233,8 @@ void FoamSystem::potentials(const Particles& fluid) {
             // Convex only: the neighbour lies behind i along i's normal (x^_ji . n_i < 0).
             if (glm::dot(-xh, ni) < 0.0f) curv += (1.0f - glm::dot(ni, normal_[j])) * w;
         });
-        const bool along_normal = speed > 1e-6f && glm::dot(vi / speed, ni) >= 0.6f;
         ta_[i] = ta;
-        wc_[i] = along_normal ? curv : 0.0f;
+        wc_[i] = crest_potential(vi, speed, ni, curv);
     });
 }
 
@@ -250,8 +259,7 @@ void FoamSystem::potentials_simd(const Particles& fluid) {
     for_each_run(grid_, [&](uint32_t k, const Ranges& rg) {
         Vec3 sum(0.0f);
         for (int q = 0; q < rg.n; ++q) sum += pbf_simd::foam_normal_sum(a, k, rg.s[q], rg.e[q], h);
-        const float len = glm::length(sum);
-        const Vec3 nk = len > kSurfaceNormalMin ? sum / len : Vec3(0.0f);
+        const Vec3 nk = surface_normal(sum);
         normal_[order[k]] = nk;
         n[k] = nk.x, n[m + k] = nk.y, n[2 * m + k] = nk.z;
     });
@@ -263,9 +271,8 @@ void FoamSystem::potentials_simd(const Particles& fluid) {
         if (ek_[i] <= def_.energy_min) return;
         float ta = 0.0f, curv = 0.0f;
         for (int q = 0; q < rg.n; ++q) pbf_simd::foam_potential_sums(a, k, vi, ni, rg.s[q], rg.e[q], h, ta, curv);
-        const bool along_normal = speed > 1e-6f && glm::dot(vi / speed, ni) >= 0.6f;
         ta_[i] = ta;
-        wc_[i] = along_normal ? curv : 0.0f;
+        wc_[i] = crest_potential(vi, speed, ni, curv);
     });
 }
 

@@ -5,10 +5,10 @@
 #include <metariver/neighbor_grid.h>
 
 #include "grid_runs.h"
+#include "pbf_simd.h"
 
 #include <tbb/parallel_reduce.h>
 
-#include <cstdlib>
 #include <cstring>
 
 #if defined(__x86_64__) && defined(__GNUC__)
@@ -32,13 +32,18 @@ inline uint32_t count_within(float x, float y, float z, const float* cx, const f
     return c;
 }
 
-#if METARIVER_LISTS_AVX2
-/// AVX2 on this CPU, unless METARIVER_NO_AVX2 is set.
-bool lists_avx2() {
-    static const bool yes = __builtin_cpu_supports("avx2") && std::getenv("METARIVER_NO_AVX2") == nullptr;
-    return yes;
+/// Writes i's list to `out`: the candidates within r2, in the ranges' order.
+void fill_scalar(uint32_t i, const Ranges& rg, const float* cx, const float* cy, const float* cz, float r2,
+                 uint32_t* out) {
+    const float x = cx[i], y = cy[i], z = cz[i];
+    for (int q = 0; q < rg.n; ++q)
+        for (uint32_t j = rg.s[q]; j < rg.e[q]; ++j) {
+            const float dx = x - cx[j], dy = y - cy[j], dz = z - cz[j];
+            if (dx * dx + dy * dy + dz * dz < r2) *out++ = j;
+        }
 }
 
+#if METARIVER_LISTS_AVX2
 /// Left-packing: for each 8-bit mask, the lanes of its set bits in order, three bits
 /// per lane.
 struct PackTable {
@@ -132,18 +137,16 @@ void NeighborLists::build(const NeighborGrid& grid, std::span<const Vec3> positi
         rz_[i] = positions[i].z;
     }
     const float *cx = rx_.data(), *cy = ry_.data(), *cz = rz_.data();
-#if METARIVER_LISTS_AVX2
-    if (simd_ && lists_avx2()) {
-        for_each_run(grid, [&](uint32_t i, const Ranges& rg) { start_[i + 1] = count_avx2(i, rg, cx, cy, cz, r2); });
-        start_[0] = 0;
-        for (size_t i = 0; i < count_; ++i) start_[i + 1] += start_[i];
-        index_.resize(start_[count_]);
-        for_each_run(grid, [&](uint32_t i, const Ranges& rg) { fill_avx2(i, rg, cx, cy, cz, r2, index_.data() + start_[i]); });
-        return;
-    }
-#endif
-    // Pass 1: counts into start_[i + 1].
+    // Pass 1: counts into start_[i + 1]; pass 2: the same test in the same order fills
+    // each list (eight candidates at a time where the CPU has AVX2: the same lists).
+    [[maybe_unused]] const bool avx2 = simd_ && pbf_simd::avx2();
     for_each_run(grid, [&](uint32_t i, const Ranges& rg) {
+#if METARIVER_LISTS_AVX2
+        if (avx2) {
+            start_[i + 1] = count_avx2(i, rg, cx, cy, cz, r2);
+            return;
+        }
+#endif
         uint32_t c = 0;
         for (int q = 0; q < rg.n; ++q) c += count_within(cx[i], cy[i], cz[i], cx, cy, cz, rg.s[q], rg.e[q], r2);
         start_[i + 1] = c;
@@ -151,15 +154,12 @@ void NeighborLists::build(const NeighborGrid& grid, std::span<const Vec3> positi
     start_[0] = 0;
     for (size_t i = 0; i < count_; ++i) start_[i + 1] += start_[i];
     index_.resize(start_[count_]);
-    // Pass 2: the same test in the same order fills each list.
     for_each_run(grid, [&](uint32_t i, const Ranges& rg) {
-        uint32_t* out = index_.data() + start_[i];
-        const float x = cx[i], y = cy[i], z = cz[i];
-        for (int q = 0; q < rg.n; ++q)
-            for (uint32_t j = rg.s[q]; j < rg.e[q]; ++j) {
-                const float dx = x - cx[j], dy = y - cy[j], dz = z - cz[j];
-                if (dx * dx + dy * dy + dz * dz < r2) *out++ = j;
-            }
+        uint32_t* const out = index_.data() + start_[i];
+#if METARIVER_LISTS_AVX2
+        if (avx2) return fill_avx2(i, rg, cx, cy, cz, r2, out);
+#endif
+        fill_scalar(i, rg, cx, cy, cz, r2, out);
     });
 }
 

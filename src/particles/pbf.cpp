@@ -512,31 +512,34 @@ void PbfSolver::step(float dt) {
                 omega_[i] = w * inv_rho0;
             });
         }
-        if (simd_on && d.vorticity <= 0.0f && !nl) {  // stale lists: the 27 cells' ranges, eight at a time
-            for_each_run(grid_, [&](uint32_t i, const Ranges& rg) {
-                const Vec3 xi = p.position[i], vi = p.velocity[i];
-                Vec3 visc(0.0f);
-                for (int q = 0; q < rg.n; ++q)
-                    visc += pbf_simd::viscosity(kc, xi, vi, nullptr, rg.s[q], rg.e[q], p.position.data(),
-                                                p.velocity.data());
-                delta_[i] = vi + d.xsph * inv_rho0 * visc;
-            });
+        if (simd_on && d.vorticity <= 0.0f) {
+            // XSPH alone, eight entries at a time: over the lists, or over the 27 cells'
+            // ranges when they went stale after collision.
+            const Vec3 *x = p.position.data(), *v = p.velocity.data();
+            const auto put = [&](uint32_t i, const Vec3& visc) { delta_[i] = v[i] + d.xsph * inv_rho0 * visc; };
+            if (nl) {
+                for_each_binned(grid_, nl, [&](uint32_t i, auto&&) {
+                    put(i, pbf_simd::viscosity(kc, x[i], v[i], nl->index(), nl->first(i), nl->first(i + 1), x, v));
+                });
+            } else {
+                for_each_run(grid_, [&](uint32_t i, const Ranges& rg) {
+                    Vec3 visc(0.0f);
+                    for (int q = 0; q < rg.n; ++q)
+                        visc += pbf_simd::viscosity(kc, x[i], v[i], nullptr, rg.s[q], rg.e[q], x, v);
+                    put(i, visc);
+                });
+            }
         } else {
             for_each_binned(grid_, nl, [&](uint32_t i, auto&& each) {
                 const Vec3 xi = p.position[i], vi = p.velocity[i];
                 Vec3 visc(0.0f), eta(0.0f);
-                if (nl && simd_on && d.vorticity <= 0.0f) {
-                    visc = pbf_simd::viscosity(kc, xi, vi, nl->index(), nl->first(i), nl->first(i + 1),
-                                               p.position.data(), p.velocity.data());
-                } else {
-                    each([&](uint32_t j, uint32_t) {
-                        const Vec3 dd = xi - p.position[j];
-                        const float r2 = glm::dot(dd, dd);
-                        if (r2 >= k.h2) return;
-                        visc += (p.velocity[j] - vi) * k.W(r2);
-                        if (d.vorticity > 0.0f) eta += glm::length(omega_[j]) * k.grad(dd, std::sqrt(r2));
-                    });
-                }
+                each([&](uint32_t j, uint32_t) {
+                    const Vec3 dd = xi - p.position[j];
+                    const float r2 = glm::dot(dd, dd);
+                    if (r2 >= k.h2) return;
+                    visc += (p.velocity[j] - vi) * k.W(r2);
+                    if (d.vorticity > 0.0f) eta += glm::length(omega_[j]) * k.grad(dd, std::sqrt(r2));
+                });
                 Vec3 v = vi + d.xsph * inv_rho0 * visc;
                 if (d.vorticity > 0.0f) {
                     const float el = glm::length(eta);

@@ -13,9 +13,13 @@ namespace mr::pbf_simd {
 
 #if METARIVER_PBF_AVX2
 
+bool avx2() {
+    static const bool yes = __builtin_cpu_supports("avx2") && std::getenv("METARIVER_NO_AVX2") == nullptr;
+    return yes;
+}
+
 bool available() {
-    static const bool yes = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
-                            std::getenv("METARIVER_NO_AVX2") == nullptr;
+    static const bool yes = avx2() && __builtin_cpu_supports("fma");
     return yes;
 }
 
@@ -226,6 +230,7 @@ MR_AVX2 void foam_potential_sums(const FoamArrays& a, uint32_t k, const Vec3& v,
 
 #else
 
+bool avx2() { return false; }
 bool available() { return false; }
 DensitySums density(const KernelConsts&, float, const Vec3&, uint32_t, const uint32_t*, uint32_t, uint32_t, const Vec3*,
                     float*, float* const*) {
