@@ -271,6 +271,9 @@ CLI = {
     "unknown_command": "fly\n--frames\n1",
     "no_command": "",
     "equals_form": "run\n--frames=5\n--seed=1\n--area-scale=1e400",
+    # found by CI's fuzz run: CLI11 took "--version=" (the NUL ends the argument) for --version
+    "version_empty_value": "--version=\x00\x00\x00?-)p\nrun\n--frames\n2",
+    "help_with_value": "run\n--help=all",
 }
 
 

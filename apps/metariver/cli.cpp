@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include <cstdio>
+#include <string_view>
 
 namespace mr::app {
 
@@ -36,6 +37,17 @@ CommandLine parse_command_line(int argc, const char* const* argv) {
         if (!found) {
             fmt::print(stderr, "metariver: unknown command '{}' (known: {})\n", argv[1], known);
             return {{}, kExitBadInput};
+        }
+    }
+    // CLI11 reads "--version=" (empty value) as the flag itself and "--version=x" as a
+    // conversion error about "--version = x"; neither says that the flag takes no value.
+    for (int i = 1; i < argc; ++i) {
+        const std::string_view a = argv[i];
+        for (std::string_view flag : {"--version", "--help"}) {
+            if (a.size() > flag.size() && a.substr(0, flag.size()) == flag && a[flag.size()] == '=') {
+                fmt::print(stderr, "metariver: {} takes no value (got '{}')\n", flag, a);
+                return {{}, kExitBadInput};
+            }
         }
     }
     try {

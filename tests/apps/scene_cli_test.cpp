@@ -26,6 +26,17 @@ TEST_F(SceneCli, VersionSaysTheVersionAndTheBuild) {
         << r.out;
 }
 
+// Found by CI's fuzz run: CLI11 took "--version=" for --version and exited 0 with no
+// command run; a value on a flag that takes none is bad input, named in one line.
+TEST_F(SceneCli, AValueOnVersionOrHelpIsBadInput) {
+    for (const char* arg : {"--version=", "--version=1", "--help=", "--help=run"}) {
+        CliResult r = run(arg);
+        EXPECT_EQ(r.code, 2) << arg << ": " << r.out;
+        EXPECT_NE(r.err.find("takes no value (got '" + std::string(arg) + "')"), std::string::npos) << r.err;
+        EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    }
+}
+
 TEST_F(SceneCli, APresetPrintedAsASceneFileRunsAndPrintsBackTheSame) {
     CliResult first = run("scene --preset paper-bowl");
     ASSERT_EQ(first.code, 0) << first.err;
