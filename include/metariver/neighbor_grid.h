@@ -55,6 +55,15 @@ public:
     /// the particle arrays are read at random).
     template <class F>
     void for_each_candidate_slot(const Vec3& p, F&& f) const {
+        for_each_candidate_range(p, [&](uint32_t b, uint32_t e) {
+            for (uint32_t k = b; k < e; ++k) f(k);
+        });
+    }
+
+    /// The same walk by ranges: f(begin, end) for each cell's (or hash bucket's) range
+    /// of order() positions, at most 27.
+    template <class F>
+    void for_each_candidate_range(const Vec3& p, F&& f) const {
         const int cx = cell_coord(p.x, origin_.x), cy = cell_coord(p.y, origin_.y), cz = cell_coord(p.z, origin_.z);
         uint32_t seen[27];
         int nseen = 0;
@@ -71,7 +80,7 @@ public:
                         if (dup) continue;
                         seen[nseen++] = ub;
                     }
-                    for (uint32_t k = start_[ub]; k < start_[ub + 1]; ++k) f(k);
+                    if (start_[ub] != start_[ub + 1]) f(start_[ub], start_[ub + 1]);
                 }
     }
 

@@ -178,21 +178,33 @@ void FoamSystem::classify_all(const Particles& fluid) {
     // these positions): contiguous per cell.
     const auto order = grid_.order();
     const auto sx = grid_.sorted_x(), sy = grid_.sorted_y(), sz = grid_.sorted_z();
+    // With SIMD, eight candidates at a time over the cell-ordered velocities that
+    // potentials_simd gathered this step (the same fluid, the same grid).
+    const bool simd = simd_ && pbf_simd::available();
+    const size_t m = order.size();
+    const float* const v = sorted_.data();
+    const pbf_simd::FoamArrays a{sx.data(), sy.data(), sz.data(), v, v + m, v + 2 * m, nullptr, nullptr, nullptr};
     tbb::parallel_for(tbb::blocked_range<size_t>(0, p_.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t i = r.begin(); i < r.end(); ++i) {
             const Vec3 x = p_.position[i];
             int count = 0;
             float wsum = 0.0f;
             Vec3 vsum(0.0f);
-            grid_.for_each_candidate_slot(x, [&](uint32_t k) {
-                const Vec3 d(x.x - sx[k], x.y - sy[k], x.z - sz[k]);
-                const float r2 = glm::dot(d, d);
-                if (r2 >= h2) return;
-                const float w = 1.0f - std::sqrt(r2) / h;  // W~, the paper's weighting
-                ++count;
-                wsum += w;
-                vsum += w * fluid.velocity[order[k]];
-            });
+            if (simd) {
+                grid_.for_each_candidate_range(x, [&](uint32_t b, uint32_t e) {
+                    pbf_simd::foam_classify_sums(a, x, b, e, h, count, wsum, vsum);
+                });
+            } else {
+                grid_.for_each_candidate_slot(x, [&](uint32_t k) {
+                    const Vec3 d(x.x - sx[k], x.y - sy[k], x.z - sz[k]);
+                    const float r2 = glm::dot(d, d);
+                    if (r2 >= h2) return;
+                    const float w = 1.0f - std::sqrt(r2) / h;  // W~, the paper's weighting
+                    ++count;
+                    wsum += w;
+                    vsum += w * fluid.velocity[order[k]];
+                });
+            }
             p_.kind[i] = uint8_t(classify(count, def_));
             p_.neighbours[i] = uint16_t(std::min(count, 65535));
             p_.fluid_velocity[i] = wsum > 0.0f ? vsum / wsum : Vec3(0.0f);

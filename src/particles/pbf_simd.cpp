@@ -228,6 +228,35 @@ MR_AVX2 void foam_potential_sums(const FoamArrays& a, uint32_t k, const Vec3& v,
     curv += sum8(c);
 }
 
+MR_AVX2 void foam_classify_sums(const FoamArrays& a, const Vec3& p, uint32_t s, uint32_t e, float h, int& count,
+                                float& wsum, Vec3& vsum) {
+    const __m256 px = _mm256_set1_ps(p.x), py = _mm256_set1_ps(p.y), pz = _mm256_set1_ps(p.z);
+    const __m256 h2 = _mm256_set1_ps(h * h), hv = _mm256_set1_ps(h), one = _mm256_set1_ps(1.0f);
+    __m256 ws = _mm256_setzero_ps(), vx = ws, vy = ws, vz = ws;
+    int c = 0;
+    for (uint32_t j0 = s; j0 < e; j0 += 8) {
+        const __m256i valid = lanes_below(e - j0);
+        const __m256 dx = _mm256_sub_ps(px, _mm256_maskload_ps(a.x + j0, valid));
+        const __m256 dy = _mm256_sub_ps(py, _mm256_maskload_ps(a.y + j0, valid));
+        const __m256 dz = _mm256_sub_ps(pz, _mm256_maskload_ps(a.z + j0, valid));
+        // No fused multiply-add: the scalar loop's r^2 bit for bit, so the same count.
+        const __m256 r2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)),
+                                        _mm256_mul_ps(dz, dz));
+        const __m256 in = _mm256_and_ps(_mm256_cmp_ps(r2, h2, _CMP_LT_OQ), _mm256_castsi256_ps(valid));
+        const int m = _mm256_movemask_ps(in);
+        if (m == 0) continue;
+        c += __builtin_popcount(unsigned(m));
+        const __m256 w = _mm256_and_ps(in, _mm256_sub_ps(one, _mm256_div_ps(_mm256_sqrt_ps(r2), hv)));
+        ws = _mm256_add_ps(ws, w);
+        vx = _mm256_fmadd_ps(w, _mm256_maskload_ps(a.vx + j0, valid), vx);
+        vy = _mm256_fmadd_ps(w, _mm256_maskload_ps(a.vy + j0, valid), vy);
+        vz = _mm256_fmadd_ps(w, _mm256_maskload_ps(a.vz + j0, valid), vz);
+    }
+    count += c;
+    wsum += sum8(ws);
+    vsum += Vec3(sum8(vx), sum8(vy), sum8(vz));
+}
+
 #else
 
 bool avx2() { return false; }
@@ -247,6 +276,7 @@ Vec3 viscosity(const KernelConsts&, const Vec3&, const Vec3&, const uint32_t*, u
 Vec3 foam_normal_sum(const FoamArrays&, uint32_t, uint32_t, uint32_t, float) { return Vec3(0.0f); }
 void foam_potential_sums(const FoamArrays&, uint32_t, const Vec3&, const Vec3&, uint32_t, uint32_t, float, float&,
                          float&) {}
+void foam_classify_sums(const FoamArrays&, const Vec3&, uint32_t, uint32_t, float, int&, float&, Vec3&) {}
 
 #endif
 

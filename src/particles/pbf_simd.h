@@ -65,4 +65,11 @@ Vec3 foam_normal_sum(const FoamArrays& a, uint32_t k, uint32_t s, uint32_t e, fl
 void foam_potential_sums(const FoamArrays& a, uint32_t k, const Vec3& v, const Vec3& n, uint32_t s, uint32_t e,
                          float h, float& ta, float& curv);
 
+/// The diffuse particles' classification (foam.cpp) for one at p over fluid candidates
+/// [s, e): the number within h (r^2 = (dx^2 + dy^2) + dz^2 < h^2, the scalar loop's test
+/// and arithmetic, so the count is the same), and the sums of W~ = 1 - r / h and of W~ v_j
+/// over them, added to count, wsum and vsum.
+void foam_classify_sums(const FoamArrays& a, const Vec3& p, uint32_t s, uint32_t e, float h, int& count, float& wsum,
+                        Vec3& vsum);
+
 }  // namespace mr::pbf_simd

@@ -168,27 +168,48 @@ TEST(Foam, ClassifiedByNeighbourCount) {
 
     // In a run, each particle's kind follows its fluid neighbour count, and that count
     // equals a brute-force count over every fluid particle (the grid's twin).
+    // The fluid velocity there is the W~-weighted mean, brute force too. Both walks: the
+    // SIMD sums over the cells' ranges (where the CPU has AVX2) and the scalar twin.
     const Terrain t = flat_terrain();
-    Particles p = block(16, 6, 16);
-    shear(p, 5.0f);
-    FoamSystem foam(d, kH, 9.82f);
-    size_t kinds[3] = {0, 0, 0};
-    for (int f = 0; f < 40; ++f) {
-        foam.step(p, t, kDt, uint64_t(f));
-        const DiffuseParticles& q = foam.particles();
-        for (size_t i = 0; i < q.size(); ++i) {
-            int brute = 0;
-            for (const Vec3& x : p.position) brute += glm::dot(q.position[i] - x, q.position[i] - x) < kH * kH;
-            ASSERT_EQ(int(q.neighbours[i]), brute) << "frame " << f << " particle " << i;
-            ASSERT_EQ(q.kind[i], uint8_t(FoamSystem::classify(brute, d)));
-            ++kinds[q.kind[i]];
+    for (const bool simd : {true, false}) {
+        Particles p = block(16, 6, 16);
+        shear(p, 5.0f);
+        FoamSystem foam(d, kH, 9.82f);
+        foam.set_simd(simd);
+        size_t kinds[3] = {0, 0, 0};
+        float worst = 0.0f;
+        for (int f = 0; f < 40; ++f) {
+            foam.step(p, t, kDt, uint64_t(f));
+            const DiffuseParticles& q = foam.particles();
+            for (size_t i = 0; i < q.size(); ++i) {
+                int brute = 0;
+                float wsum = 0.0f;
+                Vec3 vsum(0.0f);
+                for (size_t j = 0; j < p.size(); ++j) {
+                    const float r2 = glm::dot(q.position[i] - p.position[j], q.position[i] - p.position[j]);
+                    if (r2 >= kH * kH) continue;
+                    ++brute;
+                    const float w = 1.0f - std::sqrt(r2) / kH;
+                    wsum += w;
+                    vsum += w * p.velocity[j];
+                }
+                ASSERT_EQ(int(q.neighbours[i]), brute) << "frame " << f << " particle " << i << " simd " << simd;
+                ASSERT_EQ(q.kind[i], uint8_t(FoamSystem::classify(brute, d)));
+                const Vec3 want = wsum > 0.0f ? vsum / wsum : Vec3(0.0f);
+                const float err = glm::length(q.fluid_velocity[i] - want) / (1.0f + glm::length(want));
+                ASSERT_LT(err, 1e-5f) << "frame " << f << " particle " << i << " simd " << simd;
+                worst = std::max(worst, err);
+                ++kinds[q.kind[i]];
+            }
+            drift(p);
         }
-        drift(p);
+        std::printf("%s: spray %zu, foam %zu, bubbles %zu (particle-frames); fluid velocity within %.1e\n",
+                    simd ? "simd" : "scalar", kinds[0], kinds[1], kinds[2], worst);
+        EXPECT_GT(kinds[0], 0u) << "spray: thrown clear of the water";
+        EXPECT_GT(kinds[1], 0u) << "foam: at the surface";
+        const FoamStats& s = foam.stats();
+        EXPECT_EQ(s.spray + s.foam + s.bubbles, foam.particles().size());
     }
-    EXPECT_GT(kinds[0], 0u) << "spray: thrown clear of the water";
-    EXPECT_GT(kinds[1], 0u) << "foam: at the surface";
-    const FoamStats& s = foam.stats();
-    EXPECT_EQ(s.spray + s.foam + s.bubbles, foam.particles().size());
 }
 
 TEST(Foam, RemovedWhenTheirLifeEnds) {
