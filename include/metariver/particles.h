@@ -12,6 +12,7 @@
 #include <metariver/neighbor_grid.h>
 #include <metariver/terrain.h>
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -547,8 +548,9 @@ private:
     float pbf_list_skin_ = kPbfListSkin;
     bool pbf_simd_on_ = true;  ///< the list passes with AVX2 where the CPU has it (pbf_simd.h)
     /// Per list entry, W and the grad factor of the density pass (SIMD: W and the
-    /// gradient's x, y, z in pair_g_, pair_gy_, pair_gz_).
-    std::vector<float> pair_w_, pair_g_, pair_gy_, pair_gz_;
+    /// gradient's x, y, z in 16-bit fixed point, pbf_simd.h).
+    std::vector<float> pair_w_, pair_g_;
+    std::array<std::vector<int16_t>, 3> pair_fixed_;
 };
 
 }  // namespace mr

@@ -348,15 +348,15 @@ void PbfSolver::step(float dt) {
         const bool simd = nl && simd_on;
         if (nl) {
             pair_w_.resize(nl->entries());
-            pair_g_.resize(nl->entries());
-            if (simd) {  // the SIMD passes keep the gradient's three components
-                pair_gy_.resize(nl->entries());
-                pair_gz_.resize(nl->entries());
+            if (simd) {  // the SIMD passes keep the gradient's components (fixed point, + 8 read past)
+                for (auto& c : pair_fixed_) c.resize(nl->entries() + 8);
+            } else {
+                pair_g_.resize(nl->entries());
             }
         }
         float* const cache_w = nl ? pair_w_.data() : nullptr;
         float* const cache_g = nl ? pair_g_.data() : nullptr;
-        float* const cache_grad[3] = {cache_g, pair_gy_.data(), pair_gz_.data()};
+        int16_t* const cache_grad[3] = {pair_fixed_[0].data(), pair_fixed_[1].data(), pair_fixed_[2].data()};
         for_each_binned(grid_, nl, [&](uint32_t i, auto&& each) {
             const Vec3 xi = p.position[i];
             float rho = 0.0f, sum_g2 = 0.0f;
@@ -405,8 +405,8 @@ void PbfSolver::step(float dt) {
             const float li = lambda_[i];
             Vec3 dx(0.0f);
             if (simd) {
-                dx = pbf_simd::correction(li, nl->index(), nl->first(i), nl->first(i + 1), lambda_.data(), cache_w,
-                                          cache_grad, scorr_scale, inv_wdq, d.scorr_n);
+                dx = pbf_simd::correction(kc, li, nl->index(), nl->first(i), nl->first(i + 1), lambda_.data(),
+                                          cache_w, cache_grad, scorr_scale, inv_wdq, d.scorr_n);
             } else if (cache_w) {  // the density pass's W and grad factor, the same values
                 each([&](uint32_t j, uint32_t e) {
                     const float wc = cache_w[e];

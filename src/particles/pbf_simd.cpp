@@ -3,6 +3,7 @@
 #include "pbf_simd.h"
 
 #include <cstdlib>
+#include <cstring>
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
@@ -58,16 +59,27 @@ MR_AVX2 inline Gathered gather(const uint32_t* index, uint32_t q, __m256i valid,
     return g;
 }
 
+/// Eight values as 16-bit integers (rounded to nearest; saturating).
+MR_AVX2 inline __m128i to_fixed(__m256 v) {
+    const __m256i i = _mm256_cvtps_epi32(v);
+    return _mm_packs_epi32(_mm256_castsi256_si128(i), _mm256_extracti128_si256(i, 1));
+}
+/// Eight 16-bit integers from p (all eight readable) as floats.
+MR_AVX2 inline __m256 load_fixed(const int16_t* p) {
+    return _mm256_cvtepi32_ps(_mm256_cvtepi16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p))));
+}
+
 }  // namespace
 
 MR_AVX2 DensitySums density(const KernelConsts& k, float inv_rho0, const Vec3& xi, uint32_t i, const uint32_t* index,
-                            uint32_t b, uint32_t e, const Vec3* pos, float* cache_w, float* const cache_g[3]) {
+                            uint32_t b, uint32_t e, const Vec3* pos, float* cache_w, int16_t* const cache_g[3]) {
     const float* const p = &pos[0].x;
     const __m256 px = _mm256_set1_ps(xi.x), py = _mm256_set1_ps(xi.y), pz = _mm256_set1_ps(xi.z);
     const __m256 h = _mm256_set1_ps(k.h), h2 = _mm256_set1_ps(k.h2), poly6 = _mm256_set1_ps(k.poly6);
     const __m256 spiky = _mm256_set1_ps(k.spiky), tiny = _mm256_set1_ps(1e-9f), inv = _mm256_set1_ps(inv_rho0);
     const __m256 minus1 = _mm256_set1_ps(-1.0f);
     const __m256i self = _mm256_set1_epi32(int(i));
+    const __m256 g_fixed = _mm256_set1_ps(grad_fixed_scale(k));
     __m256 rho = _mm256_setzero_ps(), gx = rho, gy = rho, gz = rho, g2 = rho;
     for (uint32_t q = b; q < e; q += 8) {
         const __m256i valid = lanes_below(e - q);
@@ -85,12 +97,22 @@ MR_AVX2 DensitySums density(const KernelConsts& k, float inv_rho0, const Vec3& x
         // W for the correction: -1 beyond h and for i itself.
         const __m256 not_self = _mm256_castsi256_ps(
             _mm256_xor_si256(_mm256_cmpeq_epi32(n.j, self), _mm256_set1_epi32(-1)));
-        const __m256 wc = _mm256_blendv_ps(minus1, w, _mm256_and_ps(in, not_self));
         const __m256 gdx = _mm256_mul_ps(g, dx), gdy = _mm256_mul_ps(g, dy), gdz = _mm256_mul_ps(g, dz);
-        _mm256_maskstore_ps(cache_w + q, valid, wc);
-        _mm256_maskstore_ps(cache_g[0] + q, valid, gdx);
-        _mm256_maskstore_ps(cache_g[1] + q, valid, gdy);
-        _mm256_maskstore_ps(cache_g[2] + q, valid, gdz);
+        _mm256_maskstore_ps(cache_w + q, valid, _mm256_blendv_ps(minus1, w, _mm256_and_ps(in, not_self)));
+        const __m128i fx = to_fixed(_mm256_mul_ps(gdx, g_fixed));
+        const __m128i fy = to_fixed(_mm256_mul_ps(gdy, g_fixed));
+        const __m128i fz = to_fixed(_mm256_mul_ps(gdz, g_fixed));
+        if (e - q >= 8) {
+            _mm_storeu_si128(reinterpret_cast<__m128i*>(cache_g[0] + q), fx);
+            _mm_storeu_si128(reinterpret_cast<__m128i*>(cache_g[1] + q), fy);
+            _mm_storeu_si128(reinterpret_cast<__m128i*>(cache_g[2] + q), fz);
+        } else {  // past e lies the next particle's list, another thread's
+            alignas(16) int16_t t[3][8];
+            _mm_store_si128(reinterpret_cast<__m128i*>(t[0]), fx);
+            _mm_store_si128(reinterpret_cast<__m128i*>(t[1]), fy);
+            _mm_store_si128(reinterpret_cast<__m128i*>(t[2]), fz);
+            for (int a = 0; a < 3; ++a) std::memcpy(cache_g[a] + q, t[a], (e - q) * sizeof(int16_t));
+        }
         rho = _mm256_add_ps(rho, w);
         const __m256 grx = _mm256_mul_ps(gdx, inv), gry = _mm256_mul_ps(gdy, inv), grz = _mm256_mul_ps(gdz, inv);
         gx = _mm256_add_ps(gx, grx);
@@ -105,10 +127,12 @@ MR_AVX2 DensitySums density(const KernelConsts& k, float inv_rho0, const Vec3& x
     return s;
 }
 
-MR_AVX2 Vec3 correction(float li, const uint32_t* index, uint32_t b, uint32_t e, const float* lambda,
-                        const float* cache_w, const float* const cache_g[3], float scorr_scale, float inv_wdq,
+MR_AVX2 Vec3 correction(const KernelConsts& k, float li, const uint32_t* index, uint32_t b, uint32_t e,
+                        const float* lambda, const float* cache_w, const int16_t* const cache_g[3], float scorr_scale,
+                        float inv_wdq,
                         int scorr_n) {
-    const __m256 l = _mm256_set1_ps(li), sk = _mm256_set1_ps(scorr_scale), iw = _mm256_set1_ps(inv_wdq);
+    const __m256 l = _mm256_set1_ps(li), sk = _mm256_set1_ps(scorr_scale);
+    const __m256 iw = _mm256_set1_ps(inv_wdq);
     const __m256 one = _mm256_set1_ps(1.0f), zero = _mm256_setzero_ps();
     __m256 sx = zero, sy = zero, sz = zero;
     for (uint32_t q = b; q < e; q += 8) {
@@ -121,11 +145,12 @@ MR_AVX2 Vec3 correction(float li, const uint32_t* index, uint32_t b, uint32_t e,
         __m256 sc = one;
         for (int m = 0; m < scorr_n; ++m) sc = _mm256_mul_ps(sc, x);
         const __m256 c = _mm256_and_ps(use, _mm256_sub_ps(_mm256_add_ps(l, lj), _mm256_mul_ps(sk, sc)));
-        sx = _mm256_fmadd_ps(c, _mm256_maskload_ps(cache_g[0] + q, valid), sx);
-        sy = _mm256_fmadd_ps(c, _mm256_maskload_ps(cache_g[1] + q, valid), sy);
-        sz = _mm256_fmadd_ps(c, _mm256_maskload_ps(cache_g[2] + q, valid), sz);
+        // c is 0 in the lanes not used: the integers read there add nothing.
+        sx = _mm256_fmadd_ps(c, load_fixed(cache_g[0] + q), sx);
+        sy = _mm256_fmadd_ps(c, load_fixed(cache_g[1] + q), sy);
+        sz = _mm256_fmadd_ps(c, load_fixed(cache_g[2] + q), sz);
     }
-    return Vec3(sum8(sx), sum8(sy), sum8(sz));
+    return Vec3(sum8(sx), sum8(sy), sum8(sz)) / grad_fixed_scale(k);
 }
 
 MR_AVX2 Vec3 viscosity(const KernelConsts& k, const Vec3& xi, const Vec3& vi, const uint32_t* index, uint32_t b,
@@ -262,11 +287,11 @@ MR_AVX2 void foam_classify_sums(const FoamArrays& a, const Vec3& p, uint32_t s, 
 bool avx2() { return false; }
 bool available() { return false; }
 DensitySums density(const KernelConsts&, float, const Vec3&, uint32_t, const uint32_t*, uint32_t, uint32_t, const Vec3*,
-                    float*, float* const*) {
+                    float*, int16_t* const*) {
     return {};
 }
-Vec3 correction(float, const uint32_t*, uint32_t, uint32_t, const float*, const float*, const float* const*, float, float,
-                int) {
+Vec3 correction(const KernelConsts&, float, const uint32_t*, uint32_t, uint32_t, const float*, const float*,
+                const int16_t* const*, float, float, int) {
     return Vec3(0.0f);
 }
 Vec3 viscosity(const KernelConsts&, const Vec3&, const Vec3&, const uint32_t*, uint32_t, uint32_t, const Vec3*,

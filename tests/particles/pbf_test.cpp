@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <memory>
 #include <vector>
 
@@ -402,9 +403,16 @@ TEST(Pbf, SimdListPassesAgreeWithTheScalarTwin) {
                 b->step_frame(1.0f / 120.0f);
             }
             PbfProbe::set_simd(*a, true);
+            std::map<uint32_t, Vec3> before;  // by id: a step reorders the particles
+            for (size_t i = 0; i < b->particles().size(); ++i)
+                if (b->particles().active[i]) before[b->particles().id[i]] = b->particles().position[i];
             a->step_frame(1.0f / 120.0f);
             b->step_frame(1.0f / 120.0f);
             const Particles &pa = a->particles(), &pb = b->particles();
+            float moved = 0.0f;  // the scalar step's largest move
+            for (size_t i = 0; i < pb.size(); ++i)
+                if (const auto it = before.find(pb.id[i]); pb.active[i] && it != before.end())
+                    moved = std::max(moved, glm::length(pb.position[i] - it->second));
             ASSERT_EQ(pa.size(), pb.size());
             float dx = 0.0f, dv = 0.0f;
             size_t active = 0;
@@ -415,18 +423,21 @@ TEST(Pbf, SimdListPassesAgreeWithTheScalarTwin) {
                 dx = std::max(dx, glm::length(pa.position[i] - pb.position[i]));
                 dv = std::max(dv, glm::length(pa.velocity[i] - pb.velocity[i]));
             }
-            std::printf("vorticity %.1f, skin %.2f h, frame %d: %zu active, max |dx| %.2e m, max |dv| %.2e m/s, "
-                        "density error %.4f / %.4f\n",
-                        vorticity, skin, f, active, dx, dv, a->counters().density_error_max,
+            std::printf("vorticity %.1f, skin %.2f h, frame %d: %zu active, largest move %.3f m, max |dx| %.2e m, "
+                        "max |dv| %.2e m/s, density error %.4f / %.4f\n",
+                        vorticity, skin, f, active, moved, dx, dv, a->counters().density_error_max,
                         b->counters().density_error_max);
             EXPECT_GT(active, block.size() * 9 / 10);
             if (f == 0) {
                 EXPECT_GT(b->counters().density_error_max, 0.1f) << "the block must start under pressure";
             }
-            // Sums of ~40 terms in another order: ~1e-7 relative; the moves are ~1e-2 m.
-            EXPECT_LT(dx, 1e-5f) << "frame " << f;
-            EXPECT_LT(dv, 1e-3f) << "frame " << f;
-            EXPECT_NEAR(a->counters().density_error_max, b->counters().density_error_max, 1e-5f);
+            // The SIMD correction reads the gradient in 16-bit fixed point (pbf_simd.h; the
+            // sums of ~40 terms cancel in a compressed block): measured 1.7e-4 of the
+            // largest move at frame 0, 3e-6 at frame 40; leaving s_corr out gives 8e-3.
+            EXPECT_GT(moved, 0.05f) << "the step must move the block";
+            EXPECT_LT(dx, 5e-4f * moved) << "frame " << f;
+            EXPECT_LT(dv, 5e-4f * moved * 120.0f) << "frame " << f;
+            EXPECT_NEAR(a->counters().density_error_max, b->counters().density_error_max, 1e-4f);
         }
     }
 }
