@@ -129,10 +129,8 @@ MR_AVX2 DensitySums density(const KernelConsts& k, float inv_rho0, const Vec3& x
 
 MR_AVX2 Vec3 correction(const KernelConsts& k, float li, const uint32_t* index, uint32_t b, uint32_t e,
                         const float* lambda, const float* cache_w, const int16_t* const cache_g[3], float scorr_scale,
-                        float inv_wdq,
-                        int scorr_n) {
-    const __m256 l = _mm256_set1_ps(li), sk = _mm256_set1_ps(scorr_scale);
-    const __m256 iw = _mm256_set1_ps(inv_wdq);
+                        float inv_wdq, int scorr_n) {
+    const __m256 l = _mm256_set1_ps(li), sk = _mm256_set1_ps(scorr_scale), iw = _mm256_set1_ps(inv_wdq);
     const __m256 one = _mm256_set1_ps(1.0f), zero = _mm256_setzero_ps();
     __m256 sx = zero, sy = zero, sz = zero;
     for (uint32_t q = b; q < e; q += 8) {
