@@ -91,9 +91,12 @@ public:
 
     /// Positions of the binned particles in order() order, as separate x, y, z arrays
     /// (as they were at build time): neighbour ranges are contiguous slices of these.
-    std::span<const float> sorted_x() const { return sx_; }
-    std::span<const float> sorted_y() const { return sy_; }
-    std::span<const float> sorted_z() const { return sz_; }
+    std::span<const float> sorted_x() const { return {sx_.data(), order_.size()}; }
+    std::span<const float> sorted_y() const { return {sy_.data(), order_.size()}; }
+    std::span<const float> sorted_z() const { return {sz_.data(), order_.size()}; }
+    /// Finite floats (0) the sorted copies hold past their last element, for loops that
+    /// read whole blocks of 4 or 8.
+    static constexpr size_t kSortedPad = 8;
 
     /// Runs of binned particles that share one cell, in order(): run r covers
     /// order()[run_start(r) .. run_start(r + 1)). Built by build().

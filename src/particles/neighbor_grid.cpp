@@ -216,9 +216,14 @@ void NeighborGrid::build(std::span<const Vec3> positions, std::span<const uint8_
             }
         }
     }
-    sx_.resize(binned);
-    sy_.resize(binned);
-    sz_.resize(binned);
+    // + kSortedPad finite floats past the last: loops may read a block of 4 or 8 past
+    // the end of a range (sorted_x() spans the binned ones only).
+    sx_.resize(binned + kSortedPad);
+    sy_.resize(binned + kSortedPad);
+    sz_.resize(binned + kSortedPad);
+    std::fill(sx_.begin() + binned, sx_.end(), 0.0f);
+    std::fill(sy_.begin() + binned, sy_.end(), 0.0f);
+    std::fill(sz_.begin() + binned, sz_.end(), 0.0f);
     // Cell runs, and the positions in order.
     for (size_t k = 0; k < binned; ++k) {
         const uint32_t i = order_[k];

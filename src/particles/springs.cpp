@@ -11,6 +11,10 @@
 #include <algorithm>
 #include <cmath>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace mr {
 
 std::string_view to_string(SpringMode m) {
@@ -132,12 +136,19 @@ void add_spring_forces_grid(Particles& p, const NeighborGrid& grid, const Spring
             };
             grid.for_each_neighbor_range(run, [&](uint32_t s, uint32_t e) {
                 if (fill + (e - s) <= uint32_t(kChunk)) {  // the common case: the range fits
-                    const int f0 = fill;
-                    for (uint32_t t = s; t < e; ++t) {
-                        cx[f0 + int(t - s)] = sx[t];
-                        cy[f0 + int(t - s)] = sy[t];
-                        cz[f0 + int(t - s)] = sz[t];
+                    // Blocks of four: the last one reads up to 3 past e (the grid's copies
+                    // are padded) and writes as far past the fill (the buffers' slack), which
+                    // the next range or the flush's padding overwrites.
+                    float *dx = cx + fill, *dy = cy + fill, *dz = cz + fill;
+#if defined(__SSE2__)
+                    for (uint32_t t = s; t < e; t += 4, dx += 4, dy += 4, dz += 4) {
+                        _mm_storeu_ps(dx, _mm_loadu_ps(sx.data() + t));
+                        _mm_storeu_ps(dy, _mm_loadu_ps(sy.data() + t));
+                        _mm_storeu_ps(dz, _mm_loadu_ps(sz.data() + t));
                     }
+#else
+                    for (uint32_t t = s; t < e; ++t) *dx++ = sx[t], *dy++ = sy[t], *dz++ = sz[t];
+#endif
                     fill += static_cast<int>(e - s);
                     return;
                 }
