@@ -181,9 +181,12 @@ void FoamSystem::classify_all(const Particles& fluid) {
     // With SIMD, eight candidates at a time over the cell-ordered velocities that
     // potentials_simd gathered this step (the same fluid, the same grid).
     const bool simd = simd_ && pbf_simd::available();
-    const size_t m = order.size();
-    const float* const v = sorted_.data();
-    const pbf_simd::FoamArrays a{sx.data(), sy.data(), sz.data(), v, v + m, v + 2 * m, nullptr, nullptr, nullptr};
+    pbf_simd::FoamArrays a{};
+    if (simd) {  // (sorted_ is empty on the scalar path: no pointer arithmetic on it there)
+        const size_t m = order.size();
+        const float* const v = sorted_.data();
+        a = {sx.data(), sy.data(), sz.data(), v, v + m, v + 2 * m, nullptr, nullptr, nullptr};
+    }
     tbb::parallel_for(tbb::blocked_range<size_t>(0, p_.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t i = r.begin(); i < r.end(); ++i) {
             const Vec3 x = p_.position[i];
