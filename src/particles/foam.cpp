@@ -84,6 +84,17 @@ void basis(const Vec3& d, Vec3& e1, Vec3& e2) {
     e2 = glm::cross(d, e1);
 }
 
+/// The SIMD passes' view of the fluid in the grid's order: its sorted positions and, in
+/// `sorted` (6 m floats, m binned particles, filled by potentials_simd), the velocity's
+/// x, y, z and then the surface normal's.
+pbf_simd::FoamArrays sorted_arrays(const NeighborGrid& g, std::vector<float>& sorted) {
+    const size_t m = g.order().size();
+    sorted.resize(6 * m);
+    float* const v = sorted.data();
+    return {g.sorted_x().data(), g.sorted_y().data(), g.sorted_z().data(), v, v + m, v + 2 * m,
+            v + 3 * m, v + 4 * m, v + 5 * m};
+}
+
 }  // namespace
 
 FoamSystem::FoamSystem(const FoamDef& def, float kernel_radius, float gravity)
@@ -181,12 +192,7 @@ void FoamSystem::classify_all(const Particles& fluid) {
     // With SIMD, eight candidates at a time over the cell-ordered velocities that
     // potentials_simd gathered this step (the same fluid, the same grid).
     const bool simd = simd_ && pbf_simd::available();
-    pbf_simd::FoamArrays a{};
-    if (simd) {  // (sorted_ is empty on the scalar path: no pointer arithmetic on it there)
-        const size_t m = order.size();
-        const float* const v = sorted_.data();
-        a = {sx.data(), sy.data(), sz.data(), v, v + m, v + 2 * m, nullptr, nullptr, nullptr};
-    }
+    const pbf_simd::FoamArrays a = simd ? sorted_arrays(grid_, sorted_) : pbf_simd::FoamArrays{};
     tbb::parallel_for(tbb::blocked_range<size_t>(0, p_.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t i = r.begin(); i < r.end(); ++i) {
             const Vec3 x = p_.position[i];
@@ -260,7 +266,7 @@ void FoamSystem::potentials_simd(const Particles& fluid) {
     const auto order = grid_.order();
     const size_t m = order.size();
     const float h = h_;
-    sorted_.resize(6 * m);
+    const pbf_simd::FoamArrays a = sorted_arrays(grid_, sorted_);
     float* const v = sorted_.data();
     tbb::parallel_for(tbb::blocked_range<size_t>(0, m, 4096), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t k = r.begin(); k != r.end(); ++k) {
@@ -268,8 +274,6 @@ void FoamSystem::potentials_simd(const Particles& fluid) {
             v[k] = u.x, v[m + k] = u.y, v[2 * m + k] = u.z;
         }
     });
-    const pbf_simd::FoamArrays a{grid_.sorted_x().data(), grid_.sorted_y().data(), grid_.sorted_z().data(), v, v + m,
-                                 v + 2 * m, v + 3 * m, v + 4 * m, v + 5 * m};
     float* const n = v + 3 * m;
     for_each_run(grid_, [&](uint32_t k, const Ranges& rg) {
         Vec3 sum(0.0f);
