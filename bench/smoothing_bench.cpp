@@ -52,6 +52,7 @@ void BM_RiverSurface(benchmark::State& state) {
     state.counters["ms_fans"] = avg(r);
     state.counters["ms_steps"] = avg(st);
     state.counters["ms_normals"] = avg(n);
+    state.counters["listed"] = double(sws.stats.triangles);
     state.counters["hidden"] = static_cast<double>(sws.stats.hidden);
     state.counters["moving"] = static_cast<double>(sws.stats.moving);
     state.counters["vertices"] = static_cast<double>(mesh.vertex_count());

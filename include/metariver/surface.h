@@ -187,6 +187,7 @@ struct SmoothingStats {
     double ms_weights = 0.0;     ///< feature weights (parallel)
     double ms_smooth = 0.0;      ///< the position steps (parallel)
     double ms_normals = 0.0;     ///< normals, the volume given back (parallel)
+    bool simd_weights = false;   ///< the weights ran eight at a time (AVX2; else the scalar loop)
 };
 
 /// Scratch of smooth_surface, owned by the caller and reused: a frame no larger than one
@@ -200,16 +201,26 @@ struct SmoothingWorkspace {
     std::vector<uint32_t> moving;        ///< vertices with a weight > 0, ascending
     std::vector<uint32_t> moving_index;  ///< per vertex: its index in `moving`, or 0xffffffff
     std::vector<uint32_t> tris;          ///< triangles with a moving corner, ascending
+    std::vector<uint32_t> listed;        ///< the same, per share of the triangles from its first (scratch)
     std::vector<uint32_t> ring_start;    ///< per moving vertex + 1: its first corner in next / prev
     std::vector<uint32_t> next, prev;    ///< per corner of a moving vertex: the triangle's next and previous vertex
+    std::vector<uint32_t> next_m;        ///< per corner of a moving vertex: moving_index of its next vertex
     std::vector<uint32_t> fan_counts;    ///< per share of the triangles and moving vertex: corners, then cursors
     std::vector<float> weight;           ///< per vertex: feature weight (0: does not move)
     std::vector<float> moving_weight;    ///< per moving vertex: weight (0: pinned on an open boundary)
     std::vector<float> step_weight;      ///< per moving vertex: weight / degree
-    std::vector<P4> a, b;              ///< double-buffered positions (normal passes reuse them)
+    std::vector<uint32_t> inner;         ///< per moving vertex: its moving neighbours (the first of its range in nbr)
+    std::vector<uint32_t> nbr;           ///< per corner of a moving vertex: a moving neighbour's index in `moving`
+    std::vector<P4> fixed_sum;         ///< per moving vertex: the sum of its neighbours that do not move
+    std::vector<P4> orig;              ///< per moving vertex: its position as extracted
+    std::vector<P4> a, b;              ///< per moving vertex: double-buffered positions of the steps
     std::vector<Vec3> area_normal;     ///< per moving vertex: sum of its fan's cross products
-    std::vector<double> partial;       ///< per chunk of vertices: partial sums (fixed order)
+    std::vector<float> area_len;       ///< per moving vertex: the length of area_normal
+    std::vector<float> volume_term;    ///< per moving vertex: its share of 6 x the volume change
     std::vector<float> step_sizes;     ///< smoothing_step_sizes() of the latest call
+    /// Run the scalar twins of the SIMD passes (tests compare the two; the result is the
+    /// same bit for bit).
+    bool scalar = false;
     size_t capacity_bytes() const;
 };
 

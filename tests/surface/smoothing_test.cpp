@@ -16,6 +16,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <numeric>
 #include <sstream>
@@ -423,6 +425,88 @@ TEST(Smoothing, SameResultForAnyThreadCount) {
     }
     EXPECT_EQ(one.positions, two.positions);
     EXPECT_EQ(one.normals, two.normals);
+}
+
+// The feature weights' eight-wide pass (AVX2) and its scalar twin give the same weights
+// bit for bit, and so the same mesh: on river frames, with and without a bumpy ground
+// (about half the vertices hidden), with a field of half the balls (probes outside its
+// grid and in blocks it does not store) and without a field (weight 1).
+TEST(Smoothing, SimdWeightsEqualTheScalarTwin) {
+    for (const char* name : {"default_river_f1800.xyz", "dense_river_f600.xyz"}) {
+        const std::vector<Vec3> balls = load_xyz(name);
+        Built b;
+        build(balls, b);
+        ASSERT_GT(b.mesh.vertex_count(), 10000u) << name;
+        // Half the balls (every other one in x order): a smaller grid, holes in it.
+        std::vector<Vec3> half_balls = balls;
+        std::sort(half_balls.begin(), half_balls.end(), [](const Vec3& a, const Vec3& c) { return a.x < c.x; });
+        half_balls.resize(half_balls.size() / 2);
+        Built h;
+        build(half_balls, h);
+        // A ground through the water: the mesh's median height, +-0.8 m of bumps, on a
+        // 0.37 m grid from the origin over only part of the mesh (the rest reads its
+        // clamped edge).
+        float lo = 1e30f, hi = -1e30f, x0 = 1e30f, z0 = 1e30f, x1 = -1e30f, z1 = -1e30f;
+        for (const Vec3& p : b.mesh.positions) {
+            lo = std::min(lo, p.y), hi = std::max(hi, p.y);
+            x0 = std::min(x0, p.x), x1 = std::max(x1, p.x), z0 = std::min(z0, p.z), z1 = std::max(z1, p.z);
+        }
+        const float spacing = 0.37f;
+        const int columns = int((x0 + 0.8f * (x1 - x0)) / spacing) + 2, rows = int((z0 + 0.9f * (z1 - z0)) / spacing) + 2;
+        std::vector<Vec3> g;
+        uint32_t state = 7u;
+        for (int i = 0; i < rows; ++i)
+            for (int j = 0; j < columns; ++j) {
+                state = state * 1664525u + 1013904223u;
+                const float bump = 1.6f * (float(state >> 8) / float(1u << 24) - 0.5f);
+                g.push_back(Vec3(spacing * j, 0.5f * (lo + hi) + bump, spacing * i));
+            }
+        const SmoothingGround ground{.vertices = g.data(), .columns = columns, .rows = rows, .spacing = spacing};
+        const SmoothingField own = b.weights(), halved = h.weights();
+        struct Case {
+            const SmoothingField* field;
+            const SmoothingGround* ground;
+            float feature_count;
+        };
+        const Case cases[] = {{&own, nullptr, 3.0f}, {&own, &ground, 3.0f}, {&halved, &ground, 3.0f},
+                              {&own, &ground, 0.0f}, {&own, nullptr, 2.0f}};
+        for (const Case& c : cases) {
+            SmoothingDef def = default_smoothing();
+            def.feature_count = c.feature_count;
+            SurfaceMesh fast = b.mesh, slow = b.mesh;
+            SmoothingWorkspace wf, wsl;
+            wsl.scalar = true;
+            smooth_surface(fast, def, wf, c.field, c.ground);
+            smooth_surface(slow, def, wsl, c.field, c.ground);
+            const std::string what = std::string(name) + (c.field == &halved ? ", half the balls' field" : "") +
+                                     (c.ground ? ", ground" : "") + ", feature_count " + std::to_string(int(c.feature_count));
+            EXPECT_FALSE(wsl.stats.simd_weights);
+            if (__builtin_cpu_supports("avx2") && !std::getenv("METARIVER_NO_AVX2")) {
+                EXPECT_TRUE(wf.stats.simd_weights) << what;
+            }
+            size_t differ = 0, zero = 0, one = 0, between = 0;
+            for (size_t v = 0; v < wf.weight.size(); ++v) {
+                differ += std::memcmp(&wf.weight[v], &wsl.weight[v], sizeof(float)) != 0;
+                const float w = wsl.weight[v];
+                zero += w == 0.0f, one += w == 1.0f, between += w > 0.0f && w < 1.0f;
+            }
+            std::printf("%s: %zu vertices, %zu hidden; weights 0: %zu, 1: %zu, between: %zu; %zu differ\n",
+                        what.c_str(), wf.weight.size(), wsl.stats.hidden, zero, one, between, differ);
+            ASSERT_EQ(wf.weight.size(), wsl.weight.size());
+            EXPECT_EQ(differ, 0u) << what;
+            EXPECT_EQ(wf.stats.hidden, wsl.stats.hidden) << what;
+            EXPECT_EQ(wf.stats.moving, wsl.stats.moving) << what;
+            EXPECT_EQ(fast.positions, slow.positions) << what;
+            EXPECT_EQ(fast.normals, slow.normals) << what;
+            // Each case reaches the branches it is for.
+            if (c.ground) {
+                EXPECT_GT(wsl.stats.hidden, wf.weight.size() / 10) << what;
+            }
+            if (c.feature_count > 0.0f) {
+                EXPECT_GT(between, 100u) << what;
+            }
+        }
+    }
 }
 
 TEST(Smoothing, AFrameNoLargerThanOneBeforeAllocatesNothing) {
