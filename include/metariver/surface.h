@@ -200,8 +200,7 @@ struct SmoothingWorkspace {
     SmoothingStats stats;
     std::vector<uint32_t> moving;        ///< vertices with a weight > 0, ascending
     std::vector<uint32_t> moving_index;  ///< per vertex: its index in `moving`, or 0xffffffff
-    std::vector<uint32_t> tris;          ///< triangles with a moving corner, ascending
-    std::vector<uint32_t> listed;        ///< the same, per share of the triangles from its first (scratch)
+    std::vector<uint32_t> listed;        ///< triangles with a moving corner, each share's from its first triangle on
     std::vector<uint32_t> ring_start;    ///< per moving vertex + 1: its first corner in next / prev
     std::vector<uint32_t> next, prev;    ///< per corner of a moving vertex: the triangle's next and previous vertex
     std::vector<uint32_t> next_m;        ///< per corner of a moving vertex: moving_index of its next vertex

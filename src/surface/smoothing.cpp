@@ -124,8 +124,9 @@ float smoothstep01(float x) {
     return x * x * (3.0f - 2.0f * x);
 }
 
-/// Lists the triangles with a moving corner (ws.tris) and builds the fans of the moving
-/// vertices (ring_start per moving index, next, prev). False when an index is out of range.
+/// Lists the triangles with a moving corner (ws.listed, by share; their number in
+/// ws.stats.triangles) and builds the fans of the moving vertices (ring_start per moving
+/// index, next, prev, next_m). False when an index is out of range.
 /// A counting sort by moving vertex in two parallel passes over shares of the triangles:
 /// each share counts its listed triangles and its corners per moving vertex, and then
 /// fills from offsets that put share 0's corners before share 1's, so every fan and the
@@ -137,17 +138,18 @@ bool build_fans(const SurfaceMesh& m, SmoothingWorkspace& ws) {
     const uint32_t* mi = ws.moving_index.data();
     const Shares sh(nt, 2 * kMinSplit);
     const size_t shares = sh.count;
-    // counts[c * (nm + 1) + k]: share c's corners of moving vertex k, then its cursor;
-    // counts[c * (nm + 1) + nm]: share c's listed triangles, then its cursor into tris.
-    // Share c's listed triangles go to ws.listed from lo on (the fill pass visits only
-    // them: in a river's frame about a third of the triangles).
-    ws.fan_counts.assign(shares * (nm + 1), 0u);
+    // counts[c * nm + k]: share c's corners of moving vertex k, then its cursor. Share c's
+    // listed triangles go to ws.listed from lo on, share_listed[c] of them (the fill pass
+    // visits only them: in a river's frame about a third of the triangles).
+    ws.fan_counts.assign(shares * nm, 0u);
     ws.listed.resize(nt);
     uint32_t* listed_at = ws.listed.data();
+    uint32_t share_listed[Shares::kMax] = {};
     std::atomic<bool> bad{false};
     sh.run([&](size_t c, size_t lo, size_t hi) {
-        uint32_t* cnt = ws.fan_counts.data() + c * (nm + 1);
+        uint32_t* cnt = ws.fan_counts.data() + c * nm;
         uint32_t* out = listed_at + lo;
+        uint32_t n = 0;
         for (size_t t = lo; t < hi; ++t) {
             const uint32_t a = idx[3 * t], b = idx[3 * t + 1], cc = idx[3 * t + 2];
             if (a >= nv || b >= nv || cc >= nv) {
@@ -156,49 +158,42 @@ bool build_fans(const SurfaceMesh& m, SmoothingWorkspace& ws) {
             }
             const uint32_t ma = mi[a], mb = mi[b], mc = mi[cc];
             if ((ma & mb & mc) == kFixed) continue;  // no moving corner
-            out[cnt[nm]++] = static_cast<uint32_t>(t);
+            out[n++] = static_cast<uint32_t>(t);
             if (ma != kFixed) ++cnt[ma];
             if (mb != kFixed) ++cnt[mb];
             if (mc != kFixed) ++cnt[mc];
         }
+        share_listed[c] = n;
     });
     if (bad.load()) return false;
-    uint32_t share_listed[Shares::kMax] = {};
-    for (size_t c = 0; c < shares; ++c) share_listed[c] = ws.fan_counts[c * (nm + 1) + nm];
+    ws.stats.triangles = 0;
+    for (size_t c = 0; c < shares; ++c) ws.stats.triangles += share_listed[c];
     // Offsets: vertex by vertex, share by share (each count becomes its share's cursor).
     ws.ring_start.resize(nm + 1);
     uint32_t* start = ws.ring_start.data();
-    uint32_t at = 0, listed = 0;
-    for (size_t k = 0; k <= nm; ++k) {
-        if (k < nm) start[k] = at;
+    uint32_t at = 0;
+    for (size_t k = 0; k < nm; ++k) {
+        start[k] = at;
         for (size_t c = 0; c < shares; ++c) {
-            uint32_t& x = ws.fan_counts[c * (nm + 1) + k];
+            uint32_t& x = ws.fan_counts[c * nm + k];
             const uint32_t n = x;
-            if (k < nm) {
-                x = at;
-                at += n;
-            } else {
-                x = listed;
-                listed += n;
-            }
+            x = at;
+            at += n;
         }
     }
     start[nm] = at;
-    ws.tris.resize(listed);
     ws.next.resize(at);
     ws.prev.resize(at);
     ws.next_m.resize(at);
     uint32_t* next = ws.next.data();
     uint32_t* prev = ws.prev.data();
     uint32_t* next_m = ws.next_m.data();
-    uint32_t* tris = ws.tris.data();
     sh.run([&](size_t c, size_t lo, size_t) {
-        uint32_t* cur = ws.fan_counts.data() + c * (nm + 1);
+        uint32_t* cur = ws.fan_counts.data() + c * nm;
         for (const uint32_t* it = listed_at + lo; it != listed_at + lo + share_listed[c]; ++it) {
             const uint32_t t = *it;
             const uint32_t a = idx[3 * size_t(t)], b = idx[3 * size_t(t) + 1], cc = idx[3 * size_t(t) + 2];
             const uint32_t ma = mi[a], mb = mi[b], mc = mi[cc];
-            tris[cur[nm]++] = t;
             if (ma != kFixed) {
                 const uint32_t x = cur[ma]++;
                 next[x] = b, prev[x] = cc, next_m[x] = mb;
@@ -366,8 +361,8 @@ float lone_ball_iso_distance(const KernelDef& k, float threshold) {
 }
 
 size_t SmoothingWorkspace::capacity_bytes() const {
-    return (ring_start.capacity() + listed.capacity() + next.capacity() + prev.capacity() + next_m.capacity() + moving.capacity() + moving_index.capacity() +
-            tris.capacity() + fan_counts.capacity()) *
+    return (ring_start.capacity() + listed.capacity() + next.capacity() + prev.capacity() + next_m.capacity() +
+            moving.capacity() + moving_index.capacity() + fan_counts.capacity()) *
                sizeof(uint32_t) +
            (weight.capacity() + moving_weight.capacity() + step_weight.capacity()) * sizeof(float) +
            (a.capacity() + b.capacity() + orig.capacity() + fixed_sum.capacity()) * sizeof(P4) +
@@ -410,7 +405,8 @@ void smooth_surface(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspa
     std::optional<FieldProbe> probe;
     if (use_field) probe.emplace(*f);
     const float floor = half * unit;  // at or below it, w = 0: only that much is read
-    // The eight-wide twin of the loop below (the same floats): every vertex it can take.
+    // The eight-wide twin of the loop below (the same weights, bit for bit): every vertex
+    // it can take.
     smoothing_simd::WeightPass simd;
     bool use_simd = !ws.scalar && smoothing_simd::available();
     if (use_simd) {
@@ -427,7 +423,7 @@ void smooth_surface(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspa
             simd.hi = Vec3(float(g.nx - 1), float(g.ny - 1), float(g.nz - 1));
             simd.nx2 = g.nx - 2, simd.ny2 = g.ny - 2, simd.nz2 = g.nz - 2;
             simd.bx = f->blocks_x(), simd.by = f->blocks_y();
-            simd.depth = depth, simd.unit = unit, simd.half = half, simd.inv_span = inv_span, simd.floor = floor;
+            simd.depth = depth, simd.unit = unit, simd.half = half, simd.inv_span = inv_span;
             simd.min_weight = kMinWeight;
             if (!simd.pool) simd.dir = nullptr, use_simd = false;  // nothing stored: the scalar loop
         }
@@ -521,7 +517,6 @@ void smooth_surface(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspa
         ws.stats.pinned += ws.moving_weight[k] == 0.0f;
     }
     ws.stats.moving = nm - ws.stats.pinned;
-    ws.stats.triangles = ws.tris.size();
     ws.stats.mean_weight = wsum / double(nv);
     ws.stats.ms_rings = ms_since(t0);
 

@@ -1,9 +1,9 @@
 // The smoothing's feature-weight pass, eight vertices at a time (smoothing_simd.h). Each
 // lane computes what SmoothingGround::height, FieldProbe::at and the weight's smoothstep
 // compute for one vertex, with the same operations in the same order; the lanes that the
-// scalar code sends down a branch (hidden, outside the grid, no block above the floor)
-// are blended in at the end, so every lane's gathers read in-range indices (0 on a lane
-// that does not use them).
+// scalar code sends down a branch (hidden, outside the grid) are masked out at the end,
+// and their gathers read index 0. (The scalar probe's shortcut for blocks at or below the
+// floor is left out: it changes no weight, see probe().)
 #include "smoothing_simd.h"
 
 #include <metariver/sparse_field.h>

@@ -1,7 +1,8 @@
 // metariver surface: the smoothing's feature-weight pass eight vertices at a time (AVX2
 // gathers), the twin of the scalar loop in smoothing.cpp. Both compute the same floats in
-// the same order (no FMA, the same clamps and comparisons): the weights agree bit for bit
-// (tests/surface/smoothing_test.cpp, Smoothing.SimdWeightsEqualTheScalarTwin).
+// the same order (no FMA, the same clamps and comparisons) wherever the weight can be
+// above 0, and the weights agree bit for bit (tests/surface/smoothing_test.cpp,
+// Smoothing.SimdWeightsEqualTheScalarTwin).
 #pragma once
 
 #include <metariver/core.h>
@@ -27,7 +28,7 @@ struct WeightPass {
     float inv = 1.0f;
     Vec3 hi{0.0f};  ///< grid size - 1 per axis
     int nx2 = 0, ny2 = 0, nz2 = 0, bx = 0, by = 0;
-    float depth = 0.0f, unit = 1.0f, half = 0.0f, inv_span = 1.0f, floor = 0.0f, min_weight = 0.0f;
+    float depth = 0.0f, unit = 1.0f, half = 0.0f, inv_span = 1.0f, min_weight = 0.0f;
 };
 
 /// Whether this CPU runs weights() (AVX2; METARIVER_NO_AVX2 set: no).
