@@ -9,6 +9,7 @@
 #include <glm/geometric.hpp>
 
 #include <cstdint>
+#include <cstdlib>
 #include <limits>
 #include <string>
 #include <utility>
@@ -17,6 +18,18 @@
 namespace mr {
 
 using Vec3 = glm::vec3;
+
+/// Whether the AVX2 paths run: the CPU has AVX2 and METARIVER_NO_AVX2 is not set (set it
+/// to run the scalar twins, e.g. to compare the two). Decided once per process; false
+/// where the compiler cannot ask the CPU.
+inline bool avx2_enabled() {
+#if defined(__x86_64__) && defined(__GNUC__)
+    static const bool yes = __builtin_cpu_supports("avx2") && std::getenv("METARIVER_NO_AVX2") == nullptr;
+    return yes;
+#else
+    return false;
+#endif
+}
 
 /// An error with a one-line, user-facing message ("nile.png: not a PNG image").
 struct Error {

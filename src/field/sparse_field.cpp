@@ -21,7 +21,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <string>
@@ -169,11 +168,6 @@ __attribute__((target("avx2"))) void splat_block_avx2(const SampleGrid& g, const
     splat_block_impl<F8>(g, balls, list, count, boxes, sup2, kernel, i0, j0, k0, out);
 }
 
-/// AVX2 on this CPU, unless METARIVER_NO_AVX2 is set (to compare the two paths).
-bool use_avx2() {
-    static const bool yes = __builtin_cpu_supports("avx2") && std::getenv("METARIVER_NO_AVX2") == nullptr;
-    return yes;
-}
 #endif
 
 /// Smallest and largest of a block's 512 samples.
@@ -356,7 +350,7 @@ Status SparseField::build(std::span<const Vec3> balls, const SparseFieldDef& def
             const size_t count = list_start_[blk + 1] - list_start_[blk];
             const auto run = [&](auto kernel) {
 #if defined(METARIVER_FIELD_AVX2)
-                if (use_avx2()) {
+                if (avx2_enabled()) {
                     splat_block_avx2(grid_, balls.data(), list, count, boxes_.data(), sup2, kernel, i0, j0, k0, out);
                     return;
                 }

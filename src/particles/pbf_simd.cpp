@@ -2,7 +2,6 @@
 // entries at a time, the neighbours' positions gathered from the solver's array.
 #include "pbf_simd.h"
 
-#include <cstdlib>
 #include <cstring>
 
 #if defined(__x86_64__) && defined(__GNUC__)
@@ -14,10 +13,7 @@ namespace mr::pbf_simd {
 
 #if METARIVER_PBF_AVX2
 
-bool avx2() {
-    static const bool yes = __builtin_cpu_supports("avx2") && std::getenv("METARIVER_NO_AVX2") == nullptr;
-    return yes;
-}
+bool avx2() { return avx2_enabled(); }
 
 bool available() {
     static const bool yes = avx2() && __builtin_cpu_supports("fma");

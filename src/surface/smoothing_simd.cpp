@@ -9,7 +9,6 @@
 #include <metariver/sparse_field.h>
 
 #include <climits>
-#include <cstdlib>
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
@@ -28,10 +27,7 @@ bool sizes_fit(const WeightPass& p, size_t n, size_t slots) {
 
 #if METARIVER_SMOOTH_AVX2
 
-bool available() {
-    static const bool yes = __builtin_cpu_supports("avx2") && std::getenv("METARIVER_NO_AVX2") == nullptr;
-    return yes;
-}
+bool available() { return avx2_enabled(); }
 
 namespace {
 

@@ -481,7 +481,7 @@ TEST(Smoothing, SimdWeightsEqualTheScalarTwin) {
             const std::string what = std::string(name) + (c.field == &halved ? ", half the balls' field" : "") +
                                      (c.ground ? ", ground" : "") + ", feature_count " + std::to_string(int(c.feature_count));
             EXPECT_FALSE(wsl.stats.simd_weights);
-            if (__builtin_cpu_supports("avx2") && !std::getenv("METARIVER_NO_AVX2")) {
+            if (mr::avx2_enabled()) {
                 EXPECT_TRUE(wf.stats.simd_weights) << what;
             }
             size_t differ = 0, zero = 0, one = 0, between = 0;
