@@ -377,7 +377,9 @@ TEST(TerrainCondition, CarveLaysABedThatDescendsFromSourceToOutletWithBanksAndLe
     for (size_t k = 0; k < path.size(); ++k) {
         const auto [i, j] = path[k];
         EXPECT_LE(carved.sample(i, j), given->sample(i, j) - def.depth_m + 1e-4f) << "cell " << j;
-        if (k > 0) EXPECT_LE(carved.sample(i, j), carved.sample(path[k - 1].first, path[k - 1].second)) << "cell " << j;
+        if (k > 0) {
+            EXPECT_LE(carved.sample(i, j), carved.sample(path[k - 1].first, path[k - 1].second)) << "cell " << j;
+        }
     }
     EXPECT_LT(carved.sample(8, 0), carved.sample(8, 18) - kConditionSlope * 17.0f);
     // The floor: the rows beside the path are cut as deep (symmetric, depth_m below the ground).
