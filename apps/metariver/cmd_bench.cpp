@@ -118,10 +118,11 @@ void print_pbf_summary(const std::vector<ScenarioResult>& results) {
     for (const auto& r : results) {
         if (r.name.rfind("pbf ", 0) != 0 || r.stage_order.empty()) continue;
         if (!header) {
-            fmt::print("\nPBF river in steady flow: ms per frame, median [p95]; plausibility beside\n");
-            fmt::print("{:<11} {:>9} {:>7} {:>17} {:>15} {:>15} {:>15} {:>17} {:>9} {:>7} {:>7} {:>9} {:>8}\n",
-                       "scenario", "particles", "spacing", "simulate", "foam", "field", "surface", "total", "coverage",
-                       "out/in", "spray", "tunneled", "guarded");
+            fmt::print("\nPBF river in steady flow: ms per frame, median [p95] (smoothing: part of surface); "
+                       "plausibility beside\n");
+            fmt::print("{:<11} {:>9} {:>7} {:>17} {:>15} {:>15} {:>15} {:>15} {:>17} {:>9} {:>7} {:>7} {:>9} {:>8}\n",
+                       "scenario", "particles", "spacing", "simulate", "foam", "field", "surface", "smoothing", "total",
+                       "coverage", "out/in", "spray", "tunneled", "guarded");
             header = true;
         }
         const auto cell = [&](const char* stage) {
@@ -130,10 +131,9 @@ void print_pbf_summary(const std::vector<ScenarioResult>& results) {
             return fmt::format("{:.2f} [{:.2f}]", p.median, p.p95);
         };
         const json& q = r.quality;
-        fmt::print("{:<11} {:>9} {:>7.3f} {:>17} {:>15} {:>15} {:>15} {:>17} {:>9.2f} {:>7.2f} {:>7.4f} {:>9} {:>8}\n",
+        fmt::print("{:<11} {:>9} {:>7.3f} {:>17} {:>15} {:>15} {:>15} {:>15} {:>17} {:>9.2f} {:>7.2f} {:>7.4f} {:>9} {:>8}\n",
                    r.name, r.particles, r.params.value("spacing", 0.0), cell("simulate"), cell("foam"), cell("field"),
-                   cell("surface"),
-                   cell("total"), q.value("channel_coverage", 0.0), q.value("outflow_over_inflow", 0.0),
+                   cell("surface"), cell("smoothing"), cell("total"), q.value("channel_coverage", 0.0), q.value("outflow_over_inflow", 0.0),
                    q.value("spray_fraction", 0.0), q.value("tunneled", 0), q.value("guarded", 0));
     }
 }

@@ -175,7 +175,7 @@ int run(const RunOptions& o) {
     // Stage times (simulate, field, surface, total): every frame up to kTimingSamples,
     // then evenly spaced frames (Checkpoints), so memory stays constant for runs of up
     // to 1e8 frames; percentiles come from the kept samples.
-    Checkpoints stage_ms(kTimingSamples, 5);
+    Checkpoints stage_ms(kTimingSamples, 6);
     const int digits = std::max(5, static_cast<int>(std::to_string(o.frames - 1).size()));
     // Plausibility: outflow at the sinks, wet-channel and spray fractions (sampled every
     // 10 frames over the second half; spray also at the last frame), largest speed and
@@ -208,8 +208,8 @@ int run(const RunOptions& o) {
             ++spray_n;
         }
         const FrameTimings& t = sim.last_timings();
-        const double times[5] = {t.simulate_ms, t.field_ms, t.surface_ms,
-                                 t.simulate_ms + t.foam_ms + t.field_ms + t.surface_ms, t.foam_ms};
+        const double times[6] = {t.simulate_ms, t.field_ms, t.surface_ms,
+                                 t.simulate_ms + t.foam_ms + t.field_ms + t.surface_ms, t.foam_ms, t.smoothing_ms};
         stage_ms.push(times);
         if (!o.obj_dir.empty() && (f % obj_every == 0 || f == o.frames - 1)) {
             const std::string path = (fs::path(o.obj_dir) / fmt::format("surface_{:0{}}.obj", f, digits)).string();
@@ -316,6 +316,8 @@ int run(const RunOptions& o) {
                          {"surface", stage_json(stage_ms.column(2))},
                          {"total", stage_json(stage_ms.column(3))}};
         if (sim.foam()) j["stage_ms"]["foam"] = stage_json(stage_ms.column(4));
+        // Part of surface (not in total).
+        if (d.surface && d.smoothing.method != SmoothingMethod::None) j["stage_ms"]["smoothing"] = stage_json(stage_ms.column(5));
         // Diffuse particles at the last frame ([foam], issue 11).
         if (const FoamSystem* f = sim.foam()) {
             const FoamStats& fs = f->stats();

@@ -329,7 +329,8 @@ void Viewer::overlay(int win_w) {
     ImGui::Text("%.1f fps  (%.2f ms/frame)%s", mean_ms > 0 ? 1000.0 / mean_ms : 0.0, mean_ms, paused_ ? "  PAUSED" : "");
     ImGui::Text("sim frame %llu, %d step(s) this frame, dropped %llu", static_cast<unsigned long long>(sim_->frame()),
                 steps_this_frame_, static_cast<unsigned long long>(steps_dropped_));
-    ImGui::Text("simulate %.2f ms  field %.2f ms  surface %.2f ms", t.simulate_ms, t.field_ms, t.surface_ms);
+    ImGui::Text("simulate %.2f ms  field %.2f ms  surface %.2f ms (smoothing %.2f)", t.simulate_ms, t.field_ms,
+                t.surface_ms, t.smoothing_ms);
     ImGui::Text("particles %zu / %zu", sim_->particles().active_count(), sim_->particles().size());
     if (const FoamSystem* foam = sim_->foam()) {
         const FoamStats& fs = foam->stats();

@@ -326,6 +326,7 @@ struct FrameTimings {
     double simulate_ms = 0.0;
     double field_ms = 0.0;
     double surface_ms = 0.0;  ///< marching cubes and the smoothing ([surface])
+    double smoothing_ms = 0.0;  ///< the smoothing alone (part of surface_ms; 0 with method none)
     double foam_ms = 0.0;     ///< diffuse particles ([foam]; 0 when off)
 };
 

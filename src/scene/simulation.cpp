@@ -501,7 +501,7 @@ void Simulation::step(float frame_dt) {
     }
 
     if (!def_.surface) {
-        timings_.field_ms = timings_.surface_ms = 0.0;
+        timings_.field_ms = timings_.surface_ms = timings_.smoothing_ms = 0.0;
         smooth_ws_.stats = SmoothingStats{};
         return;
     }
@@ -517,7 +517,9 @@ void Simulation::step(float frame_dt) {
         extract_surface_sparse(sparse_, def_.field.threshold, surface_, surface_ws_);
         const SmoothingField weights{.field = &sparse_, .kernel = sparse_def_.kernel, .threshold = def_.field.threshold};
         const SmoothingGround ground = smoothing_ground(terrain_);
+        const auto ts = Clock::now();
         smooth_surface(surface_, def_.smoothing, smooth_ws_, &weights, &ground);
+        timings_.smoothing_ms = ms_since(ts);
         timings_.surface_ms = ms_since(t0);
         return;
     }
@@ -531,7 +533,9 @@ void Simulation::step(float frame_dt) {
     t0 = Clock::now();
     extract_surface(field_, def_.field.threshold, surface_);
     const SmoothingGround ground = smoothing_ground(terrain_);
+    const auto ts = Clock::now();
     smooth_surface(surface_, def_.smoothing, smooth_ws_, nullptr, &ground);  // the paper's kernels: no feature weights
+    timings_.smoothing_ms = ms_since(ts);
     timings_.surface_ms = ms_since(t0);
 }
 

@@ -107,11 +107,14 @@ TEST_F(Bench, PbfRiverHasStagesPlausibilityAndAPlot) {
     EXPECT_EQ(res["scenario"], "pbf 300");
     EXPECT_GT(res["particles"].get<int>(), 0);  // 2 s of flow: on its way, not all of it yet
     // foam: the river is the default scene's, which makes foam ([foam], issue 11).
-    for (const char* stage : {"simulate", "foam", "field", "surface", "total"}) {
+    // smoothing: part of surface (the default's [surface] method laplacian; issue 11).
+    for (const char* stage : {"simulate", "foam", "field", "surface", "smoothing", "total"}) {
         ASSERT_TRUE(res["stages"].contains(stage)) << stage;
         EXPECT_EQ(res["stages"][stage]["samples"].get<int>(), 3) << stage;
         EXPECT_GE(res["stages"][stage]["p95_ms"].get<double>(), res["stages"][stage]["median_ms"].get<double>()) << stage;
     }
+    EXPECT_LE(res["stages"]["smoothing"]["median_ms"].get<double>(), res["stages"]["surface"]["median_ms"].get<double>());
+    EXPECT_NE(r.out.find("smoothing"), std::string::npos) << "the summary table's column: " << r.out;
     for (const char* key : {"channel_coverage", "outflow_over_inflow", "spray_fraction", "tunneled", "guarded", "foam"})
         ASSERT_TRUE(res["quality"].contains(key)) << key;
     for (const char* kind : {"spray", "foam", "bubbles"}) EXPECT_TRUE(res["quality"]["foam"].contains(kind)) << kind;

@@ -106,12 +106,18 @@ TEST_F(Cli, RunStatsCountFoamWhereTheSceneMakesIt) {
     EXPECT_LE(f["total"].get<int>(), f["max_particles"].get<int>());
     for (const char* p : {"trapped_air", "wave_crest", "kinetic_energy"}) EXPECT_TRUE(f["potentials"][p].contains("p95")) << p;
     EXPECT_TRUE(j["stage_ms"]["foam"].contains("median"));
-    // The paper's scenes (springs) make none: null, and no foam stage.
+    // Its surface is smoothed: the smoothing's share of the surface stage (issue 11).
+    ASSERT_TRUE(j["stage_ms"].contains("smoothing"));
+    EXPECT_GT(j["stage_ms"]["smoothing"]["median"].get<double>(), 0.0);
+    EXPECT_LE(j["stage_ms"]["smoothing"]["median"].get<double>(), j["stage_ms"]["surface"]["median"].get<double>());
+    // The paper's scenes (springs) make none: null, and no foam stage; their surface is
+    // not smoothed (method none): no smoothing stage.
     CliResult p = run("run --preset paper-bowl --frames 5 --no-progress --stats " + stats.string());
     ASSERT_EQ(p.code, 0) << p.err;
     j = nlohmann::json::parse(slurp(stats));
     EXPECT_TRUE(j["foam"].is_null());
     EXPECT_FALSE(j["stage_ms"].contains("foam"));
+    EXPECT_FALSE(j["stage_ms"].contains("smoothing"));
 }
 
 TEST_F(Cli, RunObjEveryWritesEveryNthAndTheLastFrame) {
