@@ -60,7 +60,7 @@ ScenarioResult bench_simulation(const std::string& name, const SceneDef& def, co
         r.sample("field", t.field_ms);
         r.sample("surface", t.surface_ms);
         // Part of surface, not added to total (issue 11: the smoothing's share of the stage).
-        if (s.def().surface && s.def().smoothing.method != SmoothingMethod::None) r.sample("smoothing", t.smoothing_ms);
+        if (smoothing_on(s.def())) r.sample("smoothing", t.smoothing_ms);
         r.sample("total", t.simulate_ms + t.foam_ms + t.field_ms + t.surface_ms);
     }
     r.particles = s.particles().active_count();

@@ -317,7 +317,7 @@ int run(const RunOptions& o) {
                          {"total", stage_json(stage_ms.column(3))}};
         if (sim.foam()) j["stage_ms"]["foam"] = stage_json(stage_ms.column(4));
         // Part of surface (not in total).
-        if (d.surface && d.smoothing.method != SmoothingMethod::None) j["stage_ms"]["smoothing"] = stage_json(stage_ms.column(5));
+        if (smoothing_on(d)) j["stage_ms"]["smoothing"] = stage_json(stage_ms.column(5));
         // Diffuse particles at the last frame ([foam], issue 11).
         if (const FoamSystem* f = sim.foam()) {
             const FoamStats& fs = f->stats();

@@ -130,6 +130,8 @@ Status validate_on_terrain(const SceneDef& def, const Terrain& terrain);
 TerrainCondition resolved_condition(const SceneDef& def);
 /// A PBF river: a continuous source (or flow_rate "auto") and sink = edges.
 bool is_river(const SceneDef& def);
+/// The surface is built and smoothed: [surface] on, method not none, iterations > 0.
+bool smoothing_on(const SceneDef& def);
 /// pbf.sleep_threshold with "auto" resolved: 0 for a river (sleeping froze a slow river
 /// on a gentle bed: docs/river.md, "A least slope of 2 % and no sleeping river"),
 /// kSleepThreshold otherwise (still water comes to rest).

@@ -35,7 +35,6 @@ constexpr KeyRange big_vec(double lo) { return {.lo = lo, .hi = 1e6}; }
 
 // Who reads a key (include/metariver/scene_keys.h, KeyReaders).
 using S = const SceneDef&;
-bool smoothing_on(S d) { return d.surface && d.smoothing.method != SmoothingMethod::None && d.smoothing.iterations > 0; }
 bool with_rate(S d) { return d.spawn.auto_rate() ? d.solver == SolverKind::Pbf : d.spawn.has_rate(); }
 bool springs_on(S d) { return d.solver == SolverKind::Springs || (d.solver == SolverKind::Bullet && d.bullet.springs); }
 constexpr KeyReaders kAll{"every scene"};

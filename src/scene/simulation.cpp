@@ -240,6 +240,10 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def) {
     return create(def, map.value());
 }
 
+bool smoothing_on(const SceneDef& def) {
+    return def.surface && def.smoothing.method != SmoothingMethod::None && def.smoothing.iterations > 0;
+}
+
 bool is_river(const SceneDef& def) {
     return def.solver == SolverKind::Pbf && def.sink.kind == SinkKind::Edges &&
            (def.spawn.has_rate() || def.spawn.auto_rate());
