@@ -5,7 +5,6 @@
 #include <metariver/neighbor_grid.h>
 
 #include "grid_runs.h"
-#include "pbf_simd.h"
 
 #include <tbb/parallel_reduce.h>
 
@@ -139,7 +138,7 @@ void NeighborLists::build(const NeighborGrid& grid, std::span<const Vec3> positi
     const float *cx = rx_.data(), *cy = ry_.data(), *cz = rz_.data();
     // Pass 1: counts into start_[i + 1]; pass 2: the same test in the same order fills
     // each list (eight candidates at a time where the CPU has AVX2: the same lists).
-    [[maybe_unused]] const bool avx2 = simd_ && pbf_simd::avx2();
+    [[maybe_unused]] const bool avx2 = simd_ && avx2_enabled();
     for_each_run(grid, [&](uint32_t i, const Ranges& rg) {
 #if METARIVER_LISTS_AVX2
         if (avx2) {

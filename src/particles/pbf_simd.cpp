@@ -13,10 +13,8 @@ namespace mr::pbf_simd {
 
 #if METARIVER_PBF_AVX2
 
-bool avx2() { return avx2_enabled(); }
-
 bool available() {
-    static const bool yes = avx2() && __builtin_cpu_supports("fma");
+    static const bool yes = avx2_enabled() && __builtin_cpu_supports("fma");
     return yes;
 }
 
@@ -278,7 +276,6 @@ MR_AVX2 void foam_classify_sums(const FoamArrays& a, const Vec3& p, uint32_t s, 
 
 #else
 
-bool avx2() { return false; }
 bool available() { return false; }
 DensitySums density(const KernelConsts&, float, const Vec3&, uint32_t, const uint32_t*, uint32_t, uint32_t, const Vec3*,
                     float*, int16_t* const*) {

@@ -15,9 +15,7 @@
 
 namespace mr::pbf_simd {
 
-/// AVX2 on this CPU, unless METARIVER_NO_AVX2 is set (the neighbour lists' build).
-bool avx2();
-/// avx2() and FMA (every function below).
+/// avx2_enabled() (core.h) and FMA (every function below).
 bool available();
 
 /// The kernels of pbf.cpp: poly6 W(r2) = poly6 (h2 - r2)^3 below h2, spiky gradient
