@@ -12,30 +12,6 @@
 #include <cmath>
 
 namespace mr {
-namespace {
-
-/// Clamps v into [lo, hi]; NaN goes to lo.
-float clamp_nan(float v, float lo, float hi) {
-    if (!(v >= lo)) return lo;
-    return v > hi ? hi : v;
-}
-
-/// Cell index and fraction along one axis for coordinate x (clamped), n samples.
-struct AxisCell {
-    int index;
-    float frac;
-};
-
-AxisCell axis_cell(float x, float s, int n) {
-    const float extent = static_cast<float>(n - 1) * s;
-    const float u = clamp_nan(x, 0.0f, extent) / s;
-    int k = static_cast<int>(std::floor(u));
-    k = std::clamp(k, 0, n - 2);
-    const float f = std::clamp(u - static_cast<float>(k), 0.0f, 1.0f);
-    return {k, f};
-}
-
-}  // namespace
 
 float resolved_area_scale(const TerrainDef& def, int columns, int rows) {
     if (!def.auto_area_scale || !(def.area_scale > 0.0f)) return def.area_scale;
@@ -135,19 +111,6 @@ Vec3 Terrain::triangle_normal(uint32_t tri) const {
     return Vec3(nrm / len);
 }
 
-bool Terrain::contains_xz(float x, float z) const {
-    const float ex = static_cast<float>(columns_ - 1) * area_scale_;
-    const float ez = static_cast<float>(rows_ - 1) * area_scale_;
-    return x >= 0.0f && x <= ex && z >= 0.0f && z <= ez;
-}
-
-Terrain::CellCorners Terrain::cell_corners(float x, float z) const {
-    const AxisCell cx = axis_cell(x, area_scale_, columns_);
-    const AxisCell cz = axis_cell(z, area_scale_, rows_);
-    return {sample(cz.index, cx.index), sample(cz.index, cx.index + 1), sample(cz.index + 1, cx.index),
-            sample(cz.index + 1, cx.index + 1), cx.frac, cz.frac};
-}
-
 float Terrain::height_bilinear(float x, float z) const {
     if (vertices_.empty()) return 0.0f;
     const auto [h00, h01, h10, h11, u, v] = cell_corners(x, z);
@@ -160,26 +123,6 @@ Vec3 Terrain::normal_bilinear(float x, float z) const {
     const float dhdx = ((h01 - h00) * (1.0f - v) + (h11 - h10) * v) / area_scale_;
     const float dhdz = ((h10 - h00) * (1.0f - u) + (h11 - h01) * u) / area_scale_;
     return glm::normalize(Vec3(-dhdx, 1.0f, -dhdz));
-}
-
-uint32_t Terrain::triangle_at(float x, float z) const {
-    if (vertices_.empty()) return 0;
-    const AxisCell cx = axis_cell(x, area_scale_, columns_);
-    const AxisCell cz = axis_cell(z, area_scale_, rows_);
-    const uint32_t cell = static_cast<uint32_t>(cz.index) * static_cast<uint32_t>(columns_ - 1) +
-                          static_cast<uint32_t>(cx.index);
-    return 2u * cell + (cx.frac + cz.frac > 1.0f ? 1u : 0u);
-}
-
-float Terrain::height_mesh(float x, float z) const {
-    if (vertices_.empty()) return 0.0f;
-    const auto [h00, h01, h10, h11, u, v] = cell_corners(x, z);
-    if (u + v <= 1.0f) {
-        // Triangle (c, c+W, c+1): vertices (i, j), (i+1, j), (i, j+1).
-        return h00 + u * (h01 - h00) + v * (h10 - h00);
-    }
-    // Triangle (c+1, c+W, c+W+1): vertices (i, j+1), (i+1, j), (i+1, j+1).
-    return h11 + (1.0f - u) * (h10 - h11) + (1.0f - v) * (h01 - h11);
 }
 
 Vec3 Terrain::normal_mesh(float x, float z) const {
