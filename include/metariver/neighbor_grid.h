@@ -60,11 +60,21 @@ public:
         });
     }
 
-    /// The same walk by ranges: f(begin, end) for each cell's (or hash bucket's) range
-    /// of order() positions, at most 27.
+    /// The same walk by ranges: f(begin, end) for each range of order() positions that
+    /// holds the candidates, in the same order as for_each_candidate_slot. A dense or
+    /// blocked grid gives an x-row of three cells as one range (two where it crosses a
+    /// block face) and leaves out empty rows, at most 18; hashed: one per bucket, at
+    /// most 27. (Eight-wide loops over the ranges fill their lanes better than over
+    /// the 27 cells one by one.)
     template <class F>
     void for_each_candidate_range(const Vec3& p, F&& f) const {
         const int cx = cell_coord(p.x, origin_.x), cy = cell_coord(p.y, origin_.y), cz = cell_coord(p.z, origin_.z);
+        if (layout_ != Layout::Hashed) {
+            uint32_t rs[18], re[18];
+            const int n = row_ranges(cx, cy, cz, rs, re);
+            for (int k = 0; k < n; ++k) f(rs[k], re[k]);
+            return;
+        }
         uint32_t seen[27];
         int nseen = 0;
         const bool hashed = layout_ == Layout::Hashed;
@@ -112,13 +122,8 @@ public:
             // The ranges are gathered first by a tight loop (no calls, so its state stays
             // in registers), empty ones dropped, then handed to f.
             uint32_t rs[18], re[18];
-            int n;
-            switch (layout_ == Layout::Dense ? 0 : shift_) {
-                case 0: n = dense_ranges(r, rs, re); break;
-                case 2: n = blocked_ranges<2>(r, rs, re); break;
-                case 3: n = blocked_ranges<3>(r, rs, re); break;
-                default: n = blocked_ranges<4>(r, rs, re); break;
-            }
+            const uint64_t key = run_key_[r];
+            const int n = row_ranges(int(key & 0x1FFFFF), int((key >> 21) & 0x1FFFFF), int(key >> 42), rs, re);
             for (int k = 0; k < n; ++k) f(rs[k], re[k]);
             return;
         }
@@ -145,10 +150,20 @@ public:
 private:
     static constexpr uint32_t kNoBlock = 0xFFFFFFFFu;
 
-    /// Dense: the non-empty x-rows (3 cells, clipped to the box) around run r.
-    int dense_ranges(size_t r, uint32_t* rs, uint32_t* re) const {
-        const uint64_t key = run_key_[r];
-        const int cx = int(key & 0x1FFFFF), cy = int((key >> 21) & 0x1FFFFF), cz = int(key >> 42);
+    /// Dense or blocked: the non-empty x-row ranges around cell (cx, cy, cz), which may
+    /// lie outside the box (rows outside it are left out), in the 27 cells' order.
+    int row_ranges(int cx, int cy, int cz, uint32_t* rs, uint32_t* re) const {
+        // Rows clipped to the box: none when the cell is more than one cell outside.
+        if (cx < -1 || cy < -1 || cz < -1 || cx > dims_[0] || cy > dims_[1] || cz > dims_[2]) return 0;
+        switch (layout_ == Layout::Dense ? 0 : shift_) {
+            case 0: return dense_ranges(cx, cy, cz, rs, re);
+            case 2: return blocked_ranges<2>(cx, cy, cz, rs, re);
+            case 3: return blocked_ranges<3>(cx, cy, cz, rs, re);
+            default: return blocked_ranges<4>(cx, cy, cz, rs, re);
+        }
+    }
+    /// Dense: the non-empty x-rows (3 cells, clipped to the box) around cell (cx, cy, cz).
+    int dense_ranges(int cx, int cy, int cz, uint32_t* rs, uint32_t* re) const {
         const int nx = dims_[0], ny = dims_[1], nz = dims_[2];
         const int x0 = std::max(cx - 1, 0), x1 = std::min(cx + 1, nx - 1);
         const int y0 = std::max(cy - 1, 0), y1 = std::min(cy + 1, ny - 1);
@@ -168,12 +183,10 @@ private:
         return n;
     }
     /// Blocked with blocks of 2^S cells a side: the non-empty parts of the x-rows
-    /// around run r, one per row or two where a row crosses a block face.
+    /// around cell (cx, cy, cz), one per row or two where a row crosses a block face.
     template <int S>
-    int blocked_ranges(size_t r, uint32_t* rs, uint32_t* re) const {
+    int blocked_ranges(int cx, int cy, int cz, uint32_t* rs, uint32_t* re) const {
         constexpr int M = (1 << S) - 1;
-        const uint64_t key = run_key_[r];
-        const int cx = int(key & 0x1FFFFF), cy = int((key >> 21) & 0x1FFFFF), cz = int(key >> 42);
         const int x0 = std::max(cx - 1, 0), x1 = std::min(cx + 1, dims_[0] - 1);
         const int y0 = std::max(cy - 1, 0), y1 = std::min(cy + 1, dims_[1] - 1);
         const int z0 = std::max(cz - 1, 0), z1 = std::min(cz + 1, dims_[2] - 1);

@@ -196,6 +196,65 @@ TEST(NeighborGrid, BlockedLayoutHandlesCellsOnBlockFaces) {
     EXPECT_EQ(check_against_brute_force(c, 1.0f), NeighborGrid::Layout::Blocked);
 }
 
+TEST(NeighborGrid, CandidatesAroundAnyPointComeAsRowsInTheCellsOrder) {
+    // The foam's points lie anywhere, also beside and above the fluid's box: the walk
+    // around a point must give exactly the binned particles of the 27 cells around the
+    // point's cell, in the order of those cells (z, y, x) and each cell's index order,
+    // as x-rows (at most 18 ranges) in a dense or blocked grid.
+    using L = NeighborGrid::Layout;
+    struct Case {
+        size_t n;
+        Vec3 extent;
+        float cell;
+        L layout;
+    };
+    for (const Case& c : {Case{500, Vec3(5, 5, 5), 0.7f, L::Dense}, Case{3000, Vec3(60, 60, 60), 1.0f, L::Blocked},
+                          Case{2000, Vec3(100, 10, 100), 0.8f, L::Blocked}}) {
+        const Particles p = random_particles(c.n, 41, c.extent, 0.1f);
+        NeighborGrid g;
+        g.build(p.position, p.active, c.cell);
+        ASSERT_EQ(g.layout(), c.layout);
+        Aabb box;
+        std::map<std::array<int, 3>, std::vector<uint32_t>> by_cell;
+        for (size_t i = 0; i < p.size(); ++i)
+            if (p.active[i]) box.grow(p.position[i]);
+        for (size_t i = 0; i < p.size(); ++i)
+            if (p.active[i]) by_cell[cell_of(p.position[i], box.min, c.cell)].push_back(uint32_t(i));
+        Lcg rng(7);
+        const Vec3 margin(3.0f * c.cell);
+        int outside = 0;
+        for (int t = 0; t < 400; ++t) {
+            Vec3 q(rng.uniform(box.min.x - margin.x, box.max.x + margin.x),
+                   rng.uniform(box.min.y - margin.y, box.max.y + margin.y),
+                   rng.uniform(box.min.z - margin.z, box.max.z + margin.z));
+            if (t % 4 == 0) q = p.position[size_t(t) % p.size()] + Vec3(0.0f, float(t % 3) * c.cell, 0.0f);
+            outside += !box.contains(q);
+            const std::array<int, 3> cq = cell_of(q, box.min, c.cell);
+            std::vector<uint32_t> want;
+            for (int dz = -1; dz <= 1; ++dz)
+                for (int dy = -1; dy <= 1; ++dy)
+                    for (int dx = -1; dx <= 1; ++dx) {
+                        const auto it = by_cell.find({cq[0] + dx, cq[1] + dy, cq[2] + dz});
+                        if (it != by_cell.end()) want.insert(want.end(), it->second.begin(), it->second.end());
+                    }
+            std::vector<uint32_t> got, slots;
+            int ranges = 0;
+            const auto order = g.order();
+            g.for_each_candidate_range(q, [&](uint32_t s, uint32_t e) {
+                ++ranges;
+                EXPECT_LT(s, e) << "empty range";
+                for (uint32_t k = s; k < e; ++k) got.push_back(order[k]);
+            });
+            g.for_each_candidate_slot(q, [&](uint32_t k) { slots.push_back(order[k]); });
+            EXPECT_LE(ranges, 18);
+            EXPECT_EQ(got, want) << "point " << t;
+            EXPECT_EQ(slots, want) << "point " << t;
+            if (got != want) break;
+        }
+        EXPECT_GT(outside, 50) << "the points must also lie outside the box";
+    }
+}
+
 TEST(NeighborGrid, HugeOrSparseBoxesFallBackToTheHashExactly) {
     // One particle per 16^3 block or sparser, or a box beyond 2M cells a side (far cells
     // merge): hashed, and still every neighbour exactly once.
