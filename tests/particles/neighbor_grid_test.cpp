@@ -33,6 +33,20 @@ std::array<int, 3> cell_of(const Vec3& v, const Vec3& origin, float cell) {
     return {c(v.x, origin.x), c(v.y, origin.y), c(v.z, origin.z)};
 }
 
+/// The particles of the 27 cells around cell c, cell by cell (z, y, x), each cell's in
+/// index order.
+std::vector<uint32_t> around(const std::map<std::array<int, 3>, std::vector<uint32_t>>& by_cell,
+                             const std::array<int, 3>& c) {
+    std::vector<uint32_t> want;
+    for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+                const auto it = by_cell.find({c[0] + dx, c[1] + dy, c[2] + dz});
+                if (it != by_cell.end()) want.insert(want.end(), it->second.begin(), it->second.end());
+            }
+    return want;
+}
+
 /// Builds a grid and checks it against brute force: every cell is exactly one run (its
 /// particles in index order), order() is a stable sort by bucket, and every run's
 /// neighbour ranges hold exactly the binned particles of the 27 cells around it, each
@@ -76,13 +90,7 @@ NeighborGrid::Layout check_against_brute_force(const Particles& p, float cell) {
         EXPECT_TRUE(seen_cells.insert(c).second) << "cell split over two runs";
         const std::vector<uint32_t> run(order.begin() + g.run_start(r), order.begin() + g.run_start(r + 1));
         EXPECT_EQ(run, by_cell[c]) << "run " << r;
-        std::vector<uint32_t> want;
-        for (int dz = -1; dz <= 1; ++dz)
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dx = -1; dx <= 1; ++dx) {
-                    const auto it = by_cell.find({c[0] + dx, c[1] + dy, c[2] + dz});
-                    if (it != by_cell.end()) want.insert(want.end(), it->second.begin(), it->second.end());
-                }
+        std::vector<uint32_t> want = around(by_cell, c);
         std::sort(want.begin(), want.end());
         std::vector<uint32_t> got;
         int ranges = 0;
@@ -230,13 +238,7 @@ TEST(NeighborGrid, CandidatesAroundAnyPointComeAsRowsInTheCellsOrder) {
             if (t % 4 == 0) q = p.position[size_t(t) % p.size()] + Vec3(0.0f, float(t % 3) * c.cell, 0.0f);
             outside += !box.contains(q);
             const std::array<int, 3> cq = cell_of(q, box.min, c.cell);
-            std::vector<uint32_t> want;
-            for (int dz = -1; dz <= 1; ++dz)
-                for (int dy = -1; dy <= 1; ++dy)
-                    for (int dx = -1; dx <= 1; ++dx) {
-                        const auto it = by_cell.find({cq[0] + dx, cq[1] + dy, cq[2] + dz});
-                        if (it != by_cell.end()) want.insert(want.end(), it->second.begin(), it->second.end());
-                    }
+            const std::vector<uint32_t> want = around(by_cell, cq);
             std::vector<uint32_t> got, slots;
             int ranges = 0;
             const auto order = g.order();
