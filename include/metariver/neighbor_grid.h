@@ -75,21 +75,17 @@ public:
             for (int k = 0; k < n; ++k) f(rs[k], re[k]);
             return;
         }
+        // Hashed: the 27 cells' buckets; two neighbour cells can share one: visit it once.
         uint32_t seen[27];
         int nseen = 0;
-        const bool hashed = layout_ == Layout::Hashed;
         for (int dz = -1; dz <= 1; ++dz)
             for (int dy = -1; dy <= 1; ++dy)
                 for (int dx = -1; dx <= 1; ++dx) {
-                    const int64_t b = bucket(cx + dx, cy + dy, cz + dz);
-                    if (b < 0) continue;
-                    const uint32_t ub = static_cast<uint32_t>(b);
-                    if (hashed) {  // two neighbour cells can share a hash bucket: visit it once
-                        bool dup = false;
-                        for (int s = 0; s < nseen; ++s) dup |= seen[s] == ub;
-                        if (dup) continue;
-                        seen[nseen++] = ub;
-                    }
+                    const uint32_t ub = static_cast<uint32_t>(bucket(cx + dx, cy + dy, cz + dz));
+                    bool dup = false;
+                    for (int s = 0; s < nseen; ++s) dup |= seen[s] == ub;
+                    if (dup) continue;
+                    seen[nseen++] = ub;
                     if (start_[ub] != start_[ub + 1]) f(start_[ub], start_[ub + 1]);
                 }
     }
