@@ -11,6 +11,8 @@
 // swept segment crosses, slab test, watertight triangle test).
 #include <metariver/terrain.h>
 
+#include "watertight_ray.h"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -190,6 +192,7 @@ std::optional<RayHit> Bvh::intersect_paper(const Terrain& terrain, const Vec3& f
 std::optional<RayHit> Bvh::intersect_segment(const Terrain& terrain, const Vec3& from, const Vec3& to) const {
     if (nodes_.empty()) return std::nullopt;
     const Vec3 dir = to - from;
+    const watertight::Ray ray = watertight::prepare(from, dir);
     const auto verts = terrain.vertices();
     const auto idx = terrain.indices();
     const Aabb& root = nodes_[0].box;
@@ -210,7 +213,7 @@ std::optional<RayHit> Bvh::intersect_segment(const Terrain& terrain, const Vec3&
             for (uint32_t k = n.first; k < n.first + n.count; ++k) {
                 const uint32_t tri = tri_ids_[k];
                 const size_t v = 3 * size_t{tri};
-                const auto t = ray_triangle_watertight(from, dir, verts[idx[v]], verts[idx[v + 1]], verts[idx[v + 2]]);
+                const auto t = watertight::hit(ray, verts[idx[v]], verts[idx[v + 1]], verts[idx[v + 2]]);
                 if (t && (!found || *t < best_t || (*t == best_t && tri < best_tri))) {
                     best_t = *t;
                     best_tri = tri;

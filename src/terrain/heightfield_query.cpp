@@ -1,7 +1,9 @@
 // Segment vs heightfield by walking cells: the fast path of the robust collision mode.
 // Watertight ray/triangle test: Woop, Benthin, Wald, "Watertight Ray/Triangle
-// Intersection", JCGT 2013 (ray_triangle_watertight).
+// Intersection", JCGT 2013 (watertight_ray.h, prepared once per segment).
 #include <metariver/terrain.h>
+
+#include "watertight_ray.h"
 
 #include <algorithm>
 #include <cmath>
@@ -22,17 +24,23 @@ HeightfieldQuery intersect_segment_heightfield(const Terrain& terrain, const Vec
     const float z0 = std::min(from.z, to.z) * inv - eps, z1 = std::max(from.z, to.z) * inv + eps;
     if (!(x1 >= 0.0f && z1 >= 0.0f && x0 <= float(W - 1) && z0 <= float(H - 1))) return q;  // also NaN
     // Clamp in float before converting: an exploding coordinate (1e30) must not reach
-    // the int conversion (undefined behaviour).
-    const int j0 = static_cast<int>(std::floor(std::max(x0, 0.0f)));
-    const int j1 = static_cast<int>(std::floor(std::min(x1, float(W - 2))));
-    const int i0 = static_cast<int>(std::floor(std::max(z0, 0.0f)));
-    const int i1 = static_cast<int>(std::floor(std::min(z1, float(H - 2))));
+    // the int conversion (undefined behaviour). Every clamped value is finite and at least 0
+    // (the test above), so truncation is the floor (std::floor is a call in the
+    // portable build, four per particle and step).
+    const int j0 = static_cast<int>(std::max(x0, 0.0f));
+    const int j1 = static_cast<int>(std::min(x1, float(W - 2)));
+    const int i0 = static_cast<int>(std::max(z0, 0.0f));
+    const int i1 = static_cast<int>(std::min(z1, float(H - 2)));
     if (static_cast<int64_t>(j1 - j0 + 1) * (i1 - i0 + 1) > max_cells) {
         q.too_long = true;
         return q;
     }
     const float ymin = std::min(from.y, to.y);
     const Vec3 dir = to - from;
+    // Prepared at the first cell that reaches the segment: most particles' segments reach
+    // none, and the preparation's three divisions would cost them more than the culling.
+    watertight::Ray ray;
+    bool prepared = false;
     const auto verts = terrain.vertices();
     float best_t = 2.0f;
     uint32_t best_tri = 0;
@@ -45,12 +53,13 @@ HeightfieldQuery intersect_segment_heightfield(const Terrain& terrain, const Vec
             const Vec3& e = verts[c + W + 1];
             // The segment cannot reach a cell whose highest corner is below its lowest point.
             if (std::max(std::max(a.y, b.y), std::max(d.y, e.y)) < ymin) continue;
+            if (!prepared) ray = watertight::prepare(from, dir), prepared = true;
             const uint32_t tri = 2u * static_cast<uint32_t>(static_cast<size_t>(i) * (W - 1) + j);
-            if (auto t = ray_triangle_watertight(from, dir, a, d, b); t && *t < best_t) {
+            if (auto t = watertight::hit(ray, a, d, b); t && *t < best_t) {
                 best_t = *t;
                 best_tri = tri;
             }
-            if (auto t = ray_triangle_watertight(from, dir, b, d, e); t && *t < best_t) {
+            if (auto t = watertight::hit(ray, b, d, e); t && *t < best_t) {
                 best_t = *t;
                 best_tri = tri + 1;
             }

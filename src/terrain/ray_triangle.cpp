@@ -13,8 +13,9 @@
 //   for products of floats), as in the paper's section 4.
 #include <metariver/terrain.h>
 
+#include "watertight_ray.h"
+
 #include <cmath>
-#include <utility>
 
 namespace mr {
 
@@ -39,53 +40,7 @@ std::optional<float> ray_triangle_paper(const Vec3& origin, const Vec3& dir, con
 
 std::optional<float> ray_triangle_watertight(const Vec3& origin, const Vec3& dir, const Vec3& a, const Vec3& b,
                                              const Vec3& c) {
-    // Dimension where the ray direction is largest in magnitude becomes z.
-    const Vec3 ad = glm::abs(dir);
-    int kz = 0;
-    if (ad.y > ad[kz]) kz = 1;
-    if (ad.z > ad[kz]) kz = 2;
-    if (!(ad[kz] > 0.0f) || !std::isfinite(ad[kz])) return std::nullopt;  // zero, NaN or infinite direction
-    int kx = kz + 1 == 3 ? 0 : kz + 1;
-    int ky = kx + 1 == 3 ? 0 : kx + 1;
-    if (dir[kz] < 0.0f) std::swap(kx, ky);  // keep the winding of the 2-D projection
-
-    // Shear constants.
-    const float sx = dir[kx] / dir[kz];
-    const float sy = dir[ky] / dir[kz];
-    const float sz = 1.0f / dir[kz];
-
-    // Vertices relative to the ray origin, sheared into ray space.
-    const Vec3 A = a - origin;
-    const Vec3 B = b - origin;
-    const Vec3 C = c - origin;
-    const float ax = A[kx] - sx * A[kz], ay = A[ky] - sy * A[kz];
-    const float bx = B[kx] - sx * B[kz], by = B[ky] - sy * B[kz];
-    const float cx = C[kx] - sx * C[kz], cy = C[ky] - sy * C[kz];
-
-    // Scaled barycentrics (2-D edge functions).
-    float U = cx * by - cy * bx;
-    float V = ax * cy - ay * cx;
-    float W = bx * ay - by * ax;
-    if (U == 0.0f || V == 0.0f || W == 0.0f) {
-        const double cxby = static_cast<double>(cx) * by, cybx = static_cast<double>(cy) * bx;
-        const double axcy = static_cast<double>(ax) * cy, aycx = static_cast<double>(ay) * cx;
-        const double bxay = static_cast<double>(bx) * ay, byax = static_cast<double>(by) * ax;
-        U = static_cast<float>(cxby - cybx);
-        V = static_cast<float>(axcy - aycx);
-        W = static_cast<float>(bxay - byax);
-    }
-    // Both faces: reject only when the signs are mixed.
-    if ((U < 0.0f || V < 0.0f || W < 0.0f) && (U > 0.0f || V > 0.0f || W > 0.0f)) return std::nullopt;
-    const float det = U + V + W;
-    if (det == 0.0f || !std::isfinite(det)) return std::nullopt;
-
-    // Scaled hit distance; accept 0 <= t <= 1 without dividing first.
-    const float az = sz * A[kz], bz = sz * B[kz], cz = sz * C[kz];
-    const float T = U * az + V * bz + W * cz;
-    if (det > 0.0f ? (T < 0.0f || T > det) : (T > 0.0f || T < det)) return std::nullopt;
-    const float t = T / det;
-    if (!(t >= 0.0f && t <= 1.0f)) return std::nullopt;  // rounding in the division, or NaN
-    return t;
+    return watertight::hit(watertight::prepare(origin, dir), a, b, c);
 }
 
 }  // namespace mr
