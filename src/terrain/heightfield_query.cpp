@@ -36,6 +36,11 @@ HeightfieldQuery intersect_segment_heightfield(const Terrain& terrain, const Vec
         return q;
     }
     const float ymin = std::min(from.y, to.y);
+    // Plane heights are rounded relative to the coordinates' size (and to the heights',
+    // which a cell the segment reaches shares): 1e-5 of it, plus 0.1 mm, is hundreds of
+    // float roundings.
+    const float margin = 1e-4f + 1e-5f * (std::abs(from.x) + std::abs(from.y) + std::abs(from.z) +
+                                          std::abs(to.x) + std::abs(to.y) + std::abs(to.z));
     const Vec3 dir = to - from;
     // Prepared at the first cell that reaches the segment: most particles' segments reach
     // none, and the preparation's three divisions would cost them more than the culling.
@@ -53,13 +58,26 @@ HeightfieldQuery intersect_segment_heightfield(const Terrain& terrain, const Vec
             const Vec3& e = verts[c + W + 1];
             // The segment cannot reach a cell whose highest corner is below its lowest point.
             if (std::max(std::max(a.y, b.y), std::max(d.y, e.y)) < ymin) continue;
+            // Nor a triangle whose plane both ends lie above by more than `margin`: the
+            // segment then lies above the plane, and the watertight test could claim it
+            // only within its rounding (far under the margin). The common case of a
+            // particle moving in water near the ground costs two plane heights per end.
+            const float uf = (from.x - a.x) * inv, vf = (from.z - a.z) * inv;
+            const float ut = (to.x - a.x) * inv, vt = (to.z - a.z) * inv;
+            const float lower_f = a.y + uf * (b.y - a.y) + vf * (d.y - a.y);
+            const float lower_t = a.y + ut * (b.y - a.y) + vt * (d.y - a.y);
+            const float upper_f = e.y + (1.0f - uf) * (d.y - e.y) + (1.0f - vf) * (b.y - e.y);
+            const float upper_t = e.y + (1.0f - ut) * (d.y - e.y) + (1.0f - vt) * (b.y - e.y);
+            const bool test_lower = !(from.y - lower_f > margin && to.y - lower_t > margin);
+            const bool test_upper = !(from.y - upper_f > margin && to.y - upper_t > margin);
+            if (!test_lower && !test_upper) continue;
             if (!prepared) ray = watertight::prepare(from, dir), prepared = true;
             const uint32_t tri = 2u * static_cast<uint32_t>(static_cast<size_t>(i) * (W - 1) + j);
-            if (auto t = watertight::hit(ray, a, d, b); t && *t < best_t) {
+            if (auto t = test_lower ? watertight::hit(ray, a, d, b) : std::nullopt; t && *t < best_t) {
                 best_t = *t;
                 best_tri = tri;
             }
-            if (auto t = watertight::hit(ray, b, d, e); t && *t < best_t) {
+            if (auto t = test_upper ? watertight::hit(ray, b, d, e) : std::nullopt; t && *t < best_t) {
                 best_t = *t;
                 best_tri = tri + 1;
             }

@@ -247,6 +247,44 @@ TEST(Solver, HeightfieldQueryFindsTheSameHitsAsTheTree) {
     }
 }
 
+TEST(Solver, HeightfieldQueryFindsTheSameHitsAsTheTreeNearTheGround) {
+    // The cell walk skips a triangle whose plane both ends lie above by more than a
+    // margin (0.1 mm plus 1e-5 of the coordinates). Segments a particle makes in water
+    // on the ground start and end within millimetres of it, above and below, where that
+    // cull decides: the hits must still be the tree's, on small and large terrains.
+    for (const float scale : {0.7f, 40.0f}) {
+        for (uint32_t seed : {4u, 5u}) {
+            World w = make_world(hills(29 + seed * 3, 21 + seed * 5, seed),
+                                 TerrainDef{.area_scale = scale, .height_scale = scale});
+            Lcg rng(seed * 17 + uint32_t(scale));
+            const Aabb b = w.terrain.bounds();
+            size_t hits = 0, misses = 0;
+            for (int k = 0; k < 6000; ++k) {
+                const float x = rng.uniform(b.min.x, b.max.x), z = rng.uniform(b.min.z, b.max.z);
+                // Heights within a few margins of the ground, steps of up to 5 cm, some nearly flat.
+                const float margin = 1e-4f + 1e-5f * 2.0f * (std::abs(x) + std::abs(z) + std::abs(b.max.y));
+                const float h = w.terrain.height_mesh(x, z);
+                const Vec3 from(x, h + rng.uniform(-1.0f, 4.0f) * margin, z);
+                const float dy = k % 3 == 0 ? rng.uniform(-1.0f, 1.0f) * margin : rng.uniform(-0.05f, 0.05f);
+                const Vec3 to = from + Vec3(rng.uniform(-0.05f, 0.05f), dy, rng.uniform(-0.05f, 0.05f));
+                const auto tree = w.bvh.intersect_segment(w.terrain, from, to);
+                const HeightfieldQuery hf = intersect_segment_heightfield(w.terrain, from, to, 1 << 20);
+                ASSERT_FALSE(hf.too_long);
+                ASSERT_EQ(tree.has_value(), hf.hit.has_value()) << "scale " << scale << " segment " << k;
+                if (!tree) {
+                    ++misses;
+                    continue;
+                }
+                ++hits;
+                EXPECT_FLOAT_EQ(tree->t, hf.hit->t) << k;
+                EXPECT_EQ(tree->triangle, hf.hit->triangle) << k;
+            }
+            EXPECT_GT(hits, 600u) << "the sample must cross the ground often";
+            EXPECT_GT(misses, 1000u) << "and pass just above it often";
+        }
+    }
+}
+
 TEST(Solver, SpheresRestAtTheirRadiusOnFlatGround) {
     World w = make_world(flat_map(17, 17, 0.5f));  // ground at y = 3.5
     SpawnDef spawn{.count = 1, .center = Vec3(8.3f, 6.0f, 8.6f), .half_extent = Vec3(0.0f), .interval = 0};
