@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace mr {
 
@@ -62,14 +63,17 @@ HeightfieldQuery intersect_segment_heightfield(const Terrain& terrain, const Vec
             // segment then lies above the plane, and the watertight test could claim it
             // only within its rounding (far under the margin). The common case of a
             // particle moving in water near the ground costs two plane heights per end.
-            const float uf = (from.x - a.x) * inv, vf = (from.z - a.z) * inv;
-            const float ut = (to.x - a.x) * inv, vt = (to.z - a.z) * inv;
-            const float lower_f = a.y + uf * (b.y - a.y) + vf * (d.y - a.y);
-            const float lower_t = a.y + ut * (b.y - a.y) + vt * (d.y - a.y);
-            const float upper_f = e.y + (1.0f - uf) * (d.y - e.y) + (1.0f - vf) * (b.y - e.y);
-            const float upper_t = e.y + (1.0f - ut) * (d.y - e.y) + (1.0f - vt) * (b.y - e.y);
-            const bool test_lower = !(from.y - lower_f > margin && to.y - lower_t > margin);
-            const bool test_upper = !(from.y - upper_f > margin && to.y - upper_t > margin);
+            // Height of p above the planes of (a, d, b) and (b, d, e), in the cell's (u, v).
+            const auto clearance = [&](const Vec3& p) {
+                const float u = (p.x - a.x) * inv, v = (p.z - a.z) * inv;
+                const float lower = a.y + u * (b.y - a.y) + v * (d.y - a.y);
+                const float upper = e.y + (1.0f - u) * (d.y - e.y) + (1.0f - v) * (b.y - e.y);
+                return std::pair{p.y - lower, p.y - upper};
+            };
+            const auto [lower_f, upper_f] = clearance(from);
+            const auto [lower_t, upper_t] = clearance(to);
+            const bool test_lower = !(lower_f > margin && lower_t > margin);
+            const bool test_upper = !(upper_f > margin && upper_t > margin);
             if (!test_lower && !test_upper) continue;
             if (!prepared) ray = watertight::prepare(from, dir), prepared = true;
             const uint32_t tri = 2u * static_cast<uint32_t>(static_cast<size_t>(i) * (W - 1) + j);
