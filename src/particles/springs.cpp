@@ -5,6 +5,8 @@
 // it is the reference the neighbour-grid path is checked against.
 #include <metariver/particles.h>
 
+#include "spring_kernel.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -13,6 +15,10 @@
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
+#endif
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#define METARIVER_SPRINGS_AVX2 1
 #endif
 
 namespace mr {
@@ -52,30 +58,34 @@ void add_spring_forces_pairs(Particles& p, const SpringDef& def) {
 namespace {
 
 /// Candidates gathered per chunk; 3 x 512 floats stay on the stack (no heap at all).
-constexpr int kChunk = 512;
+constexpr int kChunk = spring_kernel::kMaxCandidates;
 
-// target_clones makes an ifunc, whose resolver the dynamic loader runs before the
-// ThreadSanitizer runtime is set up: instrumented, it crashed the tsan build's
-// particles_tests at load (before main). TSan builds keep the default version only.
-#if defined(__SANITIZE_THREAD__)
-#define METARIVER_AVX2_CLONES
-#elif defined(__has_feature)
-#if __has_feature(thread_sanitizer)
-#define METARIVER_AVX2_CLONES
-#endif
-#endif
-#ifndef METARIVER_AVX2_CLONES
-#define METARIVER_AVX2_CLONES [[gnu::target_clones("avx2", "default")]]
-#endif
+}  // namespace
 
-/// Sum of the spring accelerations on a particle at (xi, yi, zi) from m candidates.
-/// Eight independent lanes so the loop vectorises without reassociating the sum (the
-/// result is the same whatever the vector width), a candidate at distance 0 (the
-/// particle itself, or one exactly on top of it) adds nothing, as in the pair loop.
-/// The arrays must hold finite values up to the next multiple of 8 past m: the lanes
-/// past m are masked out (their terms are exactly 0), so there is no scalar tail.
-METARIVER_AVX2_CLONES void spring_sum(float xi, float yi, float zi, const float* cx, const float* cy,
-                                      const float* cz, int m, float r, float max_d, float half_k, float out[3]) {
+namespace spring_kernel {
+
+namespace {
+
+/// The eight partial sums of each axis added up in lane order.
+void add_lanes(const float ax[8], const float ay[8], const float az[8], float out[3]) {
+    float sx = 0.0f, sy = 0.0f, sz = 0.0f;
+    for (int l = 0; l < 8; ++l) {
+        sx += ax[l];
+        sy += ay[l];
+        sz += az[l];
+    }
+    out[0] = sx;
+    out[1] = sy;
+    out[2] = sz;
+}
+
+}  // namespace
+
+void sum_portable(float xi, float yi, float zi, const float* cx, const float* cy, const float* cz, int m, float r,
+                  float max_d, float half_k, float out[3]) {
+    // Eight independent lanes so the loop vectorises without reassociating the sum; a
+    // candidate at distance 0 (the particle itself, or one exactly on top of it) adds
+    // nothing, as in the pair loop.
     float ax[8] = {}, ay[8] = {}, az[8] = {};
     for (int k = 0; k < m; k += 8) {
         for (int l = 0; l < 8; ++l) {
@@ -92,18 +102,74 @@ METARIVER_AVX2_CLONES void spring_sum(float xi, float yi, float zi, const float*
             az[l] += s * dz;
         }
     }
-    float sx = 0.0f, sy = 0.0f, sz = 0.0f;
-    for (int l = 0; l < 8; ++l) {
-        sx += ax[l];
-        sy += ay[l];
-        sz += az[l];
-    }
-    out[0] = sx;
-    out[1] = sy;
-    out[2] = sz;
+    add_lanes(ax, ay, az, out);
 }
 
-}  // namespace
+#if METARIVER_SPRINGS_AVX2
+
+bool available() { return avx2_enabled(); }
+
+// The portable loop's operations in its order: (dx dx + dy dy) + dz dz without fusing,
+// max(len, 1e-20) as std::max (both finite here), s = s_all masked. A masked lane adds
+// +0 or -0 to its partial sum, which never changes it (a partial sum starts at +0 and
+// +0 + -0 = +0), so a skipped block, whose lanes would all be masked, changes nothing.
+[[gnu::target("avx2")]] void sum_avx2(float xi, float yi, float zi, const float* cx, const float* cy,
+                                      const float* cz, int m, float r, float max_d, float half_k, float out[3]) {
+    const __m256 X = _mm256_set1_ps(xi), Y = _mm256_set1_ps(yi), Z = _mm256_set1_ps(zi);
+    const __m256 R = _mm256_set1_ps(r), MAXD = _mm256_set1_ps(max_d), HK = _mm256_set1_ps(half_k);
+    const __m256 one = _mm256_set1_ps(1.0f), tiny = _mm256_set1_ps(1e-20f), zero = _mm256_setzero_ps();
+    const __m256 skip = _mm256_set1_ps(skip_d2(r, max_d));
+    const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    // First the blocks with a candidate within reach, listed without a branch; then the
+    // square roots and divisions of those blocks only.
+    int near[kMaxCandidates / 8];
+    int n_near = 0;
+    for (int k = 0; k < m; k += 8) {
+        const __m256 dx = _mm256_sub_ps(X, _mm256_loadu_ps(cx + k));
+        const __m256 dy = _mm256_sub_ps(Y, _mm256_loadu_ps(cy + k));
+        const __m256 dz = _mm256_sub_ps(Z, _mm256_loadu_ps(cz + k));
+        const __m256 d2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)),
+                                        _mm256_mul_ps(dz, dz));
+        near[n_near] = k;
+        n_near += _mm256_movemask_ps(_mm256_cmp_ps(d2, skip, _CMP_LT_OQ)) != 0;
+    }
+    __m256 ax = zero, ay = zero, az = zero;
+    for (int q = 0; q < n_near; ++q) {
+        const int k = near[q];
+        const __m256 dx = _mm256_sub_ps(X, _mm256_loadu_ps(cx + k));
+        const __m256 dy = _mm256_sub_ps(Y, _mm256_loadu_ps(cy + k));
+        const __m256 dz = _mm256_sub_ps(Z, _mm256_loadu_ps(cz + k));
+        const __m256 d2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)),
+                                        _mm256_mul_ps(dz, dz));
+        const __m256 len = _mm256_sqrt_ps(d2);
+        const __m256 s_all = _mm256_mul_ps(HK, _mm256_sub_ps(_mm256_div_ps(R, _mm256_max_ps(len, tiny)), one));
+        const __m256 inside = _mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_set1_epi32(m - k), lane));
+        const __m256 on = _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(d2, zero, _CMP_GT_OQ),
+                                                      _mm256_cmp_ps(_mm256_sub_ps(len, R), MAXD, _CMP_LT_OQ)),
+                                        inside);
+        const __m256 s = _mm256_and_ps(s_all, on);
+        ax = _mm256_add_ps(ax, _mm256_mul_ps(s, dx));
+        ay = _mm256_add_ps(ay, _mm256_mul_ps(s, dy));
+        az = _mm256_add_ps(az, _mm256_mul_ps(s, dz));
+    }
+    alignas(32) float lx[8], ly[8], lz[8];
+    _mm256_store_ps(lx, ax);
+    _mm256_store_ps(ly, ay);
+    _mm256_store_ps(lz, az);
+    add_lanes(lx, ly, lz, out);
+}
+
+#else
+
+bool available() { return false; }
+void sum_avx2(float xi, float yi, float zi, const float* cx, const float* cy, const float* cz, int m, float r,
+              float max_d, float half_k, float out[3]) {
+    sum_portable(xi, yi, zi, cx, cy, cz, m, r, max_d, half_k, out);
+}
+
+#endif
+
+}  // namespace spring_kernel
 
 // Each particle sums its own share of every pair it is in: a(i, j) = -a(j, i), so the
 // totals equal the pair loop's, with no writes to other particles (no atomics). Work
@@ -116,6 +182,7 @@ void add_spring_forces_grid(Particles& p, const NeighborGrid& grid, const Spring
     const float max_d = def.max_distance;
     const auto order = grid.order();
     const auto sx = grid.sorted_x(), sy = grid.sorted_y(), sz = grid.sorted_z();
+    const auto spring_sum = spring_kernel::available() ? spring_kernel::sum_avx2 : spring_kernel::sum_portable;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, grid.run_count(), 16), [&](const tbb::blocked_range<size_t>& range) {
         alignas(32) float cx[kChunk + 8], cy[kChunk + 8], cz[kChunk + 8];
         for (size_t run = range.begin(); run != range.end(); ++run) {

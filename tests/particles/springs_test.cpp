@@ -2,6 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+#include "spring_kernel.h"
+
 namespace mr {
 namespace {
 
@@ -75,6 +81,59 @@ TEST(Springs, ConserveMomentum) {
         EXPECT_NEAR(total.y, 0.0, 1e-5 * magnitude.y);
         EXPECT_NEAR(total.z, 0.0, 1e-5 * magnitude.z);
     }
+}
+
+// The AVX2 kernel skips blocks of eight candidates beyond reach; the portable loop
+// computes every one. Both must give the same floats bit for bit, including candidates
+// a few ulps either side of the reach (where a skip bound without its margin would drop
+// a live term), at distance 0, and counts that are not a multiple of 8.
+TEST(SpringKernel, Avx2EqualsThePortableLoopBitForBit) {
+    if (!spring_kernel::available()) GTEST_SKIP() << "no AVX2 here";
+    Lcg rng(7);
+    std::vector<float> cx(spring_kernel::kMaxCandidates + 8), cy(cx.size()), cz(cx.size());
+    size_t calls = 0, skipped_some = 0, boundary_live = 0;
+    for (int round = 0; round < 400; ++round) {
+        const float r = rng.uniform(0.05f, 2.0f), max_d = rng.uniform(0.0f, 1.5f), half_k = rng.uniform(1.0f, 500.0f);
+        const float reach = r + max_d;
+        const int m = int(rng.uniform(0.0f, float(spring_kernel::kMaxCandidates) + 0.99f));
+        const Vec3 xi(rng.uniform(-50.0f, 50.0f), rng.uniform(-50.0f, 50.0f), rng.uniform(-50.0f, 50.0f));
+        std::fill(cx.begin(), cx.end(), 0.0f);
+        std::fill(cy.begin(), cy.end(), 0.0f);
+        std::fill(cz.begin(), cz.end(), 0.0f);
+        int far_blocks = 0;
+        for (int k = 0; k < m; ++k) {
+            // Whole blocks far away (skipped), whole blocks on the reach's sphere (moved by
+            // a few ulps either way: a bound without its margin skips them), and mixed
+            // blocks: near, on the sphere, or exactly on top of xi.
+            const int block_kind = (k / 8) % 3;
+            const bool far_block = block_kind == 2;
+            far_blocks += far_block && k % 8 == 0;
+            Vec3 d(rng.uniform(-1.0f, 1.0f), rng.uniform(-1.0f, 1.0f), rng.uniform(-1.0f, 1.0f));
+            if (glm::length(d) < 1e-3f) d = Vec3(1.0f, 0.0f, 0.0f);
+            d = glm::normalize(d);
+            float dist = rng.uniform(0.0f, 1.3f * reach);
+            const int kind = block_kind == 1 ? 1 : int(rng.uniform(0.0f, 4.0f));
+            if (far_block) dist = reach * rng.uniform(1.01f, 3.0f);
+            else if (kind == 0) dist = 0.0f;
+            else if (kind == 1) dist = std::nextafter(reach, 0.0f) * (1.0f + float(int(rng.uniform(-4.0f, 4.0f))) * 6e-8f);
+            const Vec3 c = xi - dist * d;
+            cx[size_t(k)] = c.x, cy[size_t(k)] = c.y, cz[size_t(k)] = c.z;
+            if (!far_block && kind == 1) {
+                const Vec3 dd = xi - c;
+                const float len = std::sqrt((dd.x * dd.x + dd.y * dd.y) + dd.z * dd.z);
+                boundary_live += len > 0.99f * reach && len - r < max_d;
+            }
+        }
+        float a[3], b[3];
+        spring_kernel::sum_portable(xi.x, xi.y, xi.z, cx.data(), cy.data(), cz.data(), m, r, max_d, half_k, a);
+        spring_kernel::sum_avx2(xi.x, xi.y, xi.z, cx.data(), cy.data(), cz.data(), m, r, max_d, half_k, b);
+        ASSERT_EQ(std::memcmp(a, b, sizeof a), 0) << "round " << round << ", m " << m << ": " << a[0] << " " << a[1]
+                                                  << " " << a[2] << " against " << b[0] << " " << b[1] << " " << b[2];
+        ++calls;
+        skipped_some += far_blocks > 0;
+    }
+    EXPECT_GT(skipped_some, 300u) << "the case must exercise skipped blocks";
+    EXPECT_GT(boundary_live, 1000u) << "the case must put live terms just inside the reach";
 }
 
 }  // namespace
