@@ -20,6 +20,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <fmt/format.h>
 
@@ -402,9 +403,17 @@ void ParticleSolver::record_sunk(size_t i, bool over_an_edge) {
 }
 
 void ParticleSolver::record_max_speed() {
-    float vmax = 0.0f;
-    for (size_t i = 0; i < next_to_activate_; ++i) vmax = std::max(vmax, glm::length(particles_.velocity[i]));
-    counters_.max_speed = vmax;
+    // The largest squared speed, then one square root: the same float as the largest
+    // glm::length (sqrt is correctly rounded and never decreasing), for any split.
+    const auto& v = particles_.velocity;
+    const float v2max = tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, next_to_activate_, 8192), 0.0f,
+        [&](const tbb::blocked_range<size_t>& r, float m) {
+            for (size_t i = r.begin(); i != r.end(); ++i) m = std::max(m, glm::dot(v[i], v[i]));
+            return m;
+        },
+        [](float a, float b) { return std::max(a, b); });
+    counters_.max_speed = std::sqrt(v2max);
 }
 
 void ParticleSolver::sort_by_cell(float cell) {
@@ -423,7 +432,8 @@ void ParticleSolver::sort_by_cell(float cell) {
     permute(p.position);
     permute(p.last_position);
     permute(p.velocity);
-    permute(p.force);
+    // Not p.force: every step that reads it writes it first, after this sort (springs fill
+    // it with gravity; PBF does not use it).
     scratch_id_.resize(n);
     for (size_t k = 0; k < n; ++k) scratch_id_[k] = p.id[perm_[k]];
     p.id.swap(scratch_id_);
