@@ -1,8 +1,10 @@
 // metariver particles, private: the springs' per-particle sum over gathered candidates
 // (springs.cpp), as a portable loop and, picked at run time, an AVX2 one that skips each
 // block of eight candidates with none within reach. Both give the same floats bit for bit
-// (tests/particles/springs_test.cpp): the skipped lanes' terms are exactly zero, and the
-// AVX2 loop runs the portable loop's operations in its order (no fused multiply-adds).
+// for finite candidates, as both require (tests/particles/springs_test.cpp): the skipped
+// lanes' terms are exactly zero, and the AVX2 loop runs the portable loop's operations in
+// its order (no fused multiply-adds). (A NaN candidate would make the portable sum NaN;
+// the AVX2 one masks it to 0.)
 #pragma once
 
 #include <cstdint>
