@@ -152,11 +152,25 @@ bool available() { return avx2_enabled(); }
         ay = _mm256_add_ps(ay, _mm256_mul_ps(s, dy));
         az = _mm256_add_ps(az, _mm256_mul_ps(s, dz));
     }
-    alignas(32) float lx[8], ly[8], lz[8];
-    _mm256_store_ps(lx, ax);
-    _mm256_store_ps(ly, ay);
-    _mm256_store_ps(lz, az);
-    add_lanes(lx, ly, lz, out);
+    // add_lanes with x, y and z side by side: v_l = (ax_l, ay_l, az_l, 0), added up in
+    // lane order from +0, one vector add per lane instead of three scalar ones.
+    const __m256 t0 = _mm256_unpacklo_ps(ax, ay), t1 = _mm256_unpackhi_ps(ax, ay);
+    const __m256 t2 = _mm256_unpacklo_ps(az, zero), t3 = _mm256_unpackhi_ps(az, zero);
+    const __m256 v04 = _mm256_shuffle_ps(t0, t2, 0x44), v15 = _mm256_shuffle_ps(t0, t2, 0xEE);
+    const __m256 v26 = _mm256_shuffle_ps(t1, t3, 0x44), v37 = _mm256_shuffle_ps(t1, t3, 0xEE);
+    __m128 sum = _mm_add_ps(_mm_setzero_ps(), _mm256_castps256_ps128(v04));
+    sum = _mm_add_ps(sum, _mm256_castps256_ps128(v15));
+    sum = _mm_add_ps(sum, _mm256_castps256_ps128(v26));
+    sum = _mm_add_ps(sum, _mm256_castps256_ps128(v37));
+    sum = _mm_add_ps(sum, _mm256_extractf128_ps(v04, 1));
+    sum = _mm_add_ps(sum, _mm256_extractf128_ps(v15, 1));
+    sum = _mm_add_ps(sum, _mm256_extractf128_ps(v26, 1));
+    sum = _mm_add_ps(sum, _mm256_extractf128_ps(v37, 1));
+    alignas(16) float s4[4];
+    _mm_store_ps(s4, sum);
+    out[0] = s4[0];
+    out[1] = s4[1];
+    out[2] = s4[2];
 }
 
 #else
