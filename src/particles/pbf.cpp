@@ -363,7 +363,8 @@ void PbfSolver::step(float dt) {
             Vec3 gi(0.0f);
             if (simd) {
                 const pbf_simd::DensitySums s = pbf_simd::density(kc, inv_rho0, xi, i, nl->index(), nl->first(i),
-                                                                  nl->first(i + 1), p.position.data(), cache_w, cache_grad);
+                                                                  nl->first(i + 1), p.position.data(), uint32_t(n), cache_w,
+                                                                  cache_grad);
                 rho = s.rho, gi = s.grad, sum_g2 = s.grad2;
             } else {
                 each([&](uint32_t j, uint32_t e) {
@@ -519,13 +520,13 @@ void PbfSolver::step(float dt) {
             const auto put = [&](uint32_t i, const Vec3& visc) { delta_[i] = v[i] + d.xsph * inv_rho0 * visc; };
             if (nl) {
                 for_each_binned(grid_, nl, [&](uint32_t i, auto&&) {
-                    put(i, pbf_simd::viscosity(kc, x[i], v[i], nl->index(), nl->first(i), nl->first(i + 1), x, v));
+                    put(i, pbf_simd::viscosity(kc, x[i], v[i], nl->index(), nl->first(i), nl->first(i + 1), x, v, uint32_t(n)));
                 });
             } else {
                 for_each_run(grid_, [&](uint32_t i, const Ranges& rg) {
                     Vec3 visc(0.0f);
                     for (int q = 0; q < rg.n; ++q)
-                        visc += pbf_simd::viscosity(kc, x[i], v[i], nullptr, rg.s[q], rg.e[q], x, v);
+                        visc += pbf_simd::viscosity(kc, x[i], v[i], nullptr, rg.s[q], rg.e[q], x, v, uint32_t(n));
                     put(i, visc);
                 });
             }

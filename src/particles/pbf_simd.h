@@ -41,9 +41,10 @@ inline float grad_fixed_scale(const KernelConsts& k) { return 32767.0f / (k.spik
 /// The density pass of particle i (position xi) over its list entries [b, e) of `index`:
 /// per entry, for the correction pass, cache_w[e] = W (or -1 beyond h and for i itself)
 /// and cache_g[0..2][e] = the kernel gradient's x, y, z (grad factor times x_i - x_j) in
-/// fixed point (grad_fixed_scale).
+/// fixed point (grad_fixed_scale). `pos` holds `count` positions (every index below count).
 DensitySums density(const KernelConsts& k, float inv_rho0, const Vec3& xi, uint32_t i, const uint32_t* index,
-                    uint32_t b, uint32_t e, const Vec3* pos, float* cache_w, int16_t* const cache_g[3]);
+                    uint32_t b, uint32_t e, const Vec3* pos, uint32_t count, float* cache_w,
+                    int16_t* const cache_g[3]);
 
 /// The correction pass's sum of (li + lambda_j - scorr) grad W over the entries with
 /// cache_w >= 0 (not yet divided by rho0), from the density pass's cache (the positions
@@ -54,8 +55,9 @@ Vec3 correction(const KernelConsts& k, float li, const uint32_t* index, uint32_t
 
 /// XSPH's sum of (v_j - v_i) W over i's list entries [b, e) within h (not yet scaled);
 /// without an index, over the particles [b, e) (a range of the cell-ordered arrays).
+/// `pos` and `vel` hold `count` particles.
 Vec3 viscosity(const KernelConsts& k, const Vec3& xi, const Vec3& vi, const uint32_t* index, uint32_t b, uint32_t e,
-               const Vec3* pos, const Vec3* vel);
+               const Vec3* pos, const Vec3* vel, uint32_t count);
 
 /// Sorted (cell-ordered) copies of the fluid for the foam's potentials (foam.cpp): x, y, z,
 /// then the velocity's and (after the first pass) the surface normal's components.
