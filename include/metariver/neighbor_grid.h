@@ -299,6 +299,11 @@ private:
     std::vector<uint32_t> start_;  // count_ + 1
     std::vector<uint32_t> index_;
     std::vector<float> rx_, ry_, rz_;  // positions at the build
+    // The AVX2 build's blocks of eight within reach (neighbor_lists.cpp): per cell run
+    // its blocks per particle and its first slot in words_; per particle its listed words.
+    std::vector<uint32_t> run_blocks_;
+    std::vector<size_t> run_slot_;
+    std::vector<uint32_t> words_, listed_;
     uint64_t builds_ = 0;
     bool simd_ = true;
 };
