@@ -37,7 +37,7 @@ MR_AVX2 inline float sum8(__m256 v) {
 /// x, y, z of the eight Vec3 at base + 3 j (j: the lanes of `jv`, each < count), as if
 /// gathered: one 16-byte load per lane (its x, y, z and the next float) and a 4 x 4
 /// transpose per half. Three eight-wide gathers cost about 3.5 times as much on AMD Zen 4
-/// (2.1 M entries: 1.7 -> 0.47 ms) and no less on Intel. A lane at the array's last
+/// (2.1 M entries: 1.7 -> 0.47 ms; not measured on Intel). A lane at the array's last
 /// element would read one float past its end, so a batch holding it gathers instead.
 MR_AVX2 inline void load_xyz(const float* base, __m256i jv, uint32_t count, __m256& x, __m256& y, __m256& z) {
     const __m256i last = _mm256_set1_epi32(int(count) - 1);
