@@ -7,6 +7,7 @@
 #include <metariver/neighbor_grid.h>
 
 #include "grid_runs.h"
+#include "simd_offsets.h"
 
 #include <tbb/parallel_reduce.h>
 
@@ -68,10 +69,7 @@ const PackTable kPack;
 /// Bits of the candidates j0 .. j0 + 7 (those below e) within r2.
 MR_LISTS_AVX2 inline unsigned within8(__m256 x, __m256 y, __m256 z, const float* cx, const float* cy, const float* cz,
                                       uint32_t j0, uint32_t e, __m256 r2) {
-    const __m256 dx = _mm256_sub_ps(x, _mm256_loadu_ps(cx + j0));
-    const __m256 dy = _mm256_sub_ps(y, _mm256_loadu_ps(cy + j0));
-    const __m256 dz = _mm256_sub_ps(z, _mm256_loadu_ps(cz + j0));
-    const __m256 d2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
+    const __m256 d2 = simd::offsets8(x, y, z, cx, cy, cz, j0).d2;
     const unsigned in = unsigned(_mm256_movemask_ps(_mm256_cmp_ps(d2, r2, _CMP_LT_OQ)));
     const uint32_t left = e - j0;
     return left >= 8 ? in : in & ((1u << left) - 1u);

@@ -362,9 +362,9 @@ void PbfSolver::step(float dt) {
             float rho = 0.0f, sum_g2 = 0.0f;
             Vec3 gi(0.0f);
             if (simd) {
-                const pbf_simd::DensitySums s = pbf_simd::density(kc, inv_rho0, xi, i, nl->index(), nl->first(i),
-                                                                  nl->first(i + 1), p.position.data(), uint32_t(n), cache_w,
-                                                                  cache_grad);
+                const pbf_simd::DensitySums s =
+                    pbf_simd::density(kc, inv_rho0, xi, i, nl->index(), nl->first(i), nl->first(i + 1),
+                                      p.position.data(), uint32_t(n), cache_w, cache_grad);
                 rho = s.rho, gi = s.grad, sum_g2 = s.grad2;
             } else {
                 each([&](uint32_t j, uint32_t e) {
@@ -520,7 +520,8 @@ void PbfSolver::step(float dt) {
             const auto put = [&](uint32_t i, const Vec3& visc) { delta_[i] = v[i] + d.xsph * inv_rho0 * visc; };
             if (nl) {
                 for_each_binned(grid_, nl, [&](uint32_t i, auto&&) {
-                    put(i, pbf_simd::viscosity(kc, x[i], v[i], nl->index(), nl->first(i), nl->first(i + 1), x, v, uint32_t(n)));
+                    put(i, pbf_simd::viscosity(kc, x[i], v[i], nl->index(), nl->first(i), nl->first(i + 1), x, v,
+                                               uint32_t(n)));
                 });
             } else {
                 for_each_run(grid_, [&](uint32_t i, const Ranges& rg) {

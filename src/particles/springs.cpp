@@ -5,6 +5,7 @@
 // it is the reference the neighbour-grid path is checked against.
 #include <metariver/particles.h>
 
+#include "simd_offsets.h"
 #include "spring_kernel.h"
 
 #include <tbb/blocked_range.h>
@@ -109,23 +110,6 @@ void sum_portable(float xi, float yi, float zi, const float* cx, const float* cy
 
 bool available() { return avx2_enabled(); }
 
-namespace {
-
-/// Candidates k .. k + 7 relative to the particle: d = x_i - x_j and |d|^2 as the portable
-/// loop computes them, (dx dx + dy dy) + dz dz without fusing.
-struct Offsets {
-    __m256 dx, dy, dz, d2;
-};
-[[gnu::target("avx2")]] inline Offsets offsets(__m256 X, __m256 Y, __m256 Z, const float* cx, const float* cy,
-                                               const float* cz, int k) {
-    const __m256 dx = _mm256_sub_ps(X, _mm256_loadu_ps(cx + k));
-    const __m256 dy = _mm256_sub_ps(Y, _mm256_loadu_ps(cy + k));
-    const __m256 dz = _mm256_sub_ps(Z, _mm256_loadu_ps(cz + k));
-    return {dx, dy, dz, _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz))};
-}
-
-}  // namespace
-
 // The portable loop's operations in its order: (dx dx + dy dy) + dz dz without fusing,
 // max(len, 1e-20) as std::max (both finite here), s = s_all masked. A masked lane adds
 // +0 or -0 to its partial sum, which never changes it (a partial sum starts at +0 and
@@ -142,14 +126,14 @@ struct Offsets {
     int near[kMaxCandidates / 8];
     int n_near = 0;
     for (int k = 0; k < m; k += 8) {
-        const Offsets o = offsets(X, Y, Z, cx, cy, cz, k);
+        const simd::Offsets8 o = simd::offsets8(X, Y, Z, cx, cy, cz, size_t(k));
         near[n_near] = k;
         n_near += _mm256_movemask_ps(_mm256_cmp_ps(o.d2, skip, _CMP_LT_OQ)) != 0;
     }
     __m256 ax = zero, ay = zero, az = zero;
     for (int q = 0; q < n_near; ++q) {
         const int k = near[q];
-        const auto [dx, dy, dz, d2] = offsets(X, Y, Z, cx, cy, cz, k);
+        const auto [dx, dy, dz, d2] = simd::offsets8(X, Y, Z, cx, cy, cz, size_t(k));
         const __m256 len = _mm256_sqrt_ps(d2);
         const __m256 s_all = _mm256_mul_ps(HK, _mm256_sub_ps(_mm256_div_ps(R, _mm256_max_ps(len, tiny)), one));
         const __m256 inside = _mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_set1_epi32(m - k), lane));
