@@ -142,7 +142,9 @@ private:
     FoamStats stats_;
     std::vector<Vec3> normal_;
     std::vector<float> ta_, wc_, ek_;
-    std::vector<float> sorted_;  ///< potentials_simd: velocities and normals in the grid's order
+    std::vector<float> sorted_;  ///< potentials_simd: velocities in the grid's order (SoA, for classify_all)
+    std::vector<Vec3> sorted_pos_, sorted_vel_, sorted_nrm_;  ///< potentials_simd: the fluid in the grid's order
+    NeighborLists lists_;        ///< potentials_simd: each sorted particle's fluid within h
     bool simd_ = true;
     std::vector<uint32_t> emit_count_, emit_first_;
     std::vector<uint8_t> keep_;

@@ -260,38 +260,55 @@ void FoamSystem::potentials(const Particles& fluid) {
 }
 
 void FoamSystem::potentials_simd(const Particles& fluid) {
-    // The same two passes eight candidates at a time (pbf_simd.h) over cell-ordered
-    // copies: the grid's positions, the velocities gathered into its order once, and the
-    // first pass's normals written in that order for the second.
+    // The same two passes eight list entries at a time (pbf_simd.h), over the fluid's
+    // neighbour lists within h (NeighborLists, built here on the grid's cell-ordered
+    // positions: each pass reads only the pairs, where a scan of the 27 cells' ranges read
+    // about six candidates per pair) and cell-ordered copies of the positions, the
+    // velocities and the first pass's normals. The classification's SoA velocities are
+    // filled on the way.
     const auto order = grid_.order();
     const size_t m = order.size();
+    const uint32_t count = static_cast<uint32_t>(m);
     const float h = h_;
-    const pbf_simd::FoamArrays a = sorted_arrays(grid_, sorted_);
+    sorted_arrays(grid_, sorted_);
     float* const v = sorted_.data();
+    const auto sx = grid_.sorted_x(), sy = grid_.sorted_y(), sz = grid_.sorted_z();
+    sorted_pos_.resize(m);
+    sorted_vel_.resize(m);
+    sorted_nrm_.resize(m);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, m, 4096), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t k = r.begin(); k != r.end(); ++k) {
             const Vec3 u = fluid.velocity[order[k]];
             v[k] = u.x, v[m + k] = u.y, v[2 * m + k] = u.z;
+            sorted_vel_[k] = u;
+            sorted_pos_[k] = Vec3(sx[k], sy[k], sz[k]);
         }
     });
-    float* const n = v + 3 * m;
-    for_each_run(grid_, [&](uint32_t k, const Ranges& rg) {
-        Vec3 sum(0.0f);
-        for (int q = 0; q < rg.n; ++q) sum += pbf_simd::foam_normal_sum(a, k, rg.s[q], rg.e[q], h);
-        const Vec3 nk = surface_normal(sum);
-        normal_[order[k]] = nk;
-        n[k] = nk.x, n[m + k] = nk.y, n[2 * m + k] = nk.z;
+    lists_.build(grid_, sorted_pos_, h);
+    const uint32_t* index = lists_.index();
+    const Vec3* pos = sorted_pos_.data();
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, m, 256), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t k = r.begin(); k != r.end(); ++k) {
+            const uint32_t kk = static_cast<uint32_t>(k);
+            const Vec3 nk = surface_normal(pbf_simd::foam_normal_sum(pos, count, kk, index, lists_.first(kk),
+                                                                     lists_.first(kk + 1), h));
+            normal_[order[k]] = nk;
+            sorted_nrm_[k] = nk;
+        }
     });
-    for_each_run(grid_, [&](uint32_t k, const Ranges& rg) {
-        const uint32_t i = order[k];
-        const Vec3 vi = fluid.velocity[i], ni = normal_[i];
-        const float speed = glm::length(vi);
-        ek_[i] = 0.5f * speed * speed;
-        if (ek_[i] <= def_.energy_min) return;
-        float ta = 0.0f, curv = 0.0f;
-        for (int q = 0; q < rg.n; ++q) pbf_simd::foam_potential_sums(a, k, vi, ni, rg.s[q], rg.e[q], h, ta, curv);
-        ta_[i] = ta;
-        wc_[i] = crest_potential(vi, speed, ni, curv);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, m, 256), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t k = r.begin(); k != r.end(); ++k) {
+            const uint32_t kk = static_cast<uint32_t>(k), i = order[k];
+            const Vec3 vi = sorted_vel_[k], ni = sorted_nrm_[k];
+            const float speed = glm::length(vi);
+            ek_[i] = 0.5f * speed * speed;
+            if (ek_[i] <= def_.energy_min) continue;
+            float ta = 0.0f, curv = 0.0f;
+            pbf_simd::foam_potential_sums(pos, sorted_vel_.data(), sorted_nrm_.data(), count, kk, vi, ni, index,
+                                          lists_.first(kk), lists_.first(kk + 1), h, ta, curv);
+            ta_[i] = ta;
+            wc_[i] = crest_potential(vi, speed, ni, curv);
+        }
     });
 }
 

@@ -202,23 +202,20 @@ MR_AVX2 Vec3 viscosity(const KernelConsts& k, const Vec3& xi, const Vec3& vi, co
 
 namespace {
 
-/// Per lane over candidates j0 .. j0 + 7 of [s, e): the offset x_k - x_j, r, W~ = 1 - r / h
-/// and the mask of 1e-12 < r^2 < h^2, j != k, j < e.
+/// Per lane over eight list entries of particle k (neighbour j at x, y, z): the offset
+/// x_k - x_j, r, W~ = 1 - r / h and the mask of 1e-12 < r^2 < h^2, j != k, in `valid`.
 struct FoamPair {
     __m256 dx, dy, dz, r, w, ok;
 };
-MR_AVX2 inline FoamPair foam_pair(const FoamArrays& a, __m256 px, __m256 py, __m256 pz, uint32_t k, uint32_t j0,
-                                  uint32_t e, __m256 h2, __m256 inv_h, __m256i& valid) {
+MR_AVX2 inline FoamPair foam_pair(const Gathered& n, __m256 px, __m256 py, __m256 pz, uint32_t k, __m256i valid,
+                                  __m256 h2, __m256 inv_h) {
     FoamPair q;
-    valid = lanes_below(e - j0);
-    const __m256i j = _mm256_add_epi32(_mm256_set1_epi32(int(j0)), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
-    const __m256i not_k = _mm256_xor_si256(_mm256_cmpeq_epi32(j, _mm256_set1_epi32(int(k))), _mm256_set1_epi32(-1));
-    valid = _mm256_and_si256(valid, not_k);
-    q.dx = _mm256_sub_ps(px, _mm256_maskload_ps(a.x + j0, valid));
-    q.dy = _mm256_sub_ps(py, _mm256_maskload_ps(a.y + j0, valid));
-    q.dz = _mm256_sub_ps(pz, _mm256_maskload_ps(a.z + j0, valid));
+    const __m256i not_k = _mm256_xor_si256(_mm256_cmpeq_epi32(n.j, _mm256_set1_epi32(int(k))), _mm256_set1_epi32(-1));
+    q.dx = _mm256_sub_ps(px, n.x);
+    q.dy = _mm256_sub_ps(py, n.y);
+    q.dz = _mm256_sub_ps(pz, n.z);
     const __m256 r2 = _mm256_fmadd_ps(q.dz, q.dz, _mm256_fmadd_ps(q.dy, q.dy, _mm256_mul_ps(q.dx, q.dx)));
-    q.ok = _mm256_and_ps(_mm256_castsi256_ps(valid),
+    q.ok = _mm256_and_ps(_mm256_castsi256_ps(_mm256_and_si256(valid, not_k)),
                          _mm256_and_ps(_mm256_cmp_ps(r2, h2, _CMP_LT_OQ),
                                        _mm256_cmp_ps(r2, _mm256_set1_ps(1e-12f), _CMP_GT_OQ)));
     q.r = _mm256_sqrt_ps(r2);
@@ -228,13 +225,15 @@ MR_AVX2 inline FoamPair foam_pair(const FoamArrays& a, __m256 px, __m256 py, __m
 
 }  // namespace
 
-MR_AVX2 Vec3 foam_normal_sum(const FoamArrays& a, uint32_t k, uint32_t s, uint32_t e, float h) {
-    const __m256 px = _mm256_set1_ps(a.x[k]), py = _mm256_set1_ps(a.y[k]), pz = _mm256_set1_ps(a.z[k]);
+MR_AVX2 Vec3 foam_normal_sum(const Vec3* pos, uint32_t count, uint32_t k, const uint32_t* index, uint32_t b, uint32_t e,
+                             float h) {
+    const float* const p = &pos[0].x;
+    const __m256 px = _mm256_set1_ps(pos[k].x), py = _mm256_set1_ps(pos[k].y), pz = _mm256_set1_ps(pos[k].z);
     const __m256 h2 = _mm256_set1_ps(h * h), inv_h = _mm256_set1_ps(1.0f / h);
     __m256 sx = _mm256_setzero_ps(), sy = sx, sz = sx;
-    for (uint32_t j0 = s; j0 < e; j0 += 8) {
-        __m256i valid;
-        const FoamPair q = foam_pair(a, px, py, pz, k, j0, e, h2, inv_h, valid);
+    for (uint32_t q0 = b; q0 < e; q0 += 8) {
+        const __m256i valid = lanes_below(e - q0);
+        const FoamPair q = foam_pair(gather(index, q0, valid, p, count), px, py, pz, k, valid, h2, inv_h);
         const __m256 f = _mm256_and_ps(q.ok, _mm256_div_ps(q.w, q.r));  // W~ / r
         sx = _mm256_fmadd_ps(q.dx, f, sx);
         sy = _mm256_fmadd_ps(q.dy, f, sy);
@@ -243,24 +242,27 @@ MR_AVX2 Vec3 foam_normal_sum(const FoamArrays& a, uint32_t k, uint32_t s, uint32
     return Vec3(sum8(sx), sum8(sy), sum8(sz));
 }
 
-MR_AVX2 void foam_potential_sums(const FoamArrays& a, uint32_t k, const Vec3& v, const Vec3& n, uint32_t s, uint32_t e,
-                                 float h, float& ta, float& curv) {
-    const __m256 px = _mm256_set1_ps(a.x[k]), py = _mm256_set1_ps(a.y[k]), pz = _mm256_set1_ps(a.z[k]);
+MR_AVX2 void foam_potential_sums(const Vec3* pos, const Vec3* vel, const Vec3* nrm, uint32_t count, uint32_t k,
+                                 const Vec3& v, const Vec3& n, const uint32_t* index, uint32_t b, uint32_t e, float h,
+                                 float& ta, float& curv) {
+    const float* const p = &pos[0].x;
+    const __m256 px = _mm256_set1_ps(pos[k].x), py = _mm256_set1_ps(pos[k].y), pz = _mm256_set1_ps(pos[k].z);
     const __m256 ux = _mm256_set1_ps(v.x), uy = _mm256_set1_ps(v.y), uz = _mm256_set1_ps(v.z);
     const __m256 nx = _mm256_set1_ps(n.x), ny = _mm256_set1_ps(n.y), nz = _mm256_set1_ps(n.z);
     const __m256 h2 = _mm256_set1_ps(h * h), inv_h = _mm256_set1_ps(1.0f / h), zero = _mm256_setzero_ps();
     const __m256 one = _mm256_set1_ps(1.0f), tiny = _mm256_set1_ps(1e-6f);
     __m256 t = zero, c = zero;
-    for (uint32_t j0 = s; j0 < e; j0 += 8) {
-        __m256i valid;
-        const FoamPair q = foam_pair(a, px, py, pz, k, j0, e, h2, inv_h, valid);
+    for (uint32_t q0 = b; q0 < e; q0 += 8) {
+        const __m256i valid = lanes_below(e - q0);
+        const Gathered g = gather(index, q0, valid, p, count);
+        const FoamPair q = foam_pair(g, px, py, pz, k, valid, h2, inv_h);
         if (_mm256_testz_ps(q.ok, q.ok)) continue;
         const __m256 inv_r = _mm256_div_ps(one, q.r);
         const __m256 xx = _mm256_mul_ps(q.dx, inv_r), xy = _mm256_mul_ps(q.dy, inv_r), xz = _mm256_mul_ps(q.dz, inv_r);
         // Trapped air: |v_kj| - v_kj . x^_kj = |v_kj| (1 - v^_kj . x^_kj).
-        const __m256 vx = _mm256_sub_ps(ux, _mm256_maskload_ps(a.vx + j0, valid));
-        const __m256 vy = _mm256_sub_ps(uy, _mm256_maskload_ps(a.vy + j0, valid));
-        const __m256 vz = _mm256_sub_ps(uz, _mm256_maskload_ps(a.vz + j0, valid));
+        __m256 jx, jy, jz;
+        load_xyz(&vel[0].x, g.j, count, jx, jy, jz);
+        const __m256 vx = _mm256_sub_ps(ux, jx), vy = _mm256_sub_ps(uy, jy), vz = _mm256_sub_ps(uz, jz);
         const __m256 vl = _mm256_sqrt_ps(_mm256_fmadd_ps(vz, vz, _mm256_fmadd_ps(vy, vy, _mm256_mul_ps(vx, vx))));
         const __m256 along = _mm256_fmadd_ps(vz, xz, _mm256_fmadd_ps(vy, xy, _mm256_mul_ps(vx, xx)));
         const __m256 ta_ok = _mm256_and_ps(q.ok, _mm256_cmp_ps(vl, tiny, _CMP_GT_OQ));
@@ -268,9 +270,8 @@ MR_AVX2 void foam_potential_sums(const FoamArrays& a, uint32_t k, const Vec3& v,
         // Convex curvature: the neighbour lies behind k along k's normal.
         const __m256 behind = _mm256_fmadd_ps(xz, nz, _mm256_fmadd_ps(xy, ny, _mm256_mul_ps(xx, nx)));
         const __m256 cv_ok = _mm256_and_ps(q.ok, _mm256_cmp_ps(behind, zero, _CMP_GT_OQ));
-        const __m256 nn = _mm256_fmadd_ps(nz, _mm256_maskload_ps(a.nz + j0, valid),
-                                          _mm256_fmadd_ps(ny, _mm256_maskload_ps(a.ny + j0, valid),
-                                                          _mm256_mul_ps(nx, _mm256_maskload_ps(a.nx + j0, valid))));
+        load_xyz(&nrm[0].x, g.j, count, jx, jy, jz);
+        const __m256 nn = _mm256_fmadd_ps(nz, jz, _mm256_fmadd_ps(ny, jy, _mm256_mul_ps(nx, jx)));
         c = _mm256_add_ps(c, _mm256_and_ps(cv_ok, _mm256_mul_ps(_mm256_sub_ps(one, nn), q.w)));
     }
     ta += sum8(t);
@@ -321,9 +322,9 @@ Vec3 viscosity(const KernelConsts&, const Vec3&, const Vec3&, const uint32_t*, u
                const Vec3*, uint32_t) {
     return Vec3(0.0f);
 }
-Vec3 foam_normal_sum(const FoamArrays&, uint32_t, uint32_t, uint32_t, float) { return Vec3(0.0f); }
-void foam_potential_sums(const FoamArrays&, uint32_t, const Vec3&, const Vec3&, uint32_t, uint32_t, float, float&,
-                         float&) {}
+Vec3 foam_normal_sum(const Vec3*, uint32_t, uint32_t, const uint32_t*, uint32_t, uint32_t, float) { return Vec3(0.0f); }
+void foam_potential_sums(const Vec3*, const Vec3*, const Vec3*, uint32_t, uint32_t, const Vec3&, const Vec3&,
+                         const uint32_t*, uint32_t, uint32_t, float, float&, float&) {}
 void foam_classify_sums(const FoamArrays&, const Vec3&, uint32_t, uint32_t, float, int&, float&, Vec3&) {}
 
 #endif

@@ -1,6 +1,6 @@
-// metariver particles, private: the PBF solver's per-particle sums over its neighbour
-// lists (and the foam's potentials over its grid's cell ranges), eight entries at a time
-// with AVX2 (pbf_simd.cpp), picked at run time.
+// metariver particles, private: the PBF solver's and the foam's per-particle sums over
+// their neighbour lists (and the foam's classification over its grid's cell ranges),
+// eight entries at a time with AVX2 (pbf_simd.cpp), picked at run time.
 //
 // The scalar loops in pbf.cpp and foam.cpp are their twins: the same pairs and formulas, but
 // eight partial sums per particle (added up in a fixed order) and fused multiply-adds,
@@ -59,21 +59,25 @@ Vec3 correction(const KernelConsts& k, float li, const uint32_t* index, uint32_t
 Vec3 viscosity(const KernelConsts& k, const Vec3& xi, const Vec3& vi, const uint32_t* index, uint32_t b, uint32_t e,
                const Vec3* pos, const Vec3* vel, uint32_t count);
 
-/// Sorted (cell-ordered) copies of the fluid for the foam's potentials (foam.cpp): x, y, z,
-/// then the velocity's and (after the first pass) the surface normal's components.
+/// Sorted (cell-ordered) copies of the fluid for the diffuse particles' classification
+/// (foam.cpp): x, y, z, then the velocity's components (nx, ny, nz: unused).
 struct FoamArrays {
     const float *x, *y, *z, *vx, *vy, *vz, *nx, *ny, *nz;
 };
 
-/// The foam's first pass for sorted particle k at (x, y, z) over candidates [s, e): the
-/// sum of x^_kj W~ = (x_k - x_j) / r (1 - r / h) over j != k with 1e-12 < r^2 < h^2.
-Vec3 foam_normal_sum(const FoamArrays& a, uint32_t k, uint32_t s, uint32_t e, float h);
+/// The foam's first pass for particle k over its list entries [b, e) (without an index:
+/// the particles [b, e)): the sum of x^_kj W~ = (x_k - x_j) / r (1 - r / h) over j != k
+/// with 1e-12 < r^2 < h^2. `pos` holds `count` particles in the lists' order.
+Vec3 foam_normal_sum(const Vec3* pos, uint32_t count, uint32_t k, const uint32_t* index, uint32_t b, uint32_t e,
+                     float h);
 
-/// The foam's second pass for sorted particle k (velocity v, normal n) over candidates
-/// [s, e): the trapped-air sum |v_kj| (1 - v^_kj . x^_kj) W~ (|v_kj| > 1e-6) and the
-/// convex curvature sum (1 - n_k . n_j) W~ (x^_kj . n_k > 0), added to ta and curv.
-void foam_potential_sums(const FoamArrays& a, uint32_t k, const Vec3& v, const Vec3& n, uint32_t s, uint32_t e,
-                         float h, float& ta, float& curv);
+/// The foam's second pass for particle k (velocity v, normal n) over its list entries [b,
+/// e), as foam_normal_sum: the trapped-air sum |v_kj| (1 - v^_kj . x^_kj) W~ (|v_kj| >
+/// 1e-6) and the convex curvature sum (1 - n_k . n_j) W~ (x^_kj . n_k > 0), added to ta
+/// and curv. `vel` and `nrm` hold the particles' velocities and first-pass normals.
+void foam_potential_sums(const Vec3* pos, const Vec3* vel, const Vec3* nrm, uint32_t count, uint32_t k,
+                         const Vec3& v, const Vec3& n, const uint32_t* index, uint32_t b, uint32_t e, float h,
+                         float& ta, float& curv);
 
 /// The diffuse particles' classification (foam.cpp) for one at p over fluid candidates
 /// [s, e): the number within h (r^2 = (dx^2 + dy^2) + dz^2 < h^2, the scalar loop's test
