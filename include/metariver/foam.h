@@ -140,7 +140,7 @@ private:
     NeighborGrid grid_;
     DiffuseParticles p_;
     FoamStats stats_;
-    std::vector<Vec3> normal_;
+    std::vector<Vec3> normal_;  ///< potentials (scalar passes): each fluid slot's surface normal
     std::vector<float> ta_, wc_, ek_;
     std::vector<float> sorted_;  ///< potentials_simd: velocities in the grid's order (SoA, for classify_all)
     std::vector<Vec3> sorted_pos_, sorted_vel_, sorted_nrm_;  ///< potentials_simd: the fluid in the grid's order

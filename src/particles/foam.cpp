@@ -84,15 +84,14 @@ void basis(const Vec3& d, Vec3& e1, Vec3& e2) {
     e2 = glm::cross(d, e1);
 }
 
-/// The SIMD passes' view of the fluid in the grid's order: its sorted positions and, in
-/// `sorted` (6 m floats, m binned particles, filled by potentials_simd), the velocity's
-/// x, y, z and then the surface normal's.
+/// The classification's view of the fluid in the grid's order: its sorted positions and,
+/// in `sorted` (3 m floats, m binned particles, filled by potentials_simd), the velocity's
+/// x, y, z.
 pbf_simd::FoamArrays sorted_arrays(const NeighborGrid& g, std::vector<float>& sorted) {
     const size_t m = g.order().size();
-    sorted.resize(6 * m);
+    sorted.resize(3 * m);
     float* const v = sorted.data();
-    return {g.sorted_x().data(), g.sorted_y().data(), g.sorted_z().data(), v, v + m, v + 2 * m,
-            v + 3 * m, v + 4 * m, v + 5 * m};
+    return {g.sorted_x().data(), g.sorted_y().data(), g.sorted_z().data(), v, v + m, v + 2 * m};
 }
 
 }  // namespace
@@ -223,15 +222,15 @@ void FoamSystem::classify_all(const Particles& fluid) {
 
 void FoamSystem::potentials(const Particles& fluid) {
     const size_t n = fluid.size();
-    normal_.assign(n, Vec3(0.0f));
     ta_.assign(n, 0.0f);
     wc_.assign(n, 0.0f);
     ek_.assign(n, 0.0f);
     const float h = h_;
     if (simd_ && pbf_simd::available()) {
-        potentials_simd(fluid);
+        potentials_simd(fluid);  // its normals in the grid's order (sorted_nrm_)
         return;
     }
+    normal_.assign(n, Vec3(0.0f));
     // Pass 1: surface normals n_i = sum_j x_ij W~ (zero where the neighbourhood is full).
     for_each_fluid(grid_, h, [&](uint32_t i, auto&& each) {
         Vec3 s(0.0f);
@@ -292,7 +291,6 @@ void FoamSystem::potentials_simd(const Particles& fluid) {
             const uint32_t kk = static_cast<uint32_t>(k);
             const Vec3 nk = surface_normal(pbf_simd::foam_normal_sum(pos, count, kk, index, lists_.first(kk),
                                                                      lists_.first(kk + 1), h));
-            normal_[order[k]] = nk;
             sorted_nrm_[k] = nk;
         }
     });

@@ -60,9 +60,9 @@ Vec3 viscosity(const KernelConsts& k, const Vec3& xi, const Vec3& vi, const uint
                const Vec3* pos, const Vec3* vel, uint32_t count);
 
 /// Sorted (cell-ordered) copies of the fluid for the diffuse particles' classification
-/// (foam.cpp): x, y, z, then the velocity's components (nx, ny, nz: unused).
+/// (foam.cpp): x, y, z, then the velocity's components.
 struct FoamArrays {
-    const float *x, *y, *z, *vx, *vy, *vz, *nx, *ny, *nz;
+    const float *x, *y, *z, *vx, *vy, *vz;
 };
 
 /// The foam's first pass for particle k over its list entries [b, e) (without an index:
