@@ -201,13 +201,15 @@ private:
 void keep_loaded_libraries_under_asan();
 
 /// An OpenGL 4.5 core context without a window or display: EGL on Mesa's surfaceless
-/// platform (EGL_PLATFORM_SURFACELESS_MESA, EGL_NO_CONFIG_KHR, no surface). Current on
-/// the creating thread until destroyed. Sets XDG_RUNTIME_DIR to /tmp when unset (Mesa
+/// platform (EGL_PLATFORM_SURFACELESS_MESA, EGL_NO_CONFIG_KHR, no surface), or where EGL
+/// has no such platform (NVIDIA's) the first EGL device that initializes
+/// (EGL_PLATFORM_DEVICE_EXT; METARIVER_EGL_PLATFORM=device picks it on Mesa too). Current
+/// on the creating thread until destroyed. Sets XDG_RUNTIME_DIR to /tmp when unset (Mesa
 /// warns otherwise).
 class HeadlessContext {
 public:
-    /// Fails (one line, no abort) when libEGL, the surfaceless platform or a 4.5 core
-    /// context is not available.
+    /// Fails (one line, no abort) when libEGL, a headless platform or a 4.5 core context
+    /// is not available.
     static Result<std::unique_ptr<HeadlessContext>> create();
     ~HeadlessContext();
     HeadlessContext(const HeadlessContext&) = delete;

@@ -66,21 +66,57 @@ Result<std::unique_ptr<HeadlessContext>> HeadlessContext::create() {
 
     const char* client_ext = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
     const std::string ext = client_ext ? client_ext : "";
-    if (ext.find("EGL_MESA_platform_surfaceless") == std::string::npos ||
-        ext.find("EGL_EXT_platform_base") == std::string::npos)
-        return Error{"headless OpenGL: EGL has no surfaceless platform (EGL_MESA_platform_surfaceless; install libegl-mesa0)"};
-
-    EGLDisplay dpy = eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
-    if (dpy == EGL_NO_DISPLAY) return Error{"headless OpenGL: no EGL surfaceless display"};
+    const auto has = [](const std::string& list, const char* name) {
+        return (" " + list + " ").find(std::string(" ") + name + " ") != std::string::npos;
+    };
+    if (!has(ext, "EGL_EXT_platform_base"))
+        return Error{"headless OpenGL: EGL has no platform displays (EGL_EXT_platform_base; install libegl-mesa0)"};
+    // Mesa's surfaceless platform; else (NVIDIA's EGL, which has no Mesa platform) the
+    // first EGL device that initializes.
+    EGLDisplay dpy = EGL_NO_DISPLAY;
     EGLint major = 0, minor = 0;
-    if (!eglInitialize(dpy, &major, &minor))
-        return Error{fmt::format("headless OpenGL: eglInitialize failed ({})", egl_error_name(eglGetError()))};
+    std::string why = "EGL has neither the surfaceless platform (EGL_MESA_platform_surfaceless; install "
+                      "libegl-mesa0) nor a device platform (EGL_EXT_platform_device)";
+    // METARIVER_EGL_PLATFORM=device skips the surfaceless platform (to try, on Mesa, the
+    // path NVIDIA's EGL takes).
+    const char* forced = std::getenv("METARIVER_EGL_PLATFORM");
+    const bool device_only = forced && std::string(forced) == "device";
+    if (has(ext, "EGL_MESA_platform_surfaceless") && !device_only) {
+        dpy = eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
+        if (dpy == EGL_NO_DISPLAY) return Error{"headless OpenGL: no EGL surfaceless display"};
+        if (!eglInitialize(dpy, &major, &minor))
+            return Error{fmt::format("headless OpenGL: eglInitialize failed ({})", egl_error_name(eglGetError()))};
+    } else if (has(ext, "EGL_EXT_platform_device") &&
+               (has(ext, "EGL_EXT_device_enumeration") || has(ext, "EGL_EXT_device_base"))) {
+        EGLDeviceEXT devices[16];
+        EGLint count = 0;
+        if (!eglQueryDevicesEXT(16, devices, &count) || count <= 0) {
+            why = "EGL lists no devices (eglQueryDevicesEXT)";
+            count = 0;
+        }
+        for (EGLint k = 0; k < count && dpy == EGL_NO_DISPLAY; ++k) {
+            EGLDisplay d = eglGetPlatformDisplayEXT(EGL_PLATFORM_DEVICE_EXT, devices[k], nullptr);
+            if (d == EGL_NO_DISPLAY) continue;
+            if (eglInitialize(d, &major, &minor)) dpy = d;
+            else why = fmt::format("eglInitialize failed on every EGL device ({})", egl_error_name(eglGetError()));
+        }
+    }
+    if (dpy == EGL_NO_DISPLAY) return Error{"headless OpenGL: " + why};
     const char* dpy_ext_c = eglQueryString(dpy, EGL_EXTENSIONS);
     const std::string dpy_ext = dpy_ext_c ? dpy_ext_c : "";
-    if (dpy_ext.find("EGL_KHR_no_config_context") == std::string::npos ||
-        dpy_ext.find("EGL_KHR_surfaceless_context") == std::string::npos) {
+    if (!has(dpy_ext, "EGL_KHR_surfaceless_context")) {
         eglTerminate(dpy);
-        return Error{"headless OpenGL: EGL lacks EGL_KHR_no_config_context / EGL_KHR_surfaceless_context"};
+        return Error{"headless OpenGL: EGL lacks EGL_KHR_surfaceless_context"};
+    }
+    // Without EGL_KHR_no_config_context: any config that renders desktop OpenGL.
+    EGLConfig config = EGL_NO_CONFIG_KHR;
+    if (!has(dpy_ext, "EGL_KHR_no_config_context")) {
+        const EGLint want[] = {EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_NONE};
+        EGLint found = 0;
+        if (!eglChooseConfig(dpy, want, &config, 1, &found) || found < 1) {
+            eglTerminate(dpy);
+            return Error{"headless OpenGL: EGL lacks EGL_KHR_no_config_context and has no desktop OpenGL config"};
+        }
     }
     if (!eglBindAPI(EGL_OPENGL_API)) {
         eglTerminate(dpy);
@@ -88,7 +124,7 @@ Result<std::unique_ptr<HeadlessContext>> HeadlessContext::create() {
     }
     const EGLint attrs[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 5,
                             EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
-    EGLContext ctx = eglCreateContext(dpy, EGL_NO_CONFIG_KHR, EGL_NO_CONTEXT, attrs);
+    EGLContext ctx = eglCreateContext(dpy, config, EGL_NO_CONTEXT, attrs);
     if (ctx == EGL_NO_CONTEXT) {
         const EGLint e = eglGetError();
         eglTerminate(dpy);
