@@ -2,6 +2,8 @@
 #include "bench_scenarios.h"
 
 #include <metariver/export.h>
+#include <metariver/gpu_pbf.h>
+#include <metariver/render.h>
 #include <metariver/io.h>
 #include <metariver/sparse_field.h>
 #include <metariver/surface.h>
@@ -209,17 +211,9 @@ ScenarioResult bench_pbf_river(int n, int warmup, int frames) {
 ScenarioResult bench_w3(int nx, int warmup, int steps) {
     ScenarioResult r;
     r.name = fmt::format("w3 nx={}", nx);
-    constexpr float d = 0.1f;
-    std::vector<Vec3> block;
-    std::mt19937 rng(1);
-    std::uniform_real_distribution<float> jitter(-0.01f * d, 0.01f * d);
+    constexpr float d = kW3Spacing;
     const float margin = 2.0f;  // metres of ground around the block
-    for (int a = 0; a < nx; ++a)
-        for (int b = 0; b < nx; ++b)
-            for (int c = 0; c < nx / 2; ++c) {
-                const float x = float(a) * d + jitter(rng), y = float(c) * d + jitter(rng), z = float(b) * d + jitter(rng);
-                block.emplace_back(margin + x, 1.0f + y, margin + z);
-            }
+    const std::vector<Vec3> block = w3_block(nx, Vec3(margin, 1.0f, margin));
     const float side = float(nx) * d + 2.0f * margin;
     auto terrain = Terrain::build(flat_heightmap(9, 9), TerrainDef{.area_scale = side / 8.0f, .height_scale = 1.0f});
     auto bvh = Bvh::build(terrain.value(), BvhDef{});
@@ -244,6 +238,54 @@ ScenarioResult bench_w3(int nx, int warmup, int steps) {
                 {"gravity", 0.0},   {"dt", dt},           {"warmup", warmup},         {"steps", steps},
                 {"particles", n}};
     r.quality = {{"density_error_max", density_max}, {"max_speed", solver.counters().max_speed}};
+    return r;
+}
+
+/// W3 run by the GPU step (gpu_pbf.h; OpenGL 4.5 compute on whatever the headless
+/// context finds: llvmpipe here, the GPU where one is lent): the same block, parameters
+/// and step as bench_w3, no terrain (the grid's box is the block and 2 h around it).
+/// Stages: `step` one step enqueued and waited for (wall clock, as the CPU's `step`),
+/// `gpu` the GPU's own time for it (a GL_TIME_ELAPSED query; absent where the driver's
+/// queries read next to nothing, as llvmpipe's do).
+ScenarioResult bench_w3_gpu(int nx, int warmup, int steps) {
+    ScenarioResult r;
+    r.name = fmt::format("w3-gpu nx={}", nx);
+    auto ctx = render::HeadlessContext::create();
+    if (!ctx) {
+        r.note = "skipped: " + ctx.error().message;
+        return r;
+    }
+    constexpr float d = kW3Spacing;
+    const std::vector<Vec3> block = w3_block(nx, Vec3(0.0f));
+    render::GpuPbfDef def{.pbf = PbfDef{.spacing = d, .kernel_radius = 2.0f * d, .iterations = 3}, .gravity = 0.0f};
+    const float pad = 2.0f * def.pbf.kernel_radius;
+    def.domain_min = Vec3(-pad);
+    def.domain_max = Vec3(float(nx) * d, float(nx / 2) * d, float(nx) * d) + Vec3(pad);
+    auto gpu = render::GpuPbf::create(def, block);
+    if (!gpu) {
+        r.note = "skipped: " + gpu.error().message;
+        return r;
+    }
+    render::GpuPbf& g = *gpu.value();
+    const float dt = 1.0f / 120.0f;
+    float density_max = 0.0f;
+    for (int s = -warmup; s < steps; ++s) {
+        const auto t0 = Clock::now();
+        g.step(dt);
+        const double gpu_ms = g.last_step_gpu_ms();  // waits for the step
+        const double wall = ms_since(t0);
+        if (s < 0) continue;
+        r.sample("step", wall);
+        // A query that reads under 1 % of the wall time did not time the work (llvmpipe's).
+        if (gpu_ms > 0.01 * wall) r.sample("gpu", gpu_ms);
+        density_max = std::max(density_max, g.counters().density_error_max);
+    }
+    r.particles = g.size();
+    r.params = {{"nx", nx},       {"spacing", d},     {"kernel_radius", 2.0 * d}, {"iterations", def.pbf.iterations},
+                {"gravity", 0.0}, {"dt", dt},         {"warmup", warmup},         {"steps", steps},
+                {"particles", g.size()}, {"device", g.device()}};
+    const render::GpuPbfCounters c = g.counters();
+    r.quality = {{"density_error_max", density_max}, {"max_speed", c.max_speed}, {"asleep", c.asleep}};
     return r;
 }
 

@@ -40,6 +40,7 @@ constexpr int kMapsWarmupFrames = 1800;
 /// Allowed sizes of the PBF river and of W3 (bad values exit 2 naming the range).
 constexpr int kPbfMinParticles = 100, kPbfMaxParticles = 400'000;
 constexpr int kW3MinNx = 4, kW3MaxNx = 100;  // nx = 100: 500,000 particles
+constexpr int kW3GpuMaxNx = 250;              // --gpu: nx = 250: 7.8 million particles
 /// The PBF river's warm-up: 40 s of flow; the default river's water reaches the outlet
 /// after about 23 s and the particles on the terrain level off at 35-40 s
 /// (docs/benchmarks.md).
@@ -60,6 +61,7 @@ ScenarioResult bench_w2(int n);
 ScenarioResult bench_pbf_river(int n, int warmup, int frames);
 /// W3: the PBF anchor's block of nx * nx * nx/2 particles, `warmup` steps then `steps` timed.
 ScenarioResult bench_w3(int nx, int warmup, int steps);
+ScenarioResult bench_w3_gpu(int nx, int warmup, int steps);
 /// Export cost by format of the default river (or `particles` of it) after `warmup` frames.
 ScenarioResult bench_export(int particles, int warmup, int frames);
 

@@ -50,6 +50,7 @@ struct BenchOptions {
     std::vector<std::string> heightmaps;  ///< --heightmap: scenario maps, the default river on each
     std::string peers_dir = "bench/peers";
     bool peers = false;
+    bool gpu = false;  ///< --gpu: w3 also by the GPU step (gpu_pbf.h)
 };
 
 json machine_json(int threads) {
@@ -157,6 +158,11 @@ PlotDef bench_plot(const std::vector<ScenarioResult>& results, const json& peers
         if (r.name.rfind("w3 ", 0) == 0 && r.stage_ms.count("step"))
             w3.points.emplace_back(double(r.particles), percentiles(r.stage_ms.at("step")).median);
     plot.series.push_back(std::move(w3));
+    PlotSeries w3_gpu{.name = "W3 block: our PBF step, GPU", .color = "#9467bd"};
+    for (const auto& r : results)
+        if (r.name.rfind("w3-gpu ", 0) == 0 && r.stage_ms.count("step"))
+            w3_gpu.points.emplace_back(double(r.particles), percentiles(r.stage_ms.at("step")).median);
+    if (!w3_gpu.points.empty()) plot.series.push_back(std::move(w3_gpu));
     PlotSeries anchor{.name = "W3 block: PBF anchor", .color = "#ff7f0e", .dashed = true};
     if (peers.is_object() && peers.contains("rows"))
         for (const json& row : peers["rows"])
@@ -196,9 +202,10 @@ int run_bench(const BenchOptions& o) {
                    kPbfMinParticles, kPbfMaxParticles, o.particles);
         return kExitBadInput;
     }
-    if (o.nx_given && (o.nx < kW3MinNx || o.nx > kW3MaxNx)) {
-        fmt::print(stderr, "metariver bench: --nx: must be in [{}, {}] (nx * nx * nx/2 particles; got {})\n", kW3MinNx,
-                   kW3MaxNx, o.nx);
+    const int nx_max = o.gpu ? kW3GpuMaxNx : kW3MaxNx;
+    if (o.nx_given && (o.nx < kW3MinNx || o.nx > nx_max)) {
+        fmt::print(stderr, "metariver bench: --nx: must be in [{}, {}]{} (nx * nx * nx/2 particles; got {})\n", kW3MinNx,
+                   nx_max, o.gpu ? " with --gpu" : fmt::format(" ({} with --gpu)", kW3GpuMaxNx), o.nx);
         return kExitBadInput;
     }
     if (o.warmup < -1 || o.warmup > 100000) {
@@ -326,7 +333,12 @@ int run_bench(const BenchOptions& o) {
         // The anchor's sizes (pbf_anchor/README.md): 16,384, 48,668 and 97,556 particles.
         std::vector<int> sides = {32, 46, 58};
         if (o.nx) sides = {o.nx};
-        for (int nx : sides) results.push_back(bench_w3(nx, o.warmup >= 0 ? o.warmup : 3, frames ? frames : 20));
+        // --gpu: the GPU step alone past the CPU's range (the CPU would take minutes).
+        for (int nx : sides)
+            if (nx <= kW3MaxNx) results.push_back(bench_w3(nx, o.warmup >= 0 ? o.warmup : 3, frames ? frames : 20));
+        if (o.gpu)
+            for (int nx : sides) results.push_back(bench_w3_gpu(nx, o.warmup >= 0 ? o.warmup : 3, frames ? frames : 20));
+        std::erase_if(sides, [](int nx) { return nx > kW3MaxNx; });
         peer_request.w3_nx = sides;
     }
 
@@ -356,7 +368,7 @@ int run_bench(const BenchOptions& o) {
                                 .triangles = r.triangles});
             else if (r.params.contains("spheres"))
                 ours.push_back({.workload = "w2", .n = r.params["spheres"].get<int>(), .step_ms = med(r, "step")});
-            else if (r.params.contains("nx"))
+            else if (r.params.contains("nx") && r.name.rfind("w3 ", 0) == 0)  // not the GPU rows
                 ours.push_back({.workload = "w3", .n = int(r.particles), .r = r.params["nx"].get<int>(),
                                 .step_ms = med(r, "step")});
         peers_json = print_peers_side_by_side(ours, peer_rows, missing, threads);
@@ -370,7 +382,7 @@ int run_bench(const BenchOptions& o) {
         if (o.peers) j["peers"] = peers_json;
         // The plot beside the JSON (bench.json -> bench.svg) when a PBF river or W3 ran.
         const bool plotted = std::any_of(results.begin(), results.end(), [](const ScenarioResult& r) {
-            return r.name.rfind("pbf ", 0) == 0 || r.name.rfind("w3 ", 0) == 0;
+            return r.name.rfind("pbf ", 0) == 0 || r.name.rfind("w3", 0) == 0;
         });
         const std::string svg_path = fs::path(o.json_path).replace_extension(".svg").string();
         if (plotted) j["plot"] = svg_path;
@@ -417,6 +429,8 @@ void register_bench(CLI::App& app, std::function<int()>& action) {
                     "--heightmap FILE`, surface on, after 1800 warm-up frames")
         ->delimiter(',');
     cmd->add_flag("--peers", o->peers, "also run the installed peers on the same workloads");
+    cmd->add_flag("--gpu", o->gpu,
+                  "w3: also run the GPU PBF step (OpenGL 4.5 compute through headless EGL; --nx up to 250)");
     cmd->add_option("--peers-dir", o->peers_dir, "folder with the peer drivers (default bench/peers)");
     cmd->callback([o, &action, particles, nx] {
         o->particles_given = particles->count() > 0;

@@ -215,6 +215,16 @@ struct PbfDef {
     bool auto_spacing = false;
 };
 
+/// A PbfDef's lattice constants: the rest density (the kernel sum of a cubic lattice of
+/// the rest spacing: "number density", so a perfect lattice has C = 0) and a lattice
+/// particle's sum |grad C|^2 (eps and s_corr are scaled by it, so they mean the same at
+/// any spacing). Shared by the CPU solver and the GPU step (gpu_pbf.h).
+struct PbfLattice {
+    float rest_density = 1.0f;
+    float grad_sum = 1.0f;
+};
+PbfLattice pbf_lattice(const PbfDef& def);
+
 enum class SpringMode {
     Pairs,  ///< the paper's all-pairs loop, O(N^2), serial: the reference
     Grid,   ///< neighbour grid, O(N), parallel per-particle gather: same forces

@@ -49,4 +49,10 @@ inline constexpr float kPbfRiverMaxFieldResolution = 9.0f;
 /// is 1.5 n, so the source never waits for recycled water.
 SceneDef pbf_river_scene(int n);
 
+/// W3 (../shared/peers/pbf_anchor/README.md): an nx * nx * nx/2 block of particles at
+/// kW3Spacing with 1 % jitter (std::mt19937 seed 1, the anchor's draws in its order),
+/// its lowest corner near `origin` (x along nx, y along nx/2, z along nx).
+std::vector<Vec3> w3_block(int nx, Vec3 origin);
+inline constexpr float kW3Spacing = 0.1f;
+
 }  // namespace mr

@@ -144,10 +144,8 @@ void PbfSolver::permute_slots(std::span<const uint32_t> perm) {
     mean_velocity_.swap(scratch_mean_);
 }
 
-void PbfSolver::init_pbf() {
-    const PbfDef& d = pbf_;
+PbfLattice pbf_lattice(const PbfDef& d) {
     const Kernels k(d.kernel_radius);
-    // Lattice sums: rest density and a lattice particle's sum |grad C|^2.
     const int m = int(std::ceil(d.kernel_radius / d.spacing)) + 1;
     double rho = 0.0;
     Vec3 gsum(0.0f);
@@ -162,10 +160,15 @@ void PbfSolver::init_pbf() {
                 gsum += gr;
                 g2 += double(glm::dot(gr, gr));
             }
-    rest_density_ = float(rho);
-    build_lattice();
     const double inv = 1.0 / rho;
-    lattice_grad_sum_ = float(inv * inv * (g2 + double(glm::dot(gsum, gsum))));
+    return PbfLattice{.rest_density = float(rho), .grad_sum = float(inv * inv * (g2 + double(glm::dot(gsum, gsum))))};
+}
+
+void PbfSolver::init_pbf() {
+    const PbfLattice l = pbf_lattice(pbf_);
+    rest_density_ = l.rest_density;
+    build_lattice();
+    lattice_grad_sum_ = l.grad_sum;
 }
 
 void PbfSolver::pbf_densities(std::vector<float>& out) {

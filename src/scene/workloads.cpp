@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 
 namespace mr {
 
@@ -88,6 +89,21 @@ SceneDef pbf_river_scene(int n) {
     d.spawn.flow_rate = rate0 / (k * k * k);
     d.spawn.count = std::max(1, int(std::ceil(1.5f * float(n))));
     return d;
+}
+
+std::vector<Vec3> w3_block(int nx, Vec3 origin) {
+    constexpr float d = kW3Spacing;
+    std::vector<Vec3> block;
+    block.reserve(size_t(std::max(nx, 0)) * size_t(std::max(nx, 0)) * size_t(std::max(nx / 2, 0)));
+    std::mt19937 rng(1);
+    std::uniform_real_distribution<float> jitter(-0.01f * d, 0.01f * d);
+    for (int a = 0; a < nx; ++a)
+        for (int b = 0; b < nx; ++b)
+            for (int c = 0; c < nx / 2; ++c) {
+                const float x = float(a) * d + jitter(rng), y = float(c) * d + jitter(rng), z = float(b) * d + jitter(rng);
+                block.push_back(origin + Vec3(x, y, z));
+            }
+    return block;
 }
 
 }  // namespace mr

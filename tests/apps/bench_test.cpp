@@ -162,6 +162,39 @@ TEST_F(Bench, W3StepAndAnchorOrMissingLine) {
     EXPECT_TRUE(fs::exists(dir_ / "bench.svg"));
 }
 
+// --gpu: the GPU step (gpu_pbf.h) on the same block beside our CPU step, or a skipped
+// row naming why where no headless OpenGL is to be had; the plot gets a GPU series.
+TEST_F(Bench, W3OnTheGpuBesideTheCpu) {
+    const fs::path out = dir_ / "bench.json";
+    const BenchRun r = run("--scenario w3 --gpu --nx 8 --frames 3 --json " + out.string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    const json res = json::parse(slurp(out))["results"];
+    ASSERT_EQ(res.size(), 2u);
+    EXPECT_EQ(res[0]["scenario"], "w3 nx=8");
+    EXPECT_EQ(res[1]["scenario"], "w3-gpu nx=8");
+    if (res[1].contains("note") && res[1]["note"].get<std::string>().rfind("skipped", 0) == 0)
+        GTEST_SKIP() << res[1]["note"];
+    EXPECT_EQ(res[1]["particles"].get<int>(), 8 * 8 * 4);
+    EXPECT_EQ(res[1]["stages"]["step"]["samples"].get<int>(), 3);
+    EXPECT_GT(res[1]["stages"]["step"]["median_ms"].get<double>(), 0.0);
+    EXPECT_FALSE(res[1]["params"]["device"].get<std::string>().empty());
+    // The same block and step: the density error agrees with the CPU's to rounding.
+    EXPECT_NEAR(res[1]["quality"]["density_error_max"].get<double>(),
+                res[0]["quality"]["density_error_max"].get<double>(), 1e-5);
+    EXPECT_NE(slurp(dir_ / "bench.svg").find("GPU"), std::string::npos);
+    // EGL's device platform (the path NVIDIA's EGL takes) gives the same step.
+    const fs::path out2 = dir_ / "device.json";
+    const BenchRun d = CliFixture::run("bench --scenario w3 --gpu --nx 8 --frames 3 --json " + out2.string(),
+                                       "cd " + std::string(METARIVER_SOURCE_DIR) + " && METARIVER_EGL_PLATFORM=device");
+    ASSERT_EQ(d.code, 0) << d.err;
+    const json res2 = json::parse(slurp(out2))["results"];
+    ASSERT_EQ(res2.size(), 2u);
+    EXPECT_FALSE(res2[1].contains("note")) << res2[1]["note"];
+    EXPECT_EQ(res2[1]["quality"]["density_error_max"], res[1]["quality"]["density_error_max"]);
+    // Beyond the CPU's sizes the GPU row runs alone.
+    expect_bad("--scenario w3 --gpu --nx 251", "--nx: must be in [4, 250] with --gpu");
+}
+
 // Scenario maps (issue 10's frame budget): the default river on each --heightmap, one
 // row each with its stages (surface on) and the river's plausibility.
 TEST_F(Bench, MapsRunTheDefaultRiverOnEachHeightmap) {

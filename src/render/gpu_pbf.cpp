@@ -1,0 +1,733 @@
+// The PBF step as OpenGL 4.5 compute shaders (gpu_pbf.h): pbf.cpp's step without the
+// terrain, pass for pass.
+//
+//   predict + bin      v += g dt; last = x; x += v dt; cell = the kernel-radius cell of x
+//                      (clamped into the grid's box); count[cell]++ (atomic)
+//   scan               exclusive prefix sum of the counts (1024 cells per work group, the
+//                      group sums scanned by one group, added back): start[cell]
+//   scatter            slot = start[cell] + cursor[cell]++ (atomic: any order), then
+//                      each cell's slots sorted by the particle's previous slot: the
+//                      order is (cell, previous order) whatever the atomics did, so the
+//                      step is deterministic
+//   gather             every array reordered into the new slots
+//   iterations         density and lambda (eq. 1, 11; unilateral C), correction with
+//                      s_corr (eq. 13, 14), clamped to half a spacing, written to the
+//                      other position buffer; both over the 9 rows of 3 cells around the
+//                      particle's binned cell (as the CPU's 27-cell twin)
+//   velocity, XSPH     v = (x - last) / dt; v += c / rho0 sum (v_j - v_i) W
+//   finish             slow-water damping, sleeping (with the drift average), counters
+//                      (max density error, max speed, asleep: per work group, then one
+//                      atomic per group)
+//
+// Every pass writes only its particle's (or cell's) own slots; passes are separated by
+// glMemoryBarrier. Constants sit in one std140 uniform block (binding 0); each pass binds
+// its buffers at storage bindings 0..7 (the least GL 4.3 guarantees).
+#include <metariver/gpu_pbf.h>
+
+#include <epoxy/gl.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <initializer_list>
+#include <string>
+#include <utility>
+
+namespace mr::render {
+
+namespace {
+
+constexpr float kPi = 3.14159265358979f;
+constexpr uint32_t kGroup = 128;       // particle and cell passes
+constexpr uint32_t kScanBlock = 1024;  // cells per scan work group (512 threads, 2 each)
+
+// std140: every member a vec4 / uvec4.
+struct Params {
+    float grid_min[4];     // xyz; w = 1 / cell size
+    uint32_t grid_dim[4];  // cells along x, y, z; w = cells in all
+    float kern[4];         // h, h^2, poly6, spiky
+    float solve[4];        // 1/rho0, eps, scorr_scale, 1/W(dq)
+    float motion[4];       // dt, gravity, max_move, xsph
+    float rest[4];         // damping, 1/damping_speed, sleep^2 (0: off), drift^2
+    float sleepv[4];       // alpha, sleep_drift, 0, 0
+    uint32_t counts[4];    // n, after, scorr_n, 0
+};
+
+constexpr const char* kCommon = R"(#version 450
+layout(std140, binding = 0) uniform Params {
+    vec4 grid_min;
+    uvec4 grid_dim;
+    vec4 kern;
+    vec4 solve;
+    vec4 motion;
+    vec4 rest;
+    vec4 sleepv;
+    uvec4 counts;
+};
+float W(float r2) {
+    if (r2 >= kern.y) return 0.0;
+    float d = kern.y - r2;
+    return kern.z * d * d * d;
+}
+float grad_factor(float r) {
+    if (r >= kern.x || r <= 1e-9) return 0.0;
+    float a = kern.x - r;
+    return kern.w * a * a / r;
+}
+uint cell_index(vec3 x) {
+    vec3 q = clamp(floor((x - grid_min.xyz) * grid_min.w), vec3(0.0), vec3(grid_dim.xyz) - 1.0);
+    return uint(q.x) + grid_dim.x * (uint(q.y) + grid_dim.y * uint(q.z));
+}
+// The particles of the 3 x 3 x 3 cells around cell c: 9 rows of 3 cells, each one
+// contiguous range of slots. NEIGHBOURS_BEGIN(c) { body using j } NEIGHBOURS_END
+#define NEIGHBOURS_BEGIN(c)                                                      \
+    uint cx_ = (c) % grid_dim.x, cyz_ = (c) / grid_dim.x;                        \
+    int cy_ = int(cyz_ % grid_dim.y), cz_ = int(cyz_ / grid_dim.y);              \
+    uint x0_ = cx_ > 0u ? cx_ - 1u : 0u, x1_ = min(cx_ + 1u, grid_dim.x - 1u);   \
+    for (int z_ = max(cz_ - 1, 0); z_ <= min(cz_ + 1, int(grid_dim.z) - 1); ++z_) \
+        for (int y_ = max(cy_ - 1, 0); y_ <= min(cy_ + 1, int(grid_dim.y) - 1); ++y_) { \
+            uint row_ = grid_dim.x * (uint(y_) + grid_dim.y * uint(z_));         \
+            uint e_ = start[row_ + x1_ + 1u];                                    \
+            for (uint j = start[row_ + x0_]; j < e_; ++j)
+#define NEIGHBOURS_END }
+)";
+
+constexpr const char* kPredict = R"(
+layout(local_size_x = 128) in;
+layout(std430, binding = 0) buffer Buf0 { vec4 pos[]; };
+layout(std430, binding = 1) writeonly buffer Buf1 { vec4 last[]; };
+layout(std430, binding = 2) buffer Buf2 { vec4 vel[]; };
+layout(std430, binding = 3) writeonly buffer Buf3 { uint cell_of[]; };
+layout(std430, binding = 4) buffer Buf4 { uint count[]; };
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= counts.x) return;
+    vec3 v = vel[i].xyz;
+    v.y -= motion.y * motion.x;
+    vec3 x = pos[i].xyz;
+    last[i] = vec4(x, 0.0);
+    x += v * motion.x;
+    pos[i] = vec4(x, 0.0);
+    vel[i] = vec4(v, 0.0);
+    uint c = cell_index(x);
+    cell_of[i] = c;
+    atomicAdd(count[c], 1u);
+}
+)";
+
+constexpr const char* kScanBlocks = R"(
+layout(local_size_x = 512) in;
+layout(std430, binding = 0) readonly buffer Buf0 { uint count[]; };
+layout(std430, binding = 1) writeonly buffer Buf1 { uint start[]; };
+layout(std430, binding = 2) writeonly buffer Buf2 { uint sums[]; };
+shared uint s[1024];
+void main() {
+    uint t = gl_LocalInvocationID.x, g = gl_WorkGroupID.x, cells = grid_dim.w;
+    uint a = g * 1024u + 2u * t, b = a + 1u;
+    s[2u * t] = a < cells ? count[a] : 0u;
+    s[2u * t + 1u] = b < cells ? count[b] : 0u;
+    uint offset = 1u;
+    for (uint d = 512u; d > 0u; d >>= 1u) {  // up-sweep (Blelloch)
+        memoryBarrierShared();
+        barrier();
+        if (t < d) s[offset * (2u * t + 2u) - 1u] += s[offset * (2u * t + 1u) - 1u];
+        offset <<= 1u;
+    }
+    memoryBarrierShared();
+    barrier();
+    if (t == 0u) {
+        sums[g] = s[1023];
+        s[1023] = 0u;
+    }
+    for (uint d = 1u; d < 1024u; d <<= 1u) {  // down-sweep
+        offset >>= 1u;
+        memoryBarrierShared();
+        barrier();
+        if (t < d) {
+            uint ai = offset * (2u * t + 1u) - 1u, bi = offset * (2u * t + 2u) - 1u;
+            uint x = s[ai];
+            s[ai] = s[bi];
+            s[bi] += x;
+        }
+    }
+    memoryBarrierShared();
+    barrier();
+    if (a < cells) start[a] = s[2u * t];
+    if (b < cells) start[b] = s[2u * t + 1u];
+}
+)";
+
+constexpr const char* kScanSums = R"(
+layout(local_size_x = 256) in;
+layout(std430, binding = 0) buffer Buf0 { uint sums[]; };
+layout(std430, binding = 1) writeonly buffer Buf1 { uint start[]; };
+shared uint part[256];
+void main() {
+    uint t = gl_LocalInvocationID.x, cells = grid_dim.w;
+    uint groups = (cells + 1023u) / 1024u, per = (groups + 255u) / 256u;
+    uint b = min(t * per, groups), e = min(b + per, groups);
+    uint s = 0u;
+    for (uint k = b; k < e; ++k) s += sums[k];
+    part[t] = s;
+    for (uint off = 1u; off < 256u; off <<= 1u) {  // inclusive scan (Hillis-Steele)
+        memoryBarrierShared();
+        barrier();
+        uint v = t >= off ? part[t - off] : 0u;
+        memoryBarrierShared();
+        barrier();
+        part[t] += v;
+    }
+    memoryBarrierShared();
+    barrier();
+    uint run = t > 0u ? part[t - 1u] : 0u;
+    for (uint k = b; k < e; ++k) {
+        uint v = sums[k];
+        sums[k] = run;
+        run += v;
+    }
+    if (t == 255u) start[cells] = part[255];
+}
+)";
+
+constexpr const char* kScanAdd = R"(
+layout(local_size_x = 128) in;
+layout(std430, binding = 0) buffer Buf0 { uint start[]; };
+layout(std430, binding = 1) readonly buffer Buf1 { uint sums[]; };
+void main() {
+    uint c = gl_GlobalInvocationID.x;
+    if (c < grid_dim.w) start[c] += sums[c / 1024u];
+}
+)";
+
+constexpr const char* kScatter = R"(
+layout(local_size_x = 128) in;
+layout(std430, binding = 0) readonly buffer Buf0 { uint cell_of[]; };
+layout(std430, binding = 1) readonly buffer Buf1 { uint start[]; };
+layout(std430, binding = 2) buffer Buf2 { uint cursor[]; };
+layout(std430, binding = 3) writeonly buffer Buf3 { uint order[]; };
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= counts.x) return;
+    uint c = cell_of[i];
+    order[start[c] + atomicAdd(cursor[c], 1u)] = i;
+}
+)";
+
+constexpr const char* kCellSort = R"(
+layout(local_size_x = 128) in;
+layout(std430, binding = 0) readonly buffer Buf0 { uint start[]; };
+layout(std430, binding = 1) buffer Buf1 { uint order[]; };
+void main() {
+    uint c = gl_GlobalInvocationID.x;
+    if (c >= grid_dim.w) return;
+    uint b = start[c], e = start[c + 1u];
+    for (uint k = b + 1u; k < e; ++k) {  // insertion sort: a cell holds a few particles
+        uint v = order[k], m = k;
+        while (m > b && order[m - 1u] > v) {
+            order[m] = order[m - 1u];
+            --m;
+        }
+        order[m] = v;
+    }
+}
+)";
+
+// Three arrays reordered into the new slots (slot k takes particle order[k]'s values):
+// the motion (position, last position, velocity) or the state (drift mean, slow steps,
+// binned cell), by their element types.
+std::string gather_source(const char* t1, const char* t2, const char* t3) {
+    return fmt::format(R"(
+layout(local_size_x = 128) in;
+layout(std430, binding = 0) readonly buffer Buf0 {{ uint order[]; }};
+layout(std430, binding = 1) readonly buffer Buf1 {{ {0} a[]; }};
+layout(std430, binding = 2) readonly buffer Buf2 {{ {1} b[]; }};
+layout(std430, binding = 3) readonly buffer Buf3 {{ {2} c[]; }};
+layout(std430, binding = 4) writeonly buffer Buf4 {{ {0} a_out[]; }};
+layout(std430, binding = 5) writeonly buffer Buf5 {{ {1} b_out[]; }};
+layout(std430, binding = 6) writeonly buffer Buf6 {{ {2} c_out[]; }};
+void main() {{
+    uint k = gl_GlobalInvocationID.x;
+    if (k >= counts.x) return;
+    uint i = order[k];
+    a_out[k] = a[i];
+    b_out[k] = b[i];
+    c_out[k] = c[i];
+}}
+)",
+                       t1, t2, t3);
+}
+
+constexpr const char* kDensity = R"(
+layout(local_size_x = 128) in;
+layout(std430, binding = 0) readonly buffer Buf0 { vec4 pos[]; };
+layout(std430, binding = 1) readonly buffer Buf1 { uint cell[]; };
+layout(std430, binding = 2) readonly buffer Buf2 { uint start[]; };
+layout(std430, binding = 3) writeonly buffer Buf3 { float lambda[]; };
+layout(std430, binding = 4) writeonly buffer Buf4 { float density[]; };
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= counts.x) return;
+    vec3 xi = pos[i].xyz;
+    float rho = 0.0, sum_g2 = 0.0;
+    vec3 gi = vec3(0.0);
+    NEIGHBOURS_BEGIN(cell[i]) {
+        vec3 d = xi - pos[j].xyz;
+        float r2 = dot(d, d);
+        if (r2 < kern.y) {
+            rho += W(r2);
+            vec3 gr = (grad_factor(sqrt(r2)) * d) * solve.x;
+            gi += gr;
+            sum_g2 += dot(gr, gr);
+        }
+    } NEIGHBOURS_END
+    float C = rho * solve.x - 1.0;
+    sum_g2 += dot(gi, gi);
+    density[i] = C;
+    lambda[i] = -max(C, 0.0) / (sum_g2 + solve.y);
+}
+)";
+
+constexpr const char* kCorrection = R"(
+layout(local_size_x = 128) in;
+layout(std430, binding = 0) readonly buffer Buf0 { vec4 pos[]; };
+layout(std430, binding = 1) readonly buffer Buf1 { uint cell[]; };
+layout(std430, binding = 2) readonly buffer Buf2 { uint start[]; };
+layout(std430, binding = 3) readonly buffer Buf3 { float lambda[]; };
+layout(std430, binding = 4) writeonly buffer Buf4 { vec4 pos_out[]; };
+float scorr(float w) {
+    int n = int(counts.z);
+    if (n < 4) return pow(w, float(n));
+    float w2 = w * w, sc = w2 * w2;
+    for (int e = 4; e < n; ++e) sc *= w;
+    return sc;
+}
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= counts.x) return;
+    vec3 xi = pos[i].xyz;
+    float li = lambda[i];
+    vec3 dx = vec3(0.0);
+    NEIGHBOURS_BEGIN(cell[i]) {
+        if (j != i) {
+            vec3 d = xi - pos[j].xyz;
+            float r2 = dot(d, d);
+            if (r2 < kern.y)
+                dx += (li + lambda[j] - solve.z * scorr(W(r2) * solve.w)) * (grad_factor(sqrt(r2)) * d);
+        }
+    } NEIGHBOURS_END
+    dx *= solve.x;
+    float len = length(dx);
+    if (len > motion.z) dx *= motion.z / len;
+    pos_out[i] = vec4(xi + dx, 0.0);
+}
+)";
+
+constexpr const char* kVelocity = R"(
+layout(local_size_x = 128) in;
+layout(std430, binding = 0) readonly buffer Buf0 { vec4 pos[]; };
+layout(std430, binding = 1) readonly buffer Buf1 { vec4 last[]; };
+layout(std430, binding = 2) writeonly buffer Buf2 { vec4 vel[]; };
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= counts.x) return;
+    vel[i] = vec4((pos[i].xyz - last[i].xyz) * (1.0 / motion.x), 0.0);
+}
+)";
+
+constexpr const char* kXsph = R"(
+layout(local_size_x = 128) in;
+layout(std430, binding = 0) readonly buffer Buf0 { vec4 pos[]; };
+layout(std430, binding = 1) readonly buffer Buf1 { vec4 vel[]; };
+layout(std430, binding = 2) readonly buffer Buf2 { uint cell[]; };
+layout(std430, binding = 3) readonly buffer Buf3 { uint start[]; };
+layout(std430, binding = 4) writeonly buffer Buf4 { vec4 vel_out[]; };
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= counts.x) return;
+    vec3 xi = pos[i].xyz, vi = vel[i].xyz, visc = vec3(0.0);
+    NEIGHBOURS_BEGIN(cell[i]) {
+        vec3 d = xi - pos[j].xyz;
+        float r2 = dot(d, d);
+        if (r2 < kern.y) visc += (vel[j].xyz - vi) * W(r2);
+    } NEIGHBOURS_END
+    vel_out[i] = vec4(vi + motion.w * solve.x * visc, 0.0);
+}
+)";
+
+constexpr const char* kFinish = R"(
+layout(local_size_x = 128) in;
+layout(std430, binding = 0) buffer Buf0 { vec4 pos[]; };
+layout(std430, binding = 1) readonly buffer Buf1 { vec4 last[]; };
+layout(std430, binding = 2) buffer Buf2 { vec4 vel[]; };
+layout(std430, binding = 3) buffer Buf3 { vec4 mean[]; };
+layout(std430, binding = 4) buffer Buf4 { uint slow[]; };
+layout(std430, binding = 5) readonly buffer Buf5 { float density[]; };
+layout(std430, binding = 6) buffer Buf6 { uint stats[]; };
+shared uint g_density, g_speed, g_asleep;
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (gl_LocalInvocationID.x == 0u) {
+        g_density = 0u;
+        g_speed = 0u;
+        g_asleep = 0u;
+    }
+    memoryBarrierShared();
+    barrier();
+    if (i < counts.x) {
+        vec3 v = vel[i].xyz;
+        if (rest.x > 0.0) {  // slow-water damping
+            float sp = clamp(2.0 - length(v) * rest.y, 0.0, 1.0);
+            if (sp > 0.0) v *= exp(-rest.x * sp * motion.x);
+        }
+        if (rest.z > 0.0) {  // sleeping
+            uint s = slow[i];
+            uint after = counts.y;
+            bool asleep = s >= after, drifting = false;
+            if (sleepv.y > 0.0 && !asleep) {
+                vec3 m = mean[i].xyz;
+                m += sleepv.x * (vec3(v.x, 0.0, v.z) - m);
+                mean[i] = vec4(m, 0.0);
+                drifting = dot(m, m) >= rest.w;
+            }
+            if (dot(v, v) >= rest.z || drifting) {
+                s = 0u;
+            } else if (s < after) {
+                ++s;
+            } else {
+                pos[i] = last[i];
+                v = vec3(0.0);
+            }
+            slow[i] = s;
+            if (s >= after) atomicAdd(g_asleep, 1u);
+        }
+        vel[i] = vec4(v, 0.0);
+        atomicMax(g_density, floatBitsToUint(max(density[i], 0.0)));
+        atomicMax(g_speed, floatBitsToUint(length(v)));
+    }
+    memoryBarrierShared();
+    barrier();
+    if (gl_LocalInvocationID.x == 0u) {
+        atomicMax(stats[0], g_density);
+        atomicMax(stats[1], g_speed);
+        atomicAdd(stats[2], g_asleep);
+    }
+}
+)";
+
+Result<GLuint> compute_program(const std::string& body, const char* what) {
+    const GLuint sh = glCreateShader(GL_COMPUTE_SHADER);
+    const char* src[] = {kCommon, body.c_str()};
+    glShaderSource(sh, 2, src, nullptr);
+    glCompileShader(sh);
+    const auto log_of = [](GLuint obj, bool program) {
+        GLint len = 0;
+        program ? glGetProgramiv(obj, GL_INFO_LOG_LENGTH, &len) : glGetShaderiv(obj, GL_INFO_LOG_LENGTH, &len);
+        std::string log(size_t(std::max(len, 1)), '\0');
+        program ? glGetProgramInfoLog(obj, len, nullptr, log.data()) : glGetShaderInfoLog(obj, len, nullptr, log.data());
+        std::replace(log.begin(), log.end(), '\n', ' ');
+        return log;
+    };
+    GLint ok = 0;
+    glGetShaderiv(sh, GL_COMPILE_STATUS, &ok);
+    if (!ok) {
+        std::string log = log_of(sh, false);
+        glDeleteShader(sh);
+        return Error{fmt::format("GPU PBF: the {} shader does not compile: {}", what, log)};
+    }
+    const GLuint prog = glCreateProgram();
+    glAttachShader(prog, sh);
+    glLinkProgram(prog);
+    glDeleteShader(sh);
+    glGetProgramiv(prog, GL_LINK_STATUS, &ok);
+    if (!ok) {
+        std::string log = log_of(prog, true);
+        glDeleteProgram(prog);
+        return Error{fmt::format("GPU PBF: the {} shader does not link: {}", what, log)};
+    }
+    return prog;
+}
+
+uint32_t groups(size_t items, uint32_t per) { return uint32_t((items + per - 1) / per); }
+
+}  // namespace
+
+struct GpuPbf::Impl {
+    GpuPbfDef def;
+    uint32_t n = 0;
+    size_t cells = 0;
+    Params params{};
+    float sleep_threshold = 0.0f;
+    // Particle arrays: [0] is the live one, [1] the other side of a ping-pong.
+    std::array<GLuint, 2> pos{}, last{}, vel{}, mean{}, slow{};
+    GLuint cell_of = 0, cell_sorted = 0, order = 0, lambda = 0, density = 0;
+    GLuint count = 0, start = 0, sums = 0, stats = 0, ubo = 0, query = 0;
+    bool query_pending = false;
+    GLuint predict = 0, scan_blocks = 0, scan_sums = 0, scan_add = 0, scatter = 0, cell_sort = 0, gather_motion = 0,
+           gather_state = 0, density_pass = 0, correction = 0, velocity = 0, xsph = 0, finish = 0;
+
+    std::vector<GLuint*> all_buffers() {
+        std::vector<GLuint*> b = {&cell_of, &cell_sorted, &order, &lambda, &density, &count,
+                                  &start,   &sums,        &stats, &ubo};
+        for (auto* a : {&pos, &last, &vel, &mean, &slow})
+            for (GLuint& id : *a) b.push_back(&id);
+        return b;
+    }
+    std::vector<GLuint*> all_programs() {
+        return {&predict, &scan_blocks,  &scan_sums,  &scan_add, &scatter, &cell_sort, &gather_motion,
+                &gather_state, &density_pass, &correction, &velocity, &xsph,   &finish};
+    }
+
+    static GLuint buffer(size_t bytes, const void* data = nullptr) {
+        GLuint id = 0;
+        glCreateBuffers(1, &id);
+        glNamedBufferStorage(id, GLsizeiptr(std::max<size_t>(bytes, 16)), data, GL_DYNAMIC_STORAGE_BIT);
+        if (!data) {
+            const uint32_t zero = 0;
+            glClearNamedBufferData(id, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+        }
+        return id;
+    }
+    static void clear(GLuint id) {
+        const uint32_t zero = 0;
+        glClearNamedBufferData(id, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    }
+    static void run(GLuint prog, std::initializer_list<GLuint> buffers, uint32_t groups) {
+        GLuint b = 0;
+        for (GLuint id : buffers) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, b++, id);
+        glUseProgram(prog);
+        if (groups) glDispatchCompute(groups, 1, 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    }
+
+    void set_dt(float dt) {
+        const PbfDef& d = def.pbf;
+        params.motion[0] = dt;
+        const float sleep =
+            def.gravity > 0.0f ? std::min(d.sleep_threshold, kSleepCapOfFallStep * def.gravity * dt) : d.sleep_threshold;
+        params.rest[2] = sleep > 0.0f ? sleep * sleep : 0.0f;
+        params.counts[1] = uint32_t(std::clamp(int(std::ceil(kSleepAfterSeconds / dt)), 1, 65535));
+        params.sleepv[0] = std::min(1.0f, dt / kSleepDriftSeconds);
+        glNamedBufferSubData(ubo, 0, sizeof(Params), &params);
+    }
+
+    void step(float dt) {
+        set_dt(dt);
+        glBindBufferBase(GL_UNIFORM_BUFFER, 0, ubo);
+        if (query_pending) {  // the last step's time is not wanted: keep the query free
+            GLuint64 ns = 0;
+            glGetQueryObjectui64v(query, GL_QUERY_RESULT, &ns);
+        }
+        glBeginQuery(GL_TIME_ELAPSED, query);
+        const uint32_t pg = groups(n, kGroup), cg = groups(cells, kGroup);
+        clear(count);
+        run(predict, {pos[0], last[0], vel[0], cell_of, count}, pg);
+        run(scan_blocks, {count, start, sums}, groups(cells, kScanBlock));
+        run(scan_sums, {sums, start}, 1);
+        run(scan_add, {start, sums}, cg);
+        clear(count);
+        run(scatter, {cell_of, start, count, order}, pg);
+        run(cell_sort, {start, order}, cg);
+        run(gather_motion, {order, pos[0], last[0], vel[0], pos[1], last[1], vel[1]}, pg);
+        std::swap(pos[0], pos[1]);
+        std::swap(last[0], last[1]);
+        std::swap(vel[0], vel[1]);
+        run(gather_state, {order, mean[0], slow[0], cell_of, mean[1], slow[1], cell_sorted}, pg);
+        std::swap(mean[0], mean[1]);
+        std::swap(slow[0], slow[1]);
+        for (int it = 0; it < def.pbf.iterations; ++it) {
+            run(density_pass, {pos[0], cell_sorted, start, lambda, density}, pg);
+            run(correction, {pos[0], cell_sorted, start, lambda, pos[1]}, pg);
+            std::swap(pos[0], pos[1]);
+        }
+        run(velocity, {pos[0], last[0], vel[0]}, pg);
+        if (def.pbf.xsph > 0.0f) {
+            run(xsph, {pos[0], vel[0], cell_sorted, start, vel[1]}, pg);
+            std::swap(vel[0], vel[1]);
+        }
+        clear(stats);
+        run(finish, {pos[0], last[0], vel[0], mean[0], slow[0], density, stats}, pg);
+        glEndQuery(GL_TIME_ELAPSED);
+        query_pending = true;
+    }
+
+    std::vector<Vec3> read_vec(GLuint id) const {
+        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+        std::vector<float> raw(size_t(n) * 4);
+        if (n) glGetNamedBufferSubData(id, 0, GLsizeiptr(raw.size() * sizeof(float)), raw.data());
+        std::vector<Vec3> out(n);
+        for (size_t i = 0; i < n; ++i) out[i] = Vec3(raw[4 * i], raw[4 * i + 1], raw[4 * i + 2]);
+        return out;
+    }
+};
+
+Result<std::unique_ptr<GpuPbf>> GpuPbf::create(const GpuPbfDef& def, std::span<const Vec3> positions) {
+    const PbfDef& d = def.pbf;
+    if (d.vorticity != 0.0f) return Error{"GPU PBF: pbf.vorticity must be 0 on the GPU path (got a non-zero value)"};
+    if (d.wall_density != 0.0f || d.contact_band != 0.0f)
+        return Error{"GPU PBF: pbf.wall_density and pbf.contact_band need the terrain, which the GPU path does not have: "
+                     "both must be 0"};
+    if (!(d.spacing > 0.0f && d.spacing <= 1e3f) || !(d.kernel_radius > d.spacing && d.kernel_radius <= 4.0f * d.spacing))
+        return Error{fmt::format("GPU PBF: pbf.spacing must be in (0, 1000] and pbf.kernel_radius in (spacing, 4 spacing] "
+                                 "(got {} and {})",
+                                 d.spacing, d.kernel_radius)};
+    if (d.iterations < 1 || d.iterations > 100)
+        return Error{fmt::format("GPU PBF: pbf.iterations must be in [1, 100] (got {})", d.iterations)};
+    if (d.scorr_n < 1 || d.scorr_n > 8)
+        return Error{fmt::format("GPU PBF: pbf.scorr_n must be in [1, 8] (got {})", d.scorr_n)};
+    if (!(d.sleep_threshold >= 0.0f && d.sleep_threshold <= 1.0f))
+        return Error{fmt::format("GPU PBF: pbf.sleep_threshold must be in [0, 1] (got {}; resolve \"auto\" first)",
+                                 d.sleep_threshold)};
+    if (!(d.damping >= 0.0f && d.damping <= 100.0f) || !(d.damping_speed > 0.0f))
+        return Error{fmt::format("GPU PBF: pbf.damping must be in [0, 100] and pbf.damping_speed > 0 (got {} and {}; "
+                                 "resolve \"auto\" first)",
+                                 d.damping, d.damping_speed)};
+    if (!(def.gravity >= 0.0f && def.gravity <= 1000.0f))
+        return Error{fmt::format("GPU PBF: gravity must be in [0, 1000] (got {})", def.gravity)};
+    if (positions.size() > kGpuPbfMaxParticles)
+        return Error{fmt::format("GPU PBF: {} particles, at most {}", positions.size(), kGpuPbfMaxParticles)};
+    const Vec3 extent = def.domain_max - def.domain_min;
+    if (!(extent.x >= 0.0f && extent.y >= 0.0f && extent.z >= 0.0f) || !std::isfinite(extent.x + extent.y + extent.z))
+        return Error{"GPU PBF: domain_max must be at or above domain_min on every axis"};
+    std::array<uint32_t, 3> dim{};
+    double cells = 1.0;
+    for (int a = 0; a < 3; ++a) {
+        const double c = std::floor(double(extent[a]) / double(d.kernel_radius)) + 1.0;
+        cells *= c;
+        dim[size_t(a)] = c > 1e9 ? 0u : uint32_t(c);
+    }
+    if (cells > double(kGpuPbfMaxCells))
+        return Error{fmt::format("GPU PBF: the domain holds {:.0f} cells of pbf.kernel_radius, at most {}: shrink "
+                                 "domain_min..domain_max or grow the kernel radius",
+                                 cells, kGpuPbfMaxCells)};
+    for (const Vec3& p : positions)
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+            return Error{"GPU PBF: a particle position is not finite"};
+    if (epoxy_gl_version() < 43 && !epoxy_has_gl_extension("GL_ARB_compute_shader"))
+        return Error{"GPU PBF: the OpenGL context has no compute shaders (needs 4.3 or GL_ARB_compute_shader)"};
+
+    auto m = std::make_unique<Impl>();
+    m->def = def;
+    m->n = uint32_t(positions.size());
+    m->cells = size_t(cells);
+    const PbfLattice lat = pbf_lattice(d);
+    const float h = d.kernel_radius;
+    const float poly6 = 315.0f / (64.0f * kPi * std::pow(h, 9.0f)), spiky = -45.0f / (kPi * std::pow(h, 6.0f));
+    const auto W = [&](float r2) {
+        if (r2 >= h * h) return 0.0f;
+        const float q = h * h - r2;
+        return poly6 * q * q * q;
+    };
+    const float dq = d.scorr_dq * h;
+    Params& p = m->params;
+    p = Params{.grid_min = {def.domain_min.x, def.domain_min.y, def.domain_min.z, 1.0f / h},
+               .grid_dim = {dim[0], dim[1], dim[2], uint32_t(m->cells)},
+               .kern = {h, h * h, poly6, spiky},
+               .solve = {1.0f / lat.rest_density, d.relaxation * lat.grad_sum,
+                         d.scorr_k * lat.grad_sum > 0.0f ? d.scorr_k / lat.grad_sum : 0.0f, 1.0f / W(dq * dq)},
+               .motion = {1.0f / 120.0f, def.gravity, 0.5f * d.spacing, d.xsph},
+               .rest = {d.damping, 1.0f / d.damping_speed, 0.0f, d.sleep_drift * d.sleep_drift},
+               .sleepv = {0.0f, d.sleep_drift, 0.0f, 0.0f},
+               .counts = {m->n, 1u, uint32_t(d.scorr_n), 0u}};
+
+    struct Src {
+        GLuint* prog;
+        std::string body;
+        const char* what;
+    };
+    const Src srcs[] = {{&m->predict, kPredict, "predict"},
+                        {&m->scan_blocks, kScanBlocks, "scan"},
+                        {&m->scan_sums, kScanSums, "scan sums"},
+                        {&m->scan_add, kScanAdd, "scan add"},
+                        {&m->scatter, kScatter, "scatter"},
+                        {&m->cell_sort, kCellSort, "cell sort"},
+                        {&m->gather_motion, gather_source("vec4", "vec4", "vec4"), "gather"},
+                        {&m->gather_state, gather_source("vec4", "uint", "uint"), "gather state"},
+                        {&m->density_pass, kDensity, "density"},
+                        {&m->correction, kCorrection, "correction"},
+                        {&m->velocity, kVelocity, "velocity"},
+                        {&m->xsph, kXsph, "XSPH"},
+                        {&m->finish, kFinish, "finish"}};
+    auto out = std::unique_ptr<GpuPbf>(new GpuPbf(std::move(m)));
+    Impl& im = *out->impl_;
+    for (const Src& s : srcs) {
+        auto prog = compute_program(s.body, s.what);
+        if (!prog) return prog.error();  // the destructor deletes what was made
+        *s.prog = prog.value();
+    }
+    const size_t n = im.n;
+    std::vector<float> packed(n * 4, 0.0f);
+    for (size_t i = 0; i < n; ++i) {
+        packed[4 * i] = positions[i].x;
+        packed[4 * i + 1] = positions[i].y;
+        packed[4 * i + 2] = positions[i].z;
+    }
+    const size_t v4 = n * 16, u1 = n * 4;
+    im.pos = {Impl::buffer(v4, packed.data()), Impl::buffer(v4)};
+    im.last = {Impl::buffer(v4, packed.data()), Impl::buffer(v4)};
+    im.vel = {Impl::buffer(v4), Impl::buffer(v4)};
+    im.mean = {Impl::buffer(v4), Impl::buffer(v4)};
+    im.slow = {Impl::buffer(u1), Impl::buffer(u1)};
+    im.cell_of = Impl::buffer(u1);
+    im.cell_sorted = Impl::buffer(u1);
+    im.order = Impl::buffer(u1);
+    im.lambda = Impl::buffer(u1);
+    im.density = Impl::buffer(u1);
+    im.count = Impl::buffer(im.cells * 4);
+    im.start = Impl::buffer((im.cells + 1) * 4);
+    im.sums = Impl::buffer(size_t(groups(im.cells, kScanBlock)) * 4);
+    im.stats = Impl::buffer(16);
+    im.ubo = Impl::buffer(sizeof(Params), &im.params);
+    glGenQueries(1, &im.query);
+    if (const GLenum e = glGetError(); e != GL_NO_ERROR)
+        return Error{fmt::format("GPU PBF: OpenGL error 0x{:x} while allocating {} particles' buffers", e, n)};
+    return out;
+}
+
+GpuPbf::GpuPbf(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+GpuPbf::~GpuPbf() {
+    for (GLuint* b : impl_->all_buffers())
+        if (*b) glDeleteBuffers(1, b);
+    for (GLuint* p : impl_->all_programs())
+        if (*p) glDeleteProgram(*p);
+    if (impl_->query) glDeleteQueries(1, &impl_->query);
+}
+
+void GpuPbf::step(float dt) { impl_->step(std::clamp(dt, 1e-6f, 1.0f)); }
+
+double GpuPbf::last_step_gpu_ms() {
+    if (!impl_->query_pending) return 0.0;
+    GLuint64 ns = 0;
+    glGetQueryObjectui64v(impl_->query, GL_QUERY_RESULT, &ns);
+    impl_->query_pending = false;
+    return double(ns) * 1e-6;
+}
+
+std::vector<Vec3> GpuPbf::positions() const { return impl_->read_vec(impl_->pos[0]); }
+std::vector<Vec3> GpuPbf::velocities() const { return impl_->read_vec(impl_->vel[0]); }
+
+GpuPbfCounters GpuPbf::counters() const {
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    uint32_t s[4] = {};
+    glGetNamedBufferSubData(impl_->stats, 0, sizeof(s), s);
+    GpuPbfCounters c;
+    std::memcpy(&c.density_error_max, &s[0], 4);
+    std::memcpy(&c.max_speed, &s[1], 4);
+    c.asleep = s[2];
+    return c;
+}
+
+size_t GpuPbf::size() const { return impl_->n; }
+
+std::string GpuPbf::device() const {
+    const auto str = [](GLenum e) {
+        const auto* s = reinterpret_cast<const char*>(glGetString(e));
+        return std::string(s ? s : "?");
+    };
+    return str(GL_RENDERER) + ", OpenGL " + str(GL_VERSION);
+}
+
+}  // namespace mr::render
