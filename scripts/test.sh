@@ -22,23 +22,7 @@ ctest --preset default
 step "ASan + UBSan suite (label long at METARIVER_LONG_SCALE, the preset's)"
 cmake --preset asan >/dev/null
 cmake --build --preset asan -j"$(nproc)"
-# LeakSanitizer's own stop-the-world tracer now and then segfaults at a process's exit
-# after the test has passed ("Tracer caught signal 11 ... LeakSanitizer has encountered a
-# fatal error": google/sanitizers#1353; seen once here, in a render test whose process
-# had loaded Mesa). That is no leak report: when every failed test's output is that crash
-# (as many crash lines as failed tests), those tests run once more and must pass then.
-# Any other failure stops the run.
-asan_log=build/asan/ctest-asan.log
-if ! ctest --preset asan 2>&1 | tee "$asan_log"; then  # pipefail: ctest's status
-    failed=$(grep -c . build/asan/Testing/Temporary/LastTestsFailed.log || true)
-    crashes=$(grep -c "LeakSanitizer has encountered a fatal error" "$asan_log" || true)
-    if [ "$failed" -gt 0 ] && [ "$crashes" -eq "$failed" ] && [ "$(grep -c "Tracer caught signal" "$asan_log")" -eq "$failed" ]; then
-        echo "LeakSanitizer's tracer crashed after $failed passing test(s); running them once more:"
-        ctest --preset asan --rerun-failed
-    else
-        exit 1
-    fi
-fi
+ctest --preset asan
 
 step "fuzzing, ${METARIVER_FUZZ_SECONDS:-60} s per target"
 # One target per core (a libFuzzer run is one thread): on 2 cores four minutes become two.
