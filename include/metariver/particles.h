@@ -225,6 +225,27 @@ struct PbfLattice {
 };
 PbfLattice pbf_lattice(const PbfDef& def);
 
+/// The constants a PBF step uses, from the def and its lattice: the kernels' coefficients
+/// (poly6 W(r^2) = poly6 (h^2 - r^2)^3, spiky grad factor spiky (h - r)^2 / r), 1 / rest
+/// density, eps, the s_corr scale and 1 / W(dq), and the largest move per iteration. One
+/// function for the CPU solver and the GPU step (gpu_pbf.h), so the twins use the same floats.
+struct PbfStepConstants {
+    float h = 1.0f, h2 = 1.0f, poly6 = 0.0f, spiky = 0.0f;
+    float inv_rho0 = 1.0f, eps = 0.0f, scorr_scale = 0.0f, inv_wdq = 0.0f, max_move = 0.0f;
+};
+PbfStepConstants pbf_step_constants(const PbfDef& def, const PbfLattice& lattice);
+
+/// Sleeping's constants for a step of dt under `gravity` (PbfDef::sleep_threshold):
+/// the threshold, capped at kSleepCapOfFallStep x gravity x dt (0: off), the slow steps
+/// after which a particle is asleep (kSleepAfterSeconds, in [1, 65535]) and the weight of
+/// one step in the drift average (dt / kSleepDriftSeconds, at most 1).
+struct PbfSleepStep {
+    float threshold = 0.0f;
+    int after = 1;
+    float drift_alpha = 1.0f;
+};
+PbfSleepStep pbf_sleep_step(const PbfDef& def, float gravity, float dt);
+
 enum class SpringMode {
     Pairs,  ///< the paper's all-pairs loop, O(N^2), serial: the reference
     Grid,   ///< neighbour grid, O(N), parallel per-particle gather: same forces

@@ -164,6 +164,30 @@ PbfLattice pbf_lattice(const PbfDef& d) {
     return PbfLattice{.rest_density = float(rho), .grad_sum = float(inv * inv * (g2 + double(glm::dot(gsum, gsum))))};
 }
 
+PbfStepConstants pbf_step_constants(const PbfDef& d, const PbfLattice& lattice) {
+    const Kernels k(d.kernel_radius);
+    const float dq = d.scorr_dq * d.kernel_radius;
+    return PbfStepConstants{
+        .h = k.h,
+        .h2 = k.h2,
+        .poly6 = k.poly6,
+        .spiky = k.spiky,
+        .inv_rho0 = 1.0f / lattice.rest_density,
+        .eps = d.relaxation * lattice.grad_sum,
+        .scorr_scale = d.scorr_k * lattice.grad_sum > 0.0f ? d.scorr_k / lattice.grad_sum : 0.0f,
+        .inv_wdq = 1.0f / k.W(dq * dq),
+        .max_move = 0.5f * d.spacing,  // per iteration: a spawn overlap never explodes
+    };
+}
+
+PbfSleepStep pbf_sleep_step(const PbfDef& d, float gravity, float dt) {
+    return PbfSleepStep{
+        .threshold = gravity > 0.0f ? std::min(d.sleep_threshold, kSleepCapOfFallStep * gravity * dt) : d.sleep_threshold,
+        .after = std::clamp(int(std::ceil(kSleepAfterSeconds / dt)), 1, 65535),
+        .drift_alpha = std::min(1.0f, dt / kSleepDriftSeconds),
+    };
+}
+
 void PbfSolver::init_pbf() {
     const PbfLattice l = pbf_lattice(pbf_);
     rest_density_ = l.rest_density;
@@ -287,12 +311,9 @@ void PbfSolver::step(float dt) {
     const size_t n = p.size();
     const Kernels k(d.kernel_radius);
     const Vec3 g(0.0f, -integrator_.gravity, 0.0f);
-    const float inv_rho0 = 1.0f / rest_density_;
-    const float eps = d.relaxation * lattice_grad_sum_;
-    const float dq = d.scorr_dq * d.kernel_radius;
-    const float inv_wdq = 1.0f / k.W(dq * dq);
-    const float scorr_scale = d.scorr_k * lattice_grad_sum_ > 0.0f ? d.scorr_k / lattice_grad_sum_ : 0.0f;
-    const float max_move = 0.5f * d.spacing;  // per iteration: a spawn overlap never explodes
+    const PbfStepConstants sc = pbf_step_constants(d, PbfLattice{rest_density_, lattice_grad_sum_});
+    const float inv_rho0 = sc.inv_rho0, eps = sc.eps, inv_wdq = sc.inv_wdq, scorr_scale = sc.scorr_scale;
+    const float max_move = sc.max_move;
     const bool terrain = collision_.mode != CollisionMode::None;
     const bool wall = terrain && d.wall_density > 0.0f;
     // The list passes eight entries at a time (pbf_simd.h) where the CPU has AVX2.
@@ -577,12 +598,11 @@ void PbfSolver::step(float dt) {
     // viscosity: a particle at the top of a bounce is slow for a step or two, not for
     // kSleepAfterSeconds. The threshold is capped below the speed gravity gives in one
     // step, so an asleep particle whose support went away wakes with its first fall.
-    const float sleep = integrator_.gravity > 0.0f
-                            ? std::min(d.sleep_threshold, kSleepCapOfFallStep * integrator_.gravity * dt)
-                            : d.sleep_threshold;
+    const PbfSleepStep sleep_step = pbf_sleep_step(d, integrator_.gravity, dt);
+    const float sleep = sleep_step.threshold;
     if (sleep > 0.0f) {
         const float s2 = sleep * sleep;
-        const int after = std::clamp(int(std::ceil(kSleepAfterSeconds / dt)), 1, 65535);
+        const int after = sleep_step.after;
         // The mean horizontal velocity (PbfDef::sleep_drift): an exponential average
         // over kSleepDriftSeconds of the awake steps; a particle whose mean is not slow
         // stays awake, so a slosh levels out instead of freezing at its slow turn. Only
@@ -590,7 +610,7 @@ void PbfSolver::step(float dt) {
         // settling of a column (water still packing under its weight) kept the pools
         // awake past 10 s when it counted (max speed 0.10-0.20 m/s at 10 s).
         const float drift2 = d.sleep_drift * d.sleep_drift;
-        const float alpha = std::min(1.0f, dt / kSleepDriftSeconds);
+        const float alpha = sleep_step.drift_alpha;
         tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
             for (size_t i = r.begin(); i != r.end(); ++i) {
                 if (!p.active[i]) continue;

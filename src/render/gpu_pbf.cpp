@@ -39,7 +39,6 @@ namespace mr::render {
 
 namespace {
 
-constexpr float kPi = 3.14159265358979f;
 constexpr uint32_t kGroup = 128;       // particle and cell passes
 constexpr uint32_t kScanBlock = 1024;  // cells per scan work group (512 threads, 2 each)
 
@@ -458,7 +457,6 @@ struct GpuPbf::Impl {
     uint32_t n = 0;
     size_t cells = 0;
     Params params{};
-    float sleep_threshold = 0.0f;
     // Particle arrays: [0] is the live one, [1] the other side of a ping-pong.
     std::array<GLuint, 2> pos{}, last{}, vel{}, mean{}, slow{};
     GLuint cell_of = 0, cell_sorted = 0, order = 0, lambda = 0, density = 0;
@@ -503,13 +501,11 @@ struct GpuPbf::Impl {
     }
 
     void set_dt(float dt) {
-        const PbfDef& d = def.pbf;
+        const PbfSleepStep sleep = pbf_sleep_step(def.pbf, def.gravity, dt);
         params.motion[0] = dt;
-        const float sleep =
-            def.gravity > 0.0f ? std::min(d.sleep_threshold, kSleepCapOfFallStep * def.gravity * dt) : d.sleep_threshold;
-        params.rest[2] = sleep > 0.0f ? sleep * sleep : 0.0f;
-        params.counts[1] = uint32_t(std::clamp(int(std::ceil(kSleepAfterSeconds / dt)), 1, 65535));
-        params.sleepv[0] = std::min(1.0f, dt / kSleepDriftSeconds);
+        params.rest[2] = sleep.threshold > 0.0f ? sleep.threshold * sleep.threshold : 0.0f;
+        params.counts[1] = uint32_t(sleep.after);
+        params.sleepv[0] = sleep.drift_alpha;
         glNamedBufferSubData(ubo, 0, sizeof(Params), &params);
     }
 
@@ -612,22 +608,13 @@ Result<std::unique_ptr<GpuPbf>> GpuPbf::create(const GpuPbfDef& def, std::span<c
     m->def = def;
     m->n = uint32_t(positions.size());
     m->cells = size_t(cells);
-    const PbfLattice lat = pbf_lattice(d);
-    const float h = d.kernel_radius;
-    const float poly6 = 315.0f / (64.0f * kPi * std::pow(h, 9.0f)), spiky = -45.0f / (kPi * std::pow(h, 6.0f));
-    const auto W = [&](float r2) {
-        if (r2 >= h * h) return 0.0f;
-        const float q = h * h - r2;
-        return poly6 * q * q * q;
-    };
-    const float dq = d.scorr_dq * h;
+    const PbfStepConstants c = pbf_step_constants(d, pbf_lattice(d));
     Params& p = m->params;
-    p = Params{.grid_min = {def.domain_min.x, def.domain_min.y, def.domain_min.z, 1.0f / h},
+    p = Params{.grid_min = {def.domain_min.x, def.domain_min.y, def.domain_min.z, 1.0f / c.h},
                .grid_dim = {dim[0], dim[1], dim[2], uint32_t(m->cells)},
-               .kern = {h, h * h, poly6, spiky},
-               .solve = {1.0f / lat.rest_density, d.relaxation * lat.grad_sum,
-                         d.scorr_k * lat.grad_sum > 0.0f ? d.scorr_k / lat.grad_sum : 0.0f, 1.0f / W(dq * dq)},
-               .motion = {1.0f / 120.0f, def.gravity, 0.5f * d.spacing, d.xsph},
+               .kern = {c.h, c.h2, c.poly6, c.spiky},
+               .solve = {c.inv_rho0, c.eps, c.scorr_scale, c.inv_wdq},
+               .motion = {1.0f / 120.0f, def.gravity, c.max_move, d.xsph},
                .rest = {d.damping, 1.0f / d.damping_speed, 0.0f, d.sleep_drift * d.sleep_drift},
                .sleepv = {0.0f, d.sleep_drift, 0.0f, 0.0f},
                .counts = {m->n, 1u, uint32_t(d.scorr_n), 0u}};
