@@ -2,6 +2,7 @@
 #include "bench_scenarios.h"
 
 #include <metariver/export.h>
+#include <metariver/gpu_field.h>
 #include <metariver/gpu_pbf.h>
 #include <metariver/render.h>
 #include <metariver/io.h>
@@ -131,6 +132,56 @@ ScenarioResult bench_w1(int n, int res, int frames) {
     r.triangles = mesh.triangle_count();
     r.params = {{"N", n}, {"R", res}, {"rcoef", 0.3}, {"frames", frames}, {"coord_sum", coord_sum}};
     r.quality = {{"vertices", mesh.vertex_count()}};
+    return r;
+}
+
+/// W1's field on the GPU (gpu_field.h): the same balls, kernel and grid as bench_w1,
+/// the samples filled by compute shaders (llvmpipe here, the GPU where one is lent).
+/// Stages: `field` the build enqueued and waited for (upload included, read-back not),
+/// `gpu` the driver's timer for it (left out where it reads under 1 % of the wall time,
+/// as llvmpipe's does). Quality: the largest difference from SparseField's samples
+/// relative to the largest sample (the twin check, outside the timing).
+ScenarioResult bench_w1_gpu(int n, int res, int frames) {
+    ScenarioResult r;
+    r.name = fmt::format("w1-gpu N={} R={}", n, res);
+    auto ctx = render::HeadlessContext::create();
+    if (!ctx) {
+        r.note = "skipped: " + ctx.error().message;
+        return r;
+    }
+    const std::vector<Vec3> balls = w1_balls(n);
+    const KernelDef kernel = w1_kernel_for(n);
+    auto gpu = render::GpuField::create({.kernel = kernel, .grid = w1_grid(res)});
+    if (!gpu) {
+        r.note = "skipped: " + gpu.error().message;
+        return r;
+    }
+    render::GpuField& g = *gpu.value();
+    for (int f = -2; f < frames; ++f) {  // two warm-up frames, as bench_w1
+        const auto t0 = Clock::now();
+        if (auto st = g.build(balls); !st) {
+            r.note = "failed: " + st.error().message;
+            return r;
+        }
+        const double gpu_ms = g.last_build_gpu_ms();  // waits for the build
+        const double wall = ms_since(t0);
+        if (f < 0) continue;
+        r.sample("field", wall);
+        if (gpu_ms > 0.01 * wall) r.sample("gpu", gpu_ms);
+    }
+    ScalarGrid ours, twin;
+    g.to_dense(ours);
+    SparseField cpu;
+    (void)cpu.build(balls, SparseFieldDef{.kernel = kernel, .domain = DomainMode::FixedBox, .box = w1_grid(res)});
+    cpu.to_dense(twin);
+    float diff = 0.0f, top = 1.0f;
+    for (size_t i = 0; i < std::min(ours.values.size(), twin.values.size()); ++i) {
+        diff = std::max(diff, std::abs(ours.values[i] - twin.values[i]));
+        top = std::max(top, std::abs(twin.values[i]));
+    }
+    r.particles = static_cast<size_t>(n);
+    r.params = {{"N", n}, {"R", res}, {"rcoef", 0.3}, {"frames", frames}, {"device", g.device()}};
+    r.quality = {{"max_relative_difference_vs_cpu", diff / top}};
     return r;
 }
 

@@ -55,6 +55,7 @@ ScenarioResult bench_simulation(const std::string& name, const SceneDef& def, co
                                 int frames, const std::string& note = {});
 /// W1: n metaballs on an res^3 grid, field + surface.
 ScenarioResult bench_w1(int n, int res, int frames);
+ScenarioResult bench_w1_gpu(int n, int res, int frames);
 /// W2: n spheres dropped on the W2 terrain (the springs solver as rigid spheres).
 ScenarioResult bench_w2(int n);
 /// The default PBF river resolved with about n particles, after `warmup` frames of flow.

@@ -50,7 +50,7 @@ struct BenchOptions {
     std::vector<std::string> heightmaps;  ///< --heightmap: scenario maps, the default river on each
     std::string peers_dir = "bench/peers";
     bool peers = false;
-    bool gpu = false;  ///< --gpu: w3 also by the GPU step (gpu_pbf.h)
+    bool gpu = false;  ///< --gpu: w1's field and w3's step also on the GPU (gpu_field.h, gpu_pbf.h)
 };
 
 json machine_json(int threads) {
@@ -319,7 +319,10 @@ int run_bench(const BenchOptions& o) {
     if (want("w1")) {
         std::vector<std::pair<int, int>> cases = {{50, 32}, {1000, 64}, {1000, 128}, {10000, 128}, {10000, 256}};
         if (o.balls || o.res) cases = {{o.balls ? o.balls : 1000, o.res ? o.res : 128}};
-        for (auto [n, res] : cases) results.push_back(bench_w1(n, res, frames ? frames : 10));
+        for (auto [n, res] : cases) {
+            results.push_back(bench_w1(n, res, frames ? frames : 10));
+            if (o.gpu) results.push_back(bench_w1_gpu(n, res, frames ? frames : 10));
+        }
         peer_request.w1_cases = cases;
     }
     if (want("w2")) {
@@ -362,7 +365,7 @@ int run_bench(const BenchOptions& o) {
             return r.stage_ms.count(s) ? percentiles(r.stage_ms.at(s)).median : 0.0;
         };
         for (const auto& r : results)
-            if (r.params.contains("N") && r.params.contains("R"))
+            if (r.params.contains("N") && r.params.contains("R") && r.name.rfind("w1 ", 0) == 0)  // not the GPU rows
                 ours.push_back({.workload = "w1", .n = r.params["N"].get<int>(), .r = r.params["R"].get<int>(),
                                 .field_surface_ms = med(r, "total"), .surface_ms = med(r, "surface"),
                                 .triangles = r.triangles});
@@ -430,7 +433,8 @@ void register_bench(CLI::App& app, std::function<int()>& action) {
         ->delimiter(',');
     cmd->add_flag("--peers", o->peers, "also run the installed peers on the same workloads");
     cmd->add_flag("--gpu", o->gpu,
-                  "w3: also run the GPU PBF step (OpenGL 4.5 compute through headless EGL; --nx up to 250)");
+                  "w1, w3: also run the field (w1) and the PBF step (w3) on the GPU (OpenGL 4.5 compute through "
+                  "headless EGL; --nx up to 250)");
     cmd->add_option("--peers-dir", o->peers_dir, "folder with the peer drivers (default bench/peers)");
     cmd->callback([o, &action, particles, nx] {
         o->particles_given = particles->count() > 0;

@@ -24,6 +24,8 @@
 // its buffers at storage bindings 0..7 (the least GL 4.3 guarantees).
 #include <metariver/gpu_pbf.h>
 
+#include "gpu_compute.h"
+
 #include <epoxy/gl.h>
 #include <fmt/format.h>
 
@@ -37,61 +39,10 @@
 
 namespace mr::render {
 
+using namespace gpu;
+
 namespace {
 
-constexpr uint32_t kGroup = 128;       // particle and cell passes
-constexpr uint32_t kScanBlock = 1024;  // cells per scan work group (512 threads, 2 each)
-
-// std140: every member a vec4 / uvec4.
-struct Params {
-    float grid_min[4];     // xyz; w = 1 / cell size
-    uint32_t grid_dim[4];  // cells along x, y, z; w = cells in all
-    float kern[4];         // h, h^2, poly6, spiky
-    float solve[4];        // 1/rho0, eps, scorr_scale, 1/W(dq)
-    float motion[4];       // dt, gravity, max_move, xsph
-    float rest[4];         // damping, 1/damping_speed, sleep^2 (0: off), drift^2
-    float sleepv[4];       // alpha, sleep_drift, 0, 0
-    uint32_t counts[4];    // n, after, scorr_n, 0
-};
-
-constexpr const char* kCommon = R"(#version 450
-layout(std140, binding = 0) uniform Params {
-    vec4 grid_min;
-    uvec4 grid_dim;
-    vec4 kern;
-    vec4 solve;
-    vec4 motion;
-    vec4 rest;
-    vec4 sleepv;
-    uvec4 counts;
-};
-float W(float r2) {
-    if (r2 >= kern.y) return 0.0;
-    float d = kern.y - r2;
-    return kern.z * d * d * d;
-}
-float grad_factor(float r) {
-    if (r >= kern.x || r <= 1e-9) return 0.0;
-    float a = kern.x - r;
-    return kern.w * a * a / r;
-}
-uint cell_index(vec3 x) {
-    vec3 q = clamp(floor((x - grid_min.xyz) * grid_min.w), vec3(0.0), vec3(grid_dim.xyz) - 1.0);
-    return uint(q.x) + grid_dim.x * (uint(q.y) + grid_dim.y * uint(q.z));
-}
-// The particles of the 3 x 3 x 3 cells around cell c: 9 rows of 3 cells, each one
-// contiguous range of slots. NEIGHBOURS_BEGIN(c) { body using j } NEIGHBOURS_END
-#define NEIGHBOURS_BEGIN(c)                                                      \
-    uint cx_ = (c) % grid_dim.x, cyz_ = (c) / grid_dim.x;                        \
-    int cy_ = int(cyz_ % grid_dim.y), cz_ = int(cyz_ / grid_dim.y);              \
-    uint x0_ = cx_ > 0u ? cx_ - 1u : 0u, x1_ = min(cx_ + 1u, grid_dim.x - 1u);   \
-    for (int z_ = max(cz_ - 1, 0); z_ <= min(cz_ + 1, int(grid_dim.z) - 1); ++z_) \
-        for (int y_ = max(cy_ - 1, 0); y_ <= min(cy_ + 1, int(grid_dim.y) - 1); ++y_) { \
-            uint row_ = grid_dim.x * (uint(y_) + grid_dim.y * uint(z_));         \
-            uint e_ = start[row_ + x1_ + 1u];                                    \
-            for (uint j = start[row_ + x0_]; j < e_; ++j)
-#define NEIGHBOURS_END }
-)";
 
 constexpr const char* kPredict = R"(
 layout(local_size_x = 128) in;
@@ -113,123 +64,6 @@ void main() {
     uint c = cell_index(x);
     cell_of[i] = c;
     atomicAdd(count[c], 1u);
-}
-)";
-
-constexpr const char* kScanBlocks = R"(
-layout(local_size_x = 512) in;
-layout(std430, binding = 0) readonly buffer Buf0 { uint count[]; };
-layout(std430, binding = 1) writeonly buffer Buf1 { uint start[]; };
-layout(std430, binding = 2) writeonly buffer Buf2 { uint sums[]; };
-shared uint s[1024];
-void main() {
-    uint t = gl_LocalInvocationID.x, g = gl_WorkGroupID.x, cells = grid_dim.w;
-    uint a = g * 1024u + 2u * t, b = a + 1u;
-    s[2u * t] = a < cells ? count[a] : 0u;
-    s[2u * t + 1u] = b < cells ? count[b] : 0u;
-    uint offset = 1u;
-    for (uint d = 512u; d > 0u; d >>= 1u) {  // up-sweep (Blelloch)
-        memoryBarrierShared();
-        barrier();
-        if (t < d) s[offset * (2u * t + 2u) - 1u] += s[offset * (2u * t + 1u) - 1u];
-        offset <<= 1u;
-    }
-    memoryBarrierShared();
-    barrier();
-    if (t == 0u) {
-        sums[g] = s[1023];
-        s[1023] = 0u;
-    }
-    for (uint d = 1u; d < 1024u; d <<= 1u) {  // down-sweep
-        offset >>= 1u;
-        memoryBarrierShared();
-        barrier();
-        if (t < d) {
-            uint ai = offset * (2u * t + 1u) - 1u, bi = offset * (2u * t + 2u) - 1u;
-            uint x = s[ai];
-            s[ai] = s[bi];
-            s[bi] += x;
-        }
-    }
-    memoryBarrierShared();
-    barrier();
-    if (a < cells) start[a] = s[2u * t];
-    if (b < cells) start[b] = s[2u * t + 1u];
-}
-)";
-
-constexpr const char* kScanSums = R"(
-layout(local_size_x = 256) in;
-layout(std430, binding = 0) buffer Buf0 { uint sums[]; };
-layout(std430, binding = 1) writeonly buffer Buf1 { uint start[]; };
-shared uint part[256];
-void main() {
-    uint t = gl_LocalInvocationID.x, cells = grid_dim.w;
-    uint groups = (cells + 1023u) / 1024u, per = (groups + 255u) / 256u;
-    uint b = min(t * per, groups), e = min(b + per, groups);
-    uint s = 0u;
-    for (uint k = b; k < e; ++k) s += sums[k];
-    part[t] = s;
-    for (uint off = 1u; off < 256u; off <<= 1u) {  // inclusive scan (Hillis-Steele)
-        memoryBarrierShared();
-        barrier();
-        uint v = t >= off ? part[t - off] : 0u;
-        memoryBarrierShared();
-        barrier();
-        part[t] += v;
-    }
-    memoryBarrierShared();
-    barrier();
-    uint run = t > 0u ? part[t - 1u] : 0u;
-    for (uint k = b; k < e; ++k) {
-        uint v = sums[k];
-        sums[k] = run;
-        run += v;
-    }
-    if (t == 255u) start[cells] = part[255];
-}
-)";
-
-constexpr const char* kScanAdd = R"(
-layout(local_size_x = 128) in;
-layout(std430, binding = 0) buffer Buf0 { uint start[]; };
-layout(std430, binding = 1) readonly buffer Buf1 { uint sums[]; };
-void main() {
-    uint c = gl_GlobalInvocationID.x;
-    if (c < grid_dim.w) start[c] += sums[c / 1024u];
-}
-)";
-
-constexpr const char* kScatter = R"(
-layout(local_size_x = 128) in;
-layout(std430, binding = 0) readonly buffer Buf0 { uint cell_of[]; };
-layout(std430, binding = 1) readonly buffer Buf1 { uint start[]; };
-layout(std430, binding = 2) buffer Buf2 { uint cursor[]; };
-layout(std430, binding = 3) writeonly buffer Buf3 { uint order[]; };
-void main() {
-    uint i = gl_GlobalInvocationID.x;
-    if (i >= counts.x) return;
-    uint c = cell_of[i];
-    order[start[c] + atomicAdd(cursor[c], 1u)] = i;
-}
-)";
-
-constexpr const char* kCellSort = R"(
-layout(local_size_x = 128) in;
-layout(std430, binding = 0) readonly buffer Buf0 { uint start[]; };
-layout(std430, binding = 1) buffer Buf1 { uint order[]; };
-void main() {
-    uint c = gl_GlobalInvocationID.x;
-    if (c >= grid_dim.w) return;
-    uint b = start[c], e = start[c + 1u];
-    for (uint k = b + 1u; k < e; ++k) {  // insertion sort: a cell holds a few particles
-        uint v = order[k], m = k;
-        while (m > b && order[m - 1u] > v) {
-            order[m] = order[m - 1u];
-            --m;
-        }
-        order[m] = v;
-    }
 }
 )";
 
@@ -415,41 +249,6 @@ void main() {
 }
 )";
 
-Result<GLuint> compute_program(const std::string& body, const char* what) {
-    const GLuint sh = glCreateShader(GL_COMPUTE_SHADER);
-    const char* src[] = {kCommon, body.c_str()};
-    glShaderSource(sh, 2, src, nullptr);
-    glCompileShader(sh);
-    const auto log_of = [](GLuint obj, bool program) {
-        GLint len = 0;
-        program ? glGetProgramiv(obj, GL_INFO_LOG_LENGTH, &len) : glGetShaderiv(obj, GL_INFO_LOG_LENGTH, &len);
-        std::string log(size_t(std::max(len, 1)), '\0');
-        program ? glGetProgramInfoLog(obj, len, nullptr, log.data()) : glGetShaderInfoLog(obj, len, nullptr, log.data());
-        std::replace(log.begin(), log.end(), '\n', ' ');
-        return log;
-    };
-    GLint ok = 0;
-    glGetShaderiv(sh, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        std::string log = log_of(sh, false);
-        glDeleteShader(sh);
-        return Error{fmt::format("GPU PBF: the {} shader does not compile: {}", what, log)};
-    }
-    const GLuint prog = glCreateProgram();
-    glAttachShader(prog, sh);
-    glLinkProgram(prog);
-    glDeleteShader(sh);
-    glGetProgramiv(prog, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        std::string log = log_of(prog, true);
-        glDeleteProgram(prog);
-        return Error{fmt::format("GPU PBF: the {} shader does not link: {}", what, log)};
-    }
-    return prog;
-}
-
-uint32_t groups(size_t items, uint32_t per) { return uint32_t((items + per - 1) / per); }
-
 }  // namespace
 
 struct GpuPbf::Impl {
@@ -459,45 +258,20 @@ struct GpuPbf::Impl {
     Params params{};
     // Particle arrays: [0] is the live one, [1] the other side of a ping-pong.
     std::array<GLuint, 2> pos{}, last{}, vel{}, mean{}, slow{};
-    GLuint cell_of = 0, cell_sorted = 0, order = 0, lambda = 0, density = 0;
-    GLuint count = 0, start = 0, sums = 0, stats = 0, ubo = 0, query = 0;
+    GLuint cell_of = 0, cell_sorted = 0, lambda = 0, density = 0, stats = 0, ubo = 0, query = 0;
     bool query_pending = false;
-    GLuint predict = 0, scan_blocks = 0, scan_sums = 0, scan_add = 0, scatter = 0, cell_sort = 0, gather_motion = 0,
-           gather_state = 0, density_pass = 0, correction = 0, velocity = 0, xsph = 0, finish = 0;
+    Binning bin;
+    GLuint predict = 0, gather_motion = 0, gather_state = 0, density_pass = 0, correction = 0, velocity = 0, xsph = 0,
+           finish = 0;
 
     std::vector<GLuint*> all_buffers() {
-        std::vector<GLuint*> b = {&cell_of, &cell_sorted, &order, &lambda, &density, &count,
-                                  &start,   &sums,        &stats, &ubo};
+        std::vector<GLuint*> b = {&cell_of, &cell_sorted, &lambda, &density, &stats, &ubo};
         for (auto* a : {&pos, &last, &vel, &mean, &slow})
             for (GLuint& id : *a) b.push_back(&id);
         return b;
     }
     std::vector<GLuint*> all_programs() {
-        return {&predict, &scan_blocks,  &scan_sums,  &scan_add, &scatter, &cell_sort, &gather_motion,
-                &gather_state, &density_pass, &correction, &velocity, &xsph,   &finish};
-    }
-
-    static GLuint buffer(size_t bytes, const void* data = nullptr) {
-        GLuint id = 0;
-        glCreateBuffers(1, &id);
-        glNamedBufferStorage(id, GLsizeiptr(std::max<size_t>(bytes, 16)), data, GL_DYNAMIC_STORAGE_BIT);
-        if (!data) {
-            const uint32_t zero = 0;
-            glClearNamedBufferData(id, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
-        }
-        return id;
-    }
-    static void clear(GLuint id) {
-        const uint32_t zero = 0;
-        glClearNamedBufferData(id, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-    }
-    static void run(GLuint prog, std::initializer_list<GLuint> buffers, uint32_t groups) {
-        GLuint b = 0;
-        for (GLuint id : buffers) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, b++, id);
-        glUseProgram(prog);
-        if (groups) glDispatchCompute(groups, 1, 1);
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+        return {&predict, &gather_motion, &gather_state, &density_pass, &correction, &velocity, &xsph, &finish};
     }
 
     void set_dt(float dt) {
@@ -512,35 +286,27 @@ struct GpuPbf::Impl {
     void step(float dt) {
         set_dt(dt);
         glBindBufferBase(GL_UNIFORM_BUFFER, 0, ubo);
-        if (query_pending) {  // the last step's time is not wanted: keep the query free
-            GLuint64 ns = 0;
-            glGetQueryObjectui64v(query, GL_QUERY_RESULT, &ns);
-        }
+        query_ms(query, query_pending);  // the last step's time, if unread: frees the query
         glBeginQuery(GL_TIME_ELAPSED, query);
-        const uint32_t pg = groups(n, kGroup), cg = groups(cells, kGroup);
-        clear(count);
-        run(predict, {pos[0], last[0], vel[0], cell_of, count}, pg);
-        run(scan_blocks, {count, start, sums}, groups(cells, kScanBlock));
-        run(scan_sums, {sums, start}, 1);
-        run(scan_add, {start, sums}, cg);
-        clear(count);
-        run(scatter, {cell_of, start, count, order}, pg);
-        run(cell_sort, {start, order}, cg);
-        run(gather_motion, {order, pos[0], last[0], vel[0], pos[1], last[1], vel[1]}, pg);
+        const uint32_t pg = groups(n, kGroup);
+        clear(bin.count);
+        run(predict, {pos[0], last[0], vel[0], cell_of, bin.count}, pg);
+        bin.sort(cell_of, n);
+        run(gather_motion, {bin.order, pos[0], last[0], vel[0], pos[1], last[1], vel[1]}, pg);
         std::swap(pos[0], pos[1]);
         std::swap(last[0], last[1]);
         std::swap(vel[0], vel[1]);
-        run(gather_state, {order, mean[0], slow[0], cell_of, mean[1], slow[1], cell_sorted}, pg);
+        run(gather_state, {bin.order, mean[0], slow[0], cell_of, mean[1], slow[1], cell_sorted}, pg);
         std::swap(mean[0], mean[1]);
         std::swap(slow[0], slow[1]);
         for (int it = 0; it < def.pbf.iterations; ++it) {
-            run(density_pass, {pos[0], cell_sorted, start, lambda, density}, pg);
-            run(correction, {pos[0], cell_sorted, start, lambda, pos[1]}, pg);
+            run(density_pass, {pos[0], cell_sorted, bin.start, lambda, density}, pg);
+            run(correction, {pos[0], cell_sorted, bin.start, lambda, pos[1]}, pg);
             std::swap(pos[0], pos[1]);
         }
         run(velocity, {pos[0], last[0], vel[0]}, pg);
         if (def.pbf.xsph > 0.0f) {
-            run(xsph, {pos[0], vel[0], cell_sorted, start, vel[1]}, pg);
+            run(xsph, {pos[0], vel[0], cell_sorted, bin.start, vel[1]}, pg);
             std::swap(vel[0], vel[1]);
         }
         clear(stats);
@@ -625,11 +391,6 @@ Result<std::unique_ptr<GpuPbf>> GpuPbf::create(const GpuPbfDef& def, std::span<c
         const char* what;
     };
     const Src srcs[] = {{&m->predict, kPredict, "predict"},
-                        {&m->scan_blocks, kScanBlocks, "scan"},
-                        {&m->scan_sums, kScanSums, "scan sums"},
-                        {&m->scan_add, kScanAdd, "scan add"},
-                        {&m->scatter, kScatter, "scatter"},
-                        {&m->cell_sort, kCellSort, "cell sort"},
                         {&m->gather_motion, gather_source("vec4", "vec4", "vec4"), "gather"},
                         {&m->gather_state, gather_source("vec4", "uint", "uint"), "gather state"},
                         {&m->density_pass, kDensity, "density"},
@@ -640,7 +401,7 @@ Result<std::unique_ptr<GpuPbf>> GpuPbf::create(const GpuPbfDef& def, std::span<c
     auto out = std::unique_ptr<GpuPbf>(new GpuPbf(std::move(m)));
     Impl& im = *out->impl_;
     for (const Src& s : srcs) {
-        auto prog = compute_program(s.body, s.what);
+        auto prog = compute_program(s.body, "GPU PBF", s.what);
         if (!prog) return prog.error();  // the destructor deletes what was made
         *s.prog = prog.value();
     }
@@ -652,21 +413,18 @@ Result<std::unique_ptr<GpuPbf>> GpuPbf::create(const GpuPbfDef& def, std::span<c
         packed[4 * i + 2] = positions[i].z;
     }
     const size_t v4 = n * 16, u1 = n * 4;
-    im.pos = {Impl::buffer(v4, packed.data()), Impl::buffer(v4)};
-    im.last = {Impl::buffer(v4, packed.data()), Impl::buffer(v4)};
-    im.vel = {Impl::buffer(v4), Impl::buffer(v4)};
-    im.mean = {Impl::buffer(v4), Impl::buffer(v4)};
-    im.slow = {Impl::buffer(u1), Impl::buffer(u1)};
-    im.cell_of = Impl::buffer(u1);
-    im.cell_sorted = Impl::buffer(u1);
-    im.order = Impl::buffer(u1);
-    im.lambda = Impl::buffer(u1);
-    im.density = Impl::buffer(u1);
-    im.count = Impl::buffer(im.cells * 4);
-    im.start = Impl::buffer((im.cells + 1) * 4);
-    im.sums = Impl::buffer(size_t(groups(im.cells, kScanBlock)) * 4);
-    im.stats = Impl::buffer(16);
-    im.ubo = Impl::buffer(sizeof(Params), &im.params);
+    im.pos = {buffer(v4, packed.data()), buffer(v4)};
+    im.last = {buffer(v4, packed.data()), buffer(v4)};
+    im.vel = {buffer(v4), buffer(v4)};
+    im.mean = {buffer(v4), buffer(v4)};
+    im.slow = {buffer(u1), buffer(u1)};
+    im.cell_of = buffer(u1);
+    im.cell_sorted = buffer(u1);
+    im.lambda = buffer(u1);
+    im.density = buffer(u1);
+    if (auto st = im.bin.create(im.cells, n, "GPU PBF"); !st) return st.error();
+    im.stats = buffer(16);
+    im.ubo = buffer(sizeof(Params), &im.params);
     glGenQueries(1, &im.query);
     if (const GLenum e = glGetError(); e != GL_NO_ERROR)
         return Error{fmt::format("GPU PBF: OpenGL error 0x{:x} while allocating {} particles' buffers", e, n)};
@@ -680,18 +438,13 @@ GpuPbf::~GpuPbf() {
         if (*b) glDeleteBuffers(1, b);
     for (GLuint* p : impl_->all_programs())
         if (*p) glDeleteProgram(*p);
+    impl_->bin.destroy();
     if (impl_->query) glDeleteQueries(1, &impl_->query);
 }
 
 void GpuPbf::step(float dt) { impl_->step(std::clamp(dt, 1e-6f, 1.0f)); }
 
-double GpuPbf::last_step_gpu_ms() {
-    if (!impl_->query_pending) return 0.0;
-    GLuint64 ns = 0;
-    glGetQueryObjectui64v(impl_->query, GL_QUERY_RESULT, &ns);
-    impl_->query_pending = false;
-    return double(ns) * 1e-6;
-}
+double GpuPbf::last_step_gpu_ms() { return query_ms(impl_->query, impl_->query_pending); }
 
 std::vector<Vec3> GpuPbf::positions() const { return impl_->read_vec(impl_->pos[0]); }
 std::vector<Vec3> GpuPbf::velocities() const { return impl_->read_vec(impl_->vel[0]); }
@@ -709,12 +462,6 @@ GpuPbfCounters GpuPbf::counters() const {
 
 size_t GpuPbf::size() const { return impl_->n; }
 
-std::string GpuPbf::device() const {
-    const auto str = [](GLenum e) {
-        const auto* s = reinterpret_cast<const char*>(glGetString(e));
-        return std::string(s ? s : "?");
-    };
-    return str(GL_RENDERER) + ", OpenGL " + str(GL_VERSION);
-}
+std::string GpuPbf::device() const { return device_string(); }
 
 }  // namespace mr::render

@@ -195,6 +195,22 @@ TEST_F(Bench, W3OnTheGpuBesideTheCpu) {
     expect_bad("--scenario w3 --gpu --nx 251", "--nx: must be in [4, 250] with --gpu");
 }
 
+// --gpu on W1: the field by the GPU beside ours, its samples checked against ours.
+TEST_F(Bench, W1FieldOnTheGpuBesideTheCpu) {
+    const fs::path out = dir_ / "bench.json";
+    const BenchRun r = run("--scenario w1 --gpu --balls 200 --res 32 --frames 2 --json " + out.string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    const json res = json::parse(slurp(out))["results"];
+    ASSERT_EQ(res.size(), 2u);
+    EXPECT_EQ(res[0]["scenario"], "w1 N=200 R=32");
+    EXPECT_EQ(res[1]["scenario"], "w1-gpu N=200 R=32");
+    if (res[1].contains("note") && res[1]["note"].get<std::string>().rfind("skipped", 0) == 0)
+        GTEST_SKIP() << res[1]["note"];
+    EXPECT_EQ(res[1]["stages"]["field"]["samples"].get<int>(), 2);
+    EXPECT_GT(res[1]["stages"]["field"]["median_ms"].get<double>(), 0.0);
+    EXPECT_LT(res[1]["quality"]["max_relative_difference_vs_cpu"].get<double>(), 1e-5);
+}
+
 // Scenario maps (issue 10's frame budget): the default river on each --heightmap, one
 // row each with its stages (surface on) and the river's plausibility.
 TEST_F(Bench, MapsRunTheDefaultRiverOnEachHeightmap) {

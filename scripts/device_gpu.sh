@@ -1,15 +1,16 @@
 #!/bin/bash
-# The GPU PBF step on a lent GPU machine (the workplace's `device` tool), in one short run.
+# The GPU PBF step and field on a lent GPU machine (the workplace's `device` tool), in one short run.
 #
-#   bash scripts/device_w3.sh prepare   # here: build, bundle the two programs and their
+#   bash scripts/device_gpu.sh prepare   # here: build, bundle the two programs and their
 #                                       # libraries into .devrun/, fetch glvnd's EGL into .gl/
-#   then the device tool: run `bash scripts/device_w3.sh run` with carry [".devrun", ".gl"]
+#   then the device tool: run `bash scripts/device_gpu.sh run` with carry [".devrun", ".gl"]
 #
 # `run` (on the GPU machine, which has NVIDIA's driver but none of our Debian libraries):
-# unpacks the bundle, runs the GPU twin tests (tests/render/gpu_pbf_test.cpp) on the real
+# unpacks the bundle, runs the GPU twin tests (tests/render/gpu_*_test.cpp) on the real
 # GPU, then `metariver bench --scenario w3 --gpu` at nx = 32, 46, 58, 100 (CPU rows on 2
 # threads of that host beside them) and 126, 160, 200, 250 (GPU only: 1 to 7.8 million
-# particles). Into $OUT: gpu.txt (the machine), tests.txt and w3_all.json (every bench
+# particles), and `bench --scenario w1 --gpu` (the field of the peers' metaball workload
+# on the GPU beside ours). Into $OUT: gpu.txt (the machine), tests.txt and gpu_all.json (every bench
 # JSON by file name). Both folders are in .git/info/exclude; the bundle is ~15 MB.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -47,7 +48,7 @@ run)
     mkdir -p /tmp/j
     { nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv; lscpu | grep -E 'Model name|^CPU\(s\)'; } |
         tee "$OUT/gpu.txt" || true
-    timeout 120 /tmp/devrun/render_tests --gtest_filter='GpuPbf*' > "$OUT/tests.txt" 2>&1 || true
+    timeout 120 /tmp/devrun/render_tests --gtest_filter='GpuPbf*:GpuField*' > "$OUT/tests.txt" 2>&1 || true
     grep -E 'OK|FAIL|Failure|Expected|actual|Which|Skipped' "$OUT/tests.txt" || true
     for nx in 32 46 58 100; do
         timeout 120 $B bench --scenario w3 --gpu --nx $nx --threads 2 --warmup 3 --frames 20 --json /tmp/j/w3_$nx.json || true
@@ -55,12 +56,14 @@ run)
     for nx in 126 160 200 250; do
         timeout 120 $B bench --scenario w3 --gpu --nx $nx --warmup 3 --frames 20 --json /tmp/j/w3_$nx.json || true
     done
+    # W1's field (the peers' metaball workload, five sizes) on the GPU beside ours on 2 threads.
+    timeout 120 $B bench --scenario w1 --gpu --threads 2 --json /tmp/j/w1.json || true
     python3 -c "
 import glob, json
-print(json.dumps({f: json.load(open(f)) for f in sorted(glob.glob('/tmp/j/*.json'))}))" > "$OUT/w3_all.json"
+print(json.dumps({f: json.load(open(f)) for f in sorted(glob.glob('/tmp/j/*.json'))}))" > "$OUT/gpu_all.json"
     ;;
 *)
-    echo "usage: bash scripts/device_w3.sh prepare|run" >&2
+    echo "usage: bash scripts/device_gpu.sh prepare|run" >&2
     exit 2
     ;;
 esac
