@@ -105,6 +105,7 @@ struct GpuField::Impl {
     GLuint balls = 0, sorted = 0, cell_of = 0, values = 0, ubo = 0, field_ubo = 0, query = 0;
     size_t capacity = 0;
     bool query_pending = false;
+    std::vector<float> packed;  // the balls as vec4s for the upload, kept between builds
     GLuint count_pass = 0, gather = 0, splat = 0;
 
     void reserve(size_t n) {
@@ -200,7 +201,8 @@ Status GpuField::build(std::span<const Vec3> balls) {
     Impl& m = *impl_;
     if (balls.size() > kGpuFieldMaxBalls)
         return Error{fmt::format("GPU field: {} balls, at most {}", balls.size(), kGpuFieldMaxBalls)};
-    std::vector<float> packed(balls.size() * 4, 0.0f);
+    std::vector<float>& packed = m.packed;  // no allocation once it has grown to the ball count
+    packed.assign(balls.size() * 4, 0.0f);
     for (size_t i = 0; i < balls.size(); ++i) {
         const Vec3& b = balls[i];
         if (!std::isfinite(b.x) || !std::isfinite(b.y) || !std::isfinite(b.z))
