@@ -172,7 +172,11 @@ ScenarioResult bench_w1_gpu(int n, int res, int frames) {
     ScalarGrid ours, twin;
     g.to_dense(ours);
     SparseField cpu;
-    (void)cpu.build(balls, SparseFieldDef{.kernel = kernel, .domain = DomainMode::FixedBox, .box = w1_grid(res)});
+    const SparseFieldDef twin_def{.kernel = kernel, .domain = DomainMode::FixedBox, .box = w1_grid(res)};
+    if (auto st = cpu.build(balls, twin_def); !st) {
+        r.note = "failed: the CPU twin: " + st.error().message;
+        return r;
+    }
     cpu.to_dense(twin);
     float diff = 0.0f, top = 1.0f;
     for (size_t i = 0; i < std::min(ours.values.size(), twin.values.size()); ++i) {

@@ -161,20 +161,34 @@ Result<GLuint> compute_program(const std::string& body, const char* stage, const
     return prog;
 }
 
+Status compute_programs(std::initializer_list<ProgramSource> sources, const char* stage) {
+    for (const ProgramSource& s : sources) {
+        auto prog = compute_program(s.body, stage, s.what);
+        if (!prog) return prog.error();
+        *s.prog = prog.value();
+    }
+    return Ok{};
+}
+
+namespace {
+
+void zero_fill(GLuint id) {
+    const uint32_t zero = 0;
+    glClearNamedBufferData(id, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+}
+
+}  // namespace
+
 GLuint buffer(size_t bytes, const void* data) {
     GLuint id = 0;
     glCreateBuffers(1, &id);
     glNamedBufferStorage(id, GLsizeiptr(std::max<size_t>(bytes, 16)), data, GL_DYNAMIC_STORAGE_BIT);
-    if (!data) {
-        const uint32_t zero = 0;
-        glClearNamedBufferData(id, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
-    }
+    if (!data) zero_fill(id);
     return id;
 }
 
 void clear(GLuint id) {
-    const uint32_t zero = 0;
-    glClearNamedBufferData(id, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+    zero_fill(id);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
 }
 
@@ -204,21 +218,14 @@ double query_ms(GLuint query, bool& pending) {
 
 Status Binning::create(size_t cells_, size_t items, const char* stage) {
     cells = cells_;
-    struct Src {
-        GLuint* prog;
-        const char* body;
-        const char* what;
-    };
-    const Src srcs[] = {{&scan_blocks, kScanBlocks, "scan"},
-                        {&scan_sums, kScanSums, "scan sums"},
-                        {&scan_add, kScanAdd, "scan add"},
-                        {&scatter, kScatter, "scatter"},
-                        {&cell_sort, kCellSort, "cell sort"}};
-    for (const Src& s : srcs) {
-        auto prog = compute_program(s.body, stage, s.what);
-        if (!prog) return prog.error();
-        *s.prog = prog.value();
-    }
+    if (auto st = compute_programs({{&scan_blocks, kScanBlocks, "scan"},
+                                    {&scan_sums, kScanSums, "scan sums"},
+                                    {&scan_add, kScanAdd, "scan add"},
+                                    {&scatter, kScatter, "scatter"},
+                                    {&cell_sort, kCellSort, "cell sort"}},
+                                   stage);
+        !st)
+        return st;
     count = buffer(cells * 4);
     start = buffer((cells + 1) * 4);
     sums = buffer(size_t(groups(cells, kScanBlock)) * 4);

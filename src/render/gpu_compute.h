@@ -72,6 +72,15 @@ uint cell_index(vec3 x) {
 /// A compute program from kCommon and `body`; errors name the stage and the shader and
 /// carry the driver's log on one line.
 Result<GLuint> compute_program(const std::string& body, const char* stage, const char* what);
+/// One program for compute_programs: its slot, its body (after kCommon), its name in errors.
+struct ProgramSource {
+    GLuint* prog;
+    std::string body;
+    const char* what;
+};
+/// compute_program for each source, in order, into its slot; the first failure's error
+/// (the programs made before it stay in their slots, for the caller to delete).
+Status compute_programs(std::initializer_list<ProgramSource> sources, const char* stage);
 inline uint32_t groups(size_t items, uint32_t per) { return uint32_t((items + per - 1) / per); }
 /// An immutable storage buffer of `bytes` (at least 16), filled from `data` or zeroed.
 GLuint buffer(size_t bytes, const void* data = nullptr);

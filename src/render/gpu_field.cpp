@@ -163,17 +163,13 @@ Result<std::unique_ptr<GpuField>> GpuField::create(const GpuFieldDef& def) {
 
     auto out = std::unique_ptr<GpuField>(new GpuField(std::move(m)));
     Impl& im = *out->impl_;
-    struct Src {
-        GLuint* prog;
-        const char* body;
-        const char* what;
-    };
-    for (const Src& s : {Src{&im.count_pass, kBallCells, "ball cells"}, Src{&im.gather, kBallGather, "ball gather"},
-                         Src{&im.splat, kSplat, "splat"}}) {
-        auto prog = compute_program(std::string(kFieldBlock) + s.body, "GPU field", s.what);
-        if (!prog) return prog.error();
-        *s.prog = prog.value();
-    }
+    const std::string block = kFieldBlock;
+    if (auto st = compute_programs({{&im.count_pass, block + kBallCells, "ball cells"},
+                                    {&im.gather, block + kBallGather, "ball gather"},
+                                    {&im.splat, block + kSplat, "splat"}},
+                                   "GPU field");
+        !st)
+        return st.error();
     if (auto st = im.bin.create(cells, 1024, "GPU field"); !st) return st.error();
     im.reserve(1024);
     im.values = buffer(g.samples() * 4);

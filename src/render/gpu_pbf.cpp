@@ -385,26 +385,20 @@ Result<std::unique_ptr<GpuPbf>> GpuPbf::create(const GpuPbfDef& def, std::span<c
                .sleepv = {0.0f, d.sleep_drift, 0.0f, 0.0f},
                .counts = {m->n, 1u, uint32_t(d.scorr_n), 0u}};
 
-    struct Src {
-        GLuint* prog;
-        std::string body;
-        const char* what;
-    };
-    const Src srcs[] = {{&m->predict, kPredict, "predict"},
-                        {&m->gather_motion, gather_source("vec4", "vec4", "vec4"), "gather"},
-                        {&m->gather_state, gather_source("vec4", "uint", "uint"), "gather state"},
-                        {&m->density_pass, kDensity, "density"},
-                        {&m->correction, kCorrection, "correction"},
-                        {&m->velocity, kVelocity, "velocity"},
-                        {&m->xsph, kXsph, "XSPH"},
-                        {&m->finish, kFinish, "finish"}};
     auto out = std::unique_ptr<GpuPbf>(new GpuPbf(std::move(m)));
     Impl& im = *out->impl_;
-    for (const Src& s : srcs) {
-        auto prog = compute_program(s.body, "GPU PBF", s.what);
-        if (!prog) return prog.error();  // the destructor deletes what was made
-        *s.prog = prog.value();
-    }
+    // On a failure the destructor deletes what was made.
+    if (auto st = compute_programs({{&im.predict, kPredict, "predict"},
+                                    {&im.gather_motion, gather_source("vec4", "vec4", "vec4"), "gather"},
+                                    {&im.gather_state, gather_source("vec4", "uint", "uint"), "gather state"},
+                                    {&im.density_pass, kDensity, "density"},
+                                    {&im.correction, kCorrection, "correction"},
+                                    {&im.velocity, kVelocity, "velocity"},
+                                    {&im.xsph, kXsph, "XSPH"},
+                                    {&im.finish, kFinish, "finish"}},
+                                   "GPU PBF");
+        !st)
+        return st.error();
     const size_t n = im.n;
     std::vector<float> packed(n * 4, 0.0f);
     for (size_t i = 0; i < n; ++i) {
