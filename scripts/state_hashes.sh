@@ -22,9 +22,10 @@ row() {  # name frames args...
 row default 600
 row springs-valley 300 --preset springs-valley
 row paper-bowl 300 --preset paper-bowl
-row paper-engine 300 --preset paper-engine
 [ -f "$maps/metawater/strict17.png" ] && row paper-full 300 --preset paper-full --heightmap "$maps/metawater/strict17.png"
 [ -f "$maps/metawater/nile.png" ] && row paper-nile 300 --preset paper-nile --heightmap "$maps/metawater/nile.png"
+[ -f "$maps/metawater/strict17.png" ] && row paper-engine 300 --preset paper-engine --heightmap "$maps/metawater/strict17.png"
+[ -f "$maps/metawater/nile.png" ] && row paper-nile-engine 300 --preset paper-nile-engine --heightmap "$maps/metawater/nile.png"
 for dem in alps pyrenees andes_peru; do
   for d in "$here/assets/heightmaps/real" "$maps/real"; do
     if [ -f "$d/$dem.png" ]; then row "default-$dem" 300 --heightmap "$d/$dem.png"; break; fi
