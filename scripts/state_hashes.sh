@@ -16,7 +16,7 @@ row() {  # name frames args...
   local name="$1" frames="$2"; shift 2
   "$bin" run "$@" --frames "$frames" --stats "$tmp/s.json" --no-progress >/dev/null 2>"$tmp/err" ||
     { echo "$name FAILED: $(tail -1 "$tmp/err")"; return; }
-  python3 -c 'import json,sys; s=json.load(open(sys.argv[1])); print(sys.argv[2], s["state_hash"], s["particles_active"])' \
+  python3 -c 'import json,sys; s=json.load(open(sys.argv[1])); print(sys.argv[2], s["state_hash"], s["particles_active"], s["triangles"], s["vertices"])' \
     "$tmp/s.json" "$name"
 }
 row default 600
