@@ -9,7 +9,7 @@
 //
 // Each stroke raises (and the next lowers) 1 cm with a 4 m brush at the middle of the
 // terrain (so its heights change but the river does not notice); wall clock.
-#include <metariver/emitters.h>
+#include <metariver/drainage.h>
 #include <metariver/scene.h>
 
 #include <benchmark/benchmark.h>

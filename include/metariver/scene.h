@@ -5,6 +5,7 @@
 
 #include <metariver/bullet_solver.h>
 #include <metariver/core.h>
+#include <metariver/drainage.h>
 #include <metariver/field.h>
 #include <metariver/foam.h>
 #include <metariver/sparse_field.h>
