@@ -6,7 +6,7 @@
 #   then the device tool: run `bash scripts/device_gpu.sh run` with carry [".devrun", ".gl"]
 #
 # `run` (on the GPU machine, which has NVIDIA's driver but none of our Debian libraries):
-# unpacks the bundle, runs the GPU twin tests (tests/render/gpu_*_test.cpp) on the real
+# unpacks the bundle, runs the GPU twin tests (tests/gpu/, gpu_tests) on the real
 # GPU, then `metariver bench --scenario w3 --gpu` at nx = 32, 46, 58, 100 (CPU rows on 2
 # threads of that host beside them) and 126, 160, 200, 250 (GPU only: 1 to 7.8 million
 # particles), and `bench --scenario w1 --gpu` (the field of the peers' metaball workload
@@ -17,18 +17,18 @@ cd "$(dirname "$0")/.."
 
 case "${1:-}" in
 prepare)
-    cmake --build --preset default --target metariver render_tests
+    cmake --build --preset default --target metariver gpu_tests
     grep -qx '/.devrun/' .git/info/exclude || echo /.devrun/ >> .git/info/exclude
     grep -qx '/.gl/' .git/info/exclude || echo /.gl/ >> .git/info/exclude
     stage=$(mktemp -d)
     mkdir -p "$stage/devrun/lib" .devrun .gl
     # Every shared library both programs load, but glibc's and the C++ runtime (the GPU
     # machine's are newer, and NVIDIA's driver may need them).
-    { ldd build/default/apps/metariver; ldd build/default/tests/render_tests; } | awk '$3 ~ /^\// {print $3}' | sort -u |
+    { ldd build/default/apps/metariver; ldd build/default/tests/gpu_tests; } | awk '$3 ~ /^\// {print $3}' | sort -u |
         grep -v -E '/(libc|libm|libdl|libpthread|librt|libstdc\+\+|libgcc_s)\.so|ld-linux' |
         xargs -I{} cp -L {} "$stage/devrun/lib/"
     strip -o "$stage/devrun/metariver" build/default/apps/metariver
-    strip -o "$stage/devrun/render_tests" build/default/tests/render_tests
+    strip -o "$stage/devrun/gpu_tests" build/default/tests/gpu_tests
     tar czf .devrun/bundle.tgz -C "$stage" devrun
     rm -rf "$stage"
     o='-oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists=/tmp/amd64'
@@ -48,7 +48,7 @@ run)
     mkdir -p /tmp/j
     { nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv; lscpu | grep -E 'Model name|^CPU\(s\)'; } |
         tee "$OUT/gpu.txt" || true
-    timeout 120 /tmp/devrun/render_tests --gtest_filter='GpuPbf*:GpuField*' > "$OUT/tests.txt" 2>&1 || true
+    timeout 120 /tmp/devrun/gpu_tests > "$OUT/tests.txt" 2>&1 || true
     grep -E 'OK|FAIL|Failure|Expected|actual|Which|Skipped' "$OUT/tests.txt" || true
     for nx in 32 46 58 100; do
         timeout 120 $B bench --scenario w3 --gpu --nx $nx --threads 2 --warmup 3 --frames 20 --json /tmp/j/w3_$nx.json || true

@@ -2,9 +2,9 @@
 #include "bench_scenarios.h"
 
 #include <metariver/export.h>
+#include <metariver/gl_context.h>
 #include <metariver/gpu_field.h>
 #include <metariver/gpu_pbf.h>
-#include <metariver/render.h>
 #include <metariver/io.h>
 #include <metariver/sparse_field.h>
 #include <metariver/surface.h>
@@ -144,19 +144,19 @@ ScenarioResult bench_w1(int n, int res, int frames) {
 ScenarioResult bench_w1_gpu(int n, int res, int frames) {
     ScenarioResult r;
     r.name = fmt::format("w1-gpu N={} R={}", n, res);
-    auto ctx = render::HeadlessContext::create();
+    auto ctx = gl::HeadlessContext::create();
     if (!ctx) {
         r.note = "skipped: " + ctx.error().message;
         return r;
     }
     const std::vector<Vec3> balls = w1_balls(n);
     const KernelDef kernel = w1_kernel_for(n);
-    auto gpu = render::GpuField::create({.kernel = kernel, .grid = w1_grid(res)});
+    auto gpu = gpu::GpuField::create({.kernel = kernel, .grid = w1_grid(res)});
     if (!gpu) {
         r.note = "skipped: " + gpu.error().message;
         return r;
     }
-    render::GpuField& g = *gpu.value();
+    gpu::GpuField& g = *gpu.value();
     for (int f = -2; f < frames; ++f) {  // two warm-up frames, as bench_w1
         const auto t0 = Clock::now();
         if (auto st = g.build(balls); !st) {
@@ -305,23 +305,23 @@ ScenarioResult bench_w3(int nx, int warmup, int steps) {
 ScenarioResult bench_w3_gpu(int nx, int warmup, int steps) {
     ScenarioResult r;
     r.name = fmt::format("w3-gpu nx={}", nx);
-    auto ctx = render::HeadlessContext::create();
+    auto ctx = gl::HeadlessContext::create();
     if (!ctx) {
         r.note = "skipped: " + ctx.error().message;
         return r;
     }
     constexpr float d = kW3Spacing;
     const std::vector<Vec3> block = w3_block(nx, Vec3(0.0f));
-    render::GpuPbfDef def{.pbf = PbfDef{.spacing = d, .kernel_radius = 2.0f * d, .iterations = 3}, .gravity = 0.0f};
+    gpu::GpuPbfDef def{.pbf = PbfDef{.spacing = d, .kernel_radius = 2.0f * d, .iterations = 3}, .gravity = 0.0f};
     const float pad = 2.0f * def.pbf.kernel_radius;
     def.domain_min = Vec3(-pad);
     def.domain_max = Vec3(float(nx) * d, float(nx / 2) * d, float(nx) * d) + Vec3(pad);
-    auto gpu = render::GpuPbf::create(def, block);
+    auto gpu = gpu::GpuPbf::create(def, block);
     if (!gpu) {
         r.note = "skipped: " + gpu.error().message;
         return r;
     }
-    render::GpuPbf& g = *gpu.value();
+    gpu::GpuPbf& g = *gpu.value();
     const float dt = 1.0f / 120.0f;
     float density_max = 0.0f;
     for (int s = -warmup; s < steps; ++s) {
@@ -339,7 +339,7 @@ ScenarioResult bench_w3_gpu(int nx, int warmup, int steps) {
     r.params = {{"nx", nx},       {"spacing", d},     {"kernel_radius", 2.0 * d}, {"iterations", def.pbf.iterations},
                 {"gravity", 0.0}, {"dt", dt},         {"warmup", warmup},         {"steps", steps},
                 {"particles", g.size()}, {"device", g.device()}};
-    const render::GpuPbfCounters c = g.counters();
+    const gpu::GpuPbfCounters c = g.counters();
     r.quality = {{"density_error_max", density_max}, {"max_speed", c.max_speed}, {"asleep", c.asleep}};
     return r;
 }

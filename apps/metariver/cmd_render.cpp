@@ -10,6 +10,7 @@
 
 #include <metariver/export.h>
 #include <metariver/checkpoints.h>
+#include <metariver/gl_context.h>
 #include <metariver/io.h>
 #include <metariver/render.h>
 
@@ -194,7 +195,7 @@ int render(const RenderOptions& o) {
     if (!sim_result) return fail(kExitBadInput, sim_result.error().message);
     std::unique_ptr<Simulation> sim = std::move(sim_result.value());
 
-    auto context = render::HeadlessContext::create();
+    auto context = gl::HeadlessContext::create();
     if (!context) return fail(kExitFailure, context.error().message);
     auto renderer_result = render::Renderer::create();
     if (!renderer_result) return fail(kExitFailure, renderer_result.error().message);

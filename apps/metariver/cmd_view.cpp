@@ -7,6 +7,7 @@
 #include "export_options.h"
 #include "viewer.h"
 
+#include <metariver/gl_context.h>
 #include <metariver/io.h>
 #include <metariver/render.h>
 
@@ -174,7 +175,7 @@ int view(const ViewOptions& o) {
     ImGui_ImplOpenGL3_Shutdown();
     ImGui_ImplGlfw_Shutdown();
     ImGui::DestroyContext();
-    render::keep_loaded_libraries_under_asan();  // LeakSanitizer names Mesa's libraries at exit
+    gl::keep_loaded_libraries_under_asan();  // LeakSanitizer names Mesa's libraries at exit
     glfwDestroyWindow(window);
     glfwTerminate();
     return code;

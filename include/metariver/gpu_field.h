@@ -1,9 +1,9 @@
-// The compact-kernel field on the GPU: OpenGL 4.5 compute shaders (src/render/gpu_field.cpp)
+// The compact-kernel field on the GPU: OpenGL 4.5 compute shaders (src/gpu/gpu_field.cpp)
 // that fill a dense sample grid with the sum of every ball's kernel (poly6 or W1, as
 // SparseField). The balls are binned by the GPU PBF step's counting sort into cells of
 // the kernel radius (or larger, to keep the cell count bounded) over the grid's box; each
 // sample sums the balls of the 27 cells around it. SparseField (sparse_field.h) is its
-// twin (tests/render/gpu_field_test.cpp): the same samples to float rounding.
+// twin (tests/gpu/gpu_field_test.cpp): the same samples to float rounding.
 #pragma once
 
 #include <metariver/core.h>
@@ -14,7 +14,7 @@
 #include <span>
 #include <string>
 
-namespace mr::render {
+namespace mr::gpu {
 
 struct GpuFieldDef {
     KernelDef kernel;  ///< poly6 or W1 (validate() in sparse_field.h)
@@ -51,4 +51,4 @@ private:
     std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace mr::render
+}  // namespace mr::gpu

@@ -1,11 +1,11 @@
-// The PBF step on the GPU: OpenGL 4.5 compute shaders (src/render/gpu_pbf.cpp), the
+// The PBF step on the GPU: OpenGL 4.5 compute shaders (src/gpu/gpu_pbf.cpp), the
 // CPU solver's step (PbfSolver::step, pbf.cpp) without the terrain, for blocks of fluid
 // in free space: W3 of ../shared/peers/pbf_anchor and the brief's "millions on a GPU".
 // Each step: predict, bin by a counting sort into a dense grid of kernel-radius cells
 // (every array reordered by cell, each cell's particles kept in their previous order, so
 // the step is deterministic), `iterations` density / correction passes over the 27 cells
 // (as the CPU's 27-cell twin), velocities, XSPH, slow-water damping and sleeping. The
-// CPU solver is its twin (tests/render/gpu_pbf_test.cpp); it runs on llvmpipe in CI and
+// CPU solver is its twin (tests/gpu/gpu_pbf_test.cpp); it runs on llvmpipe in CI and
 // is timed on a real GPU when one is lent (`metariver bench --scenario w3 --gpu`).
 #pragma once
 
@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-namespace mr::render {
+namespace mr::gpu {
 
 struct GpuPbfDef {
     /// The CPU solver's parameters. Not on the GPU (create() refuses them, naming the
@@ -40,7 +40,7 @@ struct GpuPbfCounters {
     uint32_t asleep = 0;             ///< particles asleep after the last step
 };
 
-/// Needs a current OpenGL 4.5 core context (HeadlessContext or a window's) for its whole
+/// Needs a current OpenGL 4.5 core context (gl::HeadlessContext or a window's) for its whole
 /// life; every call enqueues work and returns, except the read-backs.
 class GpuPbf {
 public:
@@ -69,4 +69,4 @@ private:
     std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace mr::render
+}  // namespace mr::gpu

@@ -1,5 +1,6 @@
-// metariver render: the OpenGL 4.5 renderer (terrain, water surface, sky, debug views),
-// the orbit camera and its picking ray, a headless EGL context, and PNG writing.
+// metariver render: the OpenGL 4.5 renderer (terrain, water surface, sky, debug views)
+// and the orbit camera and its picking ray. A context to render in: a window's, or the
+// headless one of gl_context.h.
 //
 // This header carries no OpenGL type: the renderer keeps its GL objects behind a
 // pointer, so apps and tests include it without the GL headers. The renderer reads
@@ -16,7 +17,6 @@
 #pragma once
 
 #include <metariver/core.h>
-#include <metariver/io.h>
 #include <metariver/scene_view.h>
 
 #include <cstdint>
@@ -140,8 +140,8 @@ void surface_velocities(std::span<const Vec3> vertices, const Particles& particl
 void surface_velocities_brute(std::span<const Vec3> vertices, const Particles& particles, float radius,
                               std::vector<Vec3>& out);
 
-/// The OpenGL renderer. Needs a current OpenGL 4.5 core context (a window's, or the
-/// HeadlessContext's) for its whole life; all GL objects are created by create() and
+/// The OpenGL renderer. Needs a current OpenGL 4.5 core context (a window's, or
+/// gl::HeadlessContext's) for its whole life; all GL objects are created by create() and
 /// set_scene() and reused: draw() and update() create none (dynamic buffers grow by
 /// 1.5x and are orphaned with glBufferData before each refill).
 class Renderer {
@@ -191,34 +191,6 @@ private:
     struct Impl;
     explicit Renderer(std::unique_ptr<Impl> impl);
     std::unique_ptr<Impl> impl_;
-};
-
-/// AddressSanitizer builds only (a no-op otherwise): keeps every library loaded now
-/// mapped until the process exits. Call before tearing down an OpenGL context: Mesa
-/// unloads its driver then, and LeakSanitizer, which runs at exit, could no longer name
-/// the module of what the driver still held ("<unknown module>"), so the suppressions
-/// of tests/sanitizers/lsan.supp, which name Mesa's libraries, did not match.
-void keep_loaded_libraries_under_asan();
-
-/// An OpenGL 4.5 core context without a window or display: EGL on Mesa's surfaceless
-/// platform (EGL_PLATFORM_SURFACELESS_MESA, EGL_NO_CONFIG_KHR, no surface), or where EGL
-/// has no such platform (NVIDIA's) the first EGL device that initializes
-/// (EGL_PLATFORM_DEVICE_EXT; METARIVER_EGL_PLATFORM=device picks it on Mesa too). Current
-/// on the creating thread until destroyed. Sets XDG_RUNTIME_DIR to /tmp when unset (Mesa
-/// warns otherwise).
-class HeadlessContext {
-public:
-    /// Fails (one line, no abort) when libEGL, a headless platform or a 4.5 core context
-    /// is not available.
-    static Result<std::unique_ptr<HeadlessContext>> create();
-    ~HeadlessContext();
-    HeadlessContext(const HeadlessContext&) = delete;
-    HeadlessContext& operator=(const HeadlessContext&) = delete;
-
-private:
-    HeadlessContext() = default;
-    void* display_ = nullptr;
-    void* context_ = nullptr;
 };
 
 }  // namespace mr::render

@@ -15,6 +15,7 @@
 
 #include "flow_texture.h"
 #include "gl_objects.h"
+#include "gl_shader.h"
 #include "terrain_geometry.h"
 #include "shaders.h"
 
@@ -513,9 +514,7 @@ void Renderer::read_rgb(std::vector<uint8_t>& out) {
 const RenderStats& Renderer::stats() const { return impl_->stats; }
 
 std::string Renderer::gl_description() const {
-    const auto* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
-    const auto* version = reinterpret_cast<const char*>(glGetString(GL_VERSION));
-    return fmt::format("{} / {}", renderer ? renderer : "?", version ? version : "?");
+    return gl::gl_string(GL_RENDERER) + " / " + gl::gl_string(GL_VERSION);
 }
 
 }  // namespace mr::render

@@ -3,7 +3,8 @@
 // unwritable --out, a missing ffmpeg fail with one line and exit code 2, writing nothing;
 // `view` without a display says so and points to `render`. Rendering tests skip when no
 // headless OpenGL can be created (a machine without Mesa).
-#include <metariver/render.h>
+#include <metariver/gl_context.h>
+#include <metariver/io.h>
 
 #include <gtest/gtest.h>
 #include "cli_fixture.h"
@@ -27,7 +28,7 @@ bool headless_gl_available(std::string& why) {
     static int state = -1;
     static std::string reason;
     if (state < 0) {
-        auto ctx = mr::render::HeadlessContext::create();
+        auto ctx = mr::gl::HeadlessContext::create();
         state = ctx.ok() ? 1 : 0;
         if (!ctx.ok()) reason = ctx.error().message;
     }

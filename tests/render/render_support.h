@@ -1,7 +1,8 @@
-// Shared by the render test files: one headless OpenGL context for the whole test
-// program (REQUIRE_GL skips a test, with the reason, where none can be made), the small
-// deterministic valley scene, and an image comparison.
+// Shared by the render test files: the headless OpenGL context (gl_test_context.h), the
+// small deterministic valley scene, and an image comparison.
 #pragma once
+
+#include "gl_test_context.h"
 
 #include <metariver/render.h>
 #include <metariver/scene.h>
@@ -13,35 +14,6 @@
 #include <memory>
 #include <string>
 #include <vector>
-
-namespace mr::test {
-
-/// One context for the whole test program (creating one costs ~50 ms on llvmpipe).
-inline render::HeadlessContext* context() {
-    static std::unique_ptr<render::HeadlessContext> ctx;
-    static std::string error;
-    static bool tried = false;
-    if (!tried) {
-        tried = true;
-        auto r = render::HeadlessContext::create();
-        if (r) ctx = std::move(r.value());
-        else error = r.error().message;
-    }
-    return ctx.get();
-}
-
-inline std::string context_error() {
-    auto r = render::HeadlessContext::create();
-    return r ? std::string() : r.error().message;
-}
-
-}  // namespace mr::test
-
-#define REQUIRE_GL()                                                                                   \
-    do {                                                                                                \
-        if (!::mr::test::context())                                                                     \
-            GTEST_SKIP() << "no headless OpenGL 4.5 (EGL surfaceless): " << ::mr::test::context_error(); \
-    } while (0)
 
 namespace mr::test {
 

@@ -5,6 +5,7 @@
 //
 // Golden images live in tests/render/golden/. To re-record them after an intended
 // change of the look: METARIVER_UPDATE_GOLDEN=1 ctest -R Golden (then look at them).
+#include <metariver/io.h>
 #include <metariver/render.h>
 
 #include "bowl_drop.h"

@@ -1,6 +1,7 @@
 // Sculpting under the running water, drawn (issue 14): a raised hill shows and undo
 // draws the same image; the incremental terrain upload draws what a whole one draws; a
 // dam across the default river dries its channel and the water finds another way.
+#include <metariver/io.h>
 #include <metariver/render.h>
 
 #include "long_scale.h"

@@ -1,7 +1,7 @@
 // The GPU PBF step (gpu_pbf.h) against its twin, the CPU PbfSolver with the terrain's
 // collision off: the same block, the same parameters, the same steps. On llvmpipe here;
 // the same test runs on a real GPU wherever the headless context finds one.
-#include "render_support.h"
+#include "gl_test_context.h"
 
 #include "pbf_probe.h"
 
@@ -62,15 +62,15 @@ Frames cpu_run(const std::vector<Vec3>& start, const PbfDef& pbf, float gravity,
     return r;
 }
 
-render::GpuPbfDef gpu_def(const PbfDef& pbf, float gravity) {
+gpu::GpuPbfDef gpu_def(const PbfDef& pbf, float gravity) {
     // A box of 16 x 16 x 16 cells around the block: four scan work groups of 1024 cells.
-    return render::GpuPbfDef{.pbf = pbf, .gravity = gravity, .domain_min = Vec3(13.2f, 0.0f, 13.2f),
+    return gpu::GpuPbfDef{.pbf = pbf, .gravity = gravity, .domain_min = Vec3(13.2f, 0.0f, 13.2f),
                              .domain_max = Vec3(16.2f, 3.0f, 16.2f)};
 }
 
 Frames gpu_run(const std::vector<Vec3>& start, const PbfDef& pbf, float gravity, int steps, float dt,
-            render::GpuPbfCounters* counters = nullptr) {
-    auto g = render::GpuPbf::create(gpu_def(pbf, gravity), start);
+            gpu::GpuPbfCounters* counters = nullptr) {
+    auto g = gpu::GpuPbf::create(gpu_def(pbf, gravity), start);
     EXPECT_TRUE(g.ok()) << (g.ok() ? "" : g.error().message);
     if (!g) return {};
     for (int s = 0; s < steps; ++s) g.value()->step(dt);
@@ -140,7 +140,7 @@ TEST(GpuPbf, MatchesTheCpuStepOnTheW3BlockAsItFallsAsleep) {
     const std::vector<Vec3> start = block(10, 1.0f);
     const float dt = 1.0f / 120.0f;
     const int steps = 30;
-    render::GpuPbfCounters c;
+    gpu::GpuPbfCounters c;
     const Frames cpu = cpu_run(start, w3_def(), 0.0f, steps, dt);
     const Frames gpu = gpu_run(start, w3_def(), 0.0f, steps, dt, &c);
     const Match m = match(gpu, cpu);
@@ -160,7 +160,7 @@ TEST(GpuPbf, IsDeterministicAndItsCountersMove) {
         ASSERT_EQ(a.x[i], b.x[i]) << "particle " << i;
         ASSERT_EQ(a.v[i], b.v[i]) << "particle " << i;
     }
-    render::GpuPbfCounters c;
+    gpu::GpuPbfCounters c;
     gpu_run(start, w3_def(), 9.82f, 1, 1.0f / 120.0f, &c);
     EXPECT_GT(c.density_error_max, 0.05f) << "a squeezed block is over-dense";
     EXPECT_GT(c.max_speed, 0.5f);
@@ -172,9 +172,9 @@ TEST(GpuPbf, ParticlesOutsideTheGridAreStillNeighbours) {
     // The same squeezed block with a grid box that ends inside it: the particles beyond
     // are binned in the border cells and still find each other (the twin agrees).
     const std::vector<Vec3> start = block(8, 0.8f);
-    render::GpuPbfDef def = gpu_def(w3_def(), 0.0f);
+    gpu::GpuPbfDef def = gpu_def(w3_def(), 0.0f);
     def.domain_max = Vec3(14.3f, 1.1f, 14.3f);
-    auto g = render::GpuPbf::create(def, start);
+    auto g = gpu::GpuPbf::create(def, start);
     ASSERT_TRUE(g.ok()) << g.error().message;
     for (int s = 0; s < 5; ++s) g.value()->step(1.0f / 120.0f);
     const Frames gpu{g.value()->positions(), g.value()->velocities()};
@@ -187,12 +187,12 @@ TEST(GpuPbf, ParticlesOutsideTheGridAreStillNeighbours) {
 TEST(GpuPbf, RefusesWhatItCannotRunNamingTheField) {
     // Checked before any OpenGL call: no context needed.
     const std::vector<Vec3> start = block(4, 1.0f);
-    const auto refuses = [&](render::GpuPbfDef def, const char* field) {
-        auto g = render::GpuPbf::create(def, start);
+    const auto refuses = [&](gpu::GpuPbfDef def, const char* field) {
+        auto g = gpu::GpuPbf::create(def, start);
         ASSERT_FALSE(g.ok());
         EXPECT_NE(g.error().message.find(field), std::string::npos) << g.error().message;
     };
-    render::GpuPbfDef d = gpu_def(w3_def(), 9.82f);
+    gpu::GpuPbfDef d = gpu_def(w3_def(), 9.82f);
     d.pbf.vorticity = 0.1f;
     refuses(d, "pbf.vorticity");
     d = gpu_def(w3_def(), 9.82f);
@@ -211,7 +211,7 @@ TEST(GpuPbf, RefusesWhatItCannotRunNamingTheField) {
     refuses(d, "gravity");
     std::vector<Vec3> bad = start;
     bad[3].y = std::numeric_limits<float>::quiet_NaN();
-    auto g = render::GpuPbf::create(gpu_def(w3_def(), 9.82f), bad);
+    auto g = gpu::GpuPbf::create(gpu_def(w3_def(), 9.82f), bad);
     ASSERT_FALSE(g.ok());
     EXPECT_NE(g.error().message.find("not finite"), std::string::npos);
 }

@@ -37,9 +37,7 @@
 #include <string>
 #include <utility>
 
-namespace mr::render {
-
-using namespace gpu;
+namespace mr::gpu {
 
 namespace {
 
@@ -458,4 +456,4 @@ size_t GpuPbf::size() const { return impl_->n; }
 
 std::string GpuPbf::device() const { return device_string(); }
 
-}  // namespace mr::render
+}  // namespace mr::gpu

@@ -1,11 +1,13 @@
 // The GPU compute stages' shared parts (gpu_compute.h).
 #include "gpu_compute.h"
 
+#include "gl_shader.h"
+
 #include <fmt/format.h>
 
 #include <algorithm>
 
-namespace mr::render::gpu {
+namespace mr::gpu {
 
 namespace {
 
@@ -129,36 +131,11 @@ void main() {
 }  // namespace
 
 Result<GLuint> compute_program(const std::string& body, const char* stage, const char* what) {
-    const GLuint sh = glCreateShader(GL_COMPUTE_SHADER);
-    const char* src[] = {kCommon, body.c_str()};
-    glShaderSource(sh, 2, src, nullptr);
-    glCompileShader(sh);
-    const auto log_of = [](GLuint obj, bool program) {
-        GLint len = 0;
-        program ? glGetProgramiv(obj, GL_INFO_LOG_LENGTH, &len) : glGetShaderiv(obj, GL_INFO_LOG_LENGTH, &len);
-        std::string log(size_t(std::max(len, 1)), '\0');
-        program ? glGetProgramInfoLog(obj, len, nullptr, log.data()) : glGetShaderInfoLog(obj, len, nullptr, log.data());
-        std::replace(log.begin(), log.end(), '\n', ' ');
-        return log;
-    };
-    GLint ok = 0;
-    glGetShaderiv(sh, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        std::string log = log_of(sh, false);
-        glDeleteShader(sh);
-        return Error{fmt::format("{}: the {} shader does not compile: {}", stage, what, log)};
-    }
-    const GLuint prog = glCreateProgram();
-    glAttachShader(prog, sh);
-    glLinkProgram(prog);
-    glDeleteShader(sh);
-    glGetProgramiv(prog, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        std::string log = log_of(prog, true);
-        glDeleteProgram(prog);
-        return Error{fmt::format("{}: the {} shader does not link: {}", stage, what, log)};
-    }
-    return prog;
+    auto sh = gl::compile_shader(GL_COMPUTE_SHADER, {kCommon, body.c_str()});
+    if (!sh) return Error{fmt::format("{}: the {} shader does not compile: {}", stage, what, sh.error().message)};
+    auto prog = gl::link_program({sh.value()});
+    if (!prog) return Error{fmt::format("{}: the {} shader does not link: {}", stage, what, prog.error().message)};
+    return prog.value();
 }
 
 Status compute_programs(std::initializer_list<ProgramSource> sources, const char* stage) {
@@ -200,13 +177,7 @@ void run(GLuint prog, std::initializer_list<GLuint> buffers, uint32_t groups) {
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
 }
 
-std::string device_string() {
-    const auto str = [](GLenum e) {
-        const auto* s = reinterpret_cast<const char*>(glGetString(e));
-        return std::string(s ? s : "?");
-    };
-    return str(GL_RENDERER) + ", OpenGL " + str(GL_VERSION);
-}
+std::string device_string() { return gl::gl_string(GL_RENDERER) + ", OpenGL " + gl::gl_string(GL_VERSION); }
 
 double query_ms(GLuint query, bool& pending) {
     if (!pending) return 0.0;
@@ -257,4 +228,4 @@ void Binning::destroy() {
         if (*p) glDeleteProgram(*p), *p = 0;
 }
 
-}  // namespace mr::render::gpu
+}  // namespace mr::gpu

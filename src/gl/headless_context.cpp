@@ -5,7 +5,7 @@
 // <EGL/egl.h> (the two declare khronos_boolean_enum_t twice). libepoxy aborts the
 // process when libEGL cannot be loaded, so its presence is checked with dlopen first:
 // a machine without Mesa gets an error value, not a crash.
-#include <metariver/render.h>
+#include <metariver/gl_context.h>
 
 #include <epoxy/egl.h>
 #include <fmt/format.h>
@@ -25,7 +25,7 @@
 #endif
 #endif
 
-namespace mr::render {
+namespace mr::gl {
 
 namespace {
 
@@ -150,4 +150,4 @@ HeadlessContext::~HeadlessContext() {
     eglTerminate(display_);
 }
 
-}  // namespace mr::render
+}  // namespace mr::gl

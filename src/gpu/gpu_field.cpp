@@ -21,9 +21,7 @@
 #include <cmath>
 #include <vector>
 
-namespace mr::render {
-
-using namespace gpu;
+namespace mr::gpu {
 
 namespace {
 
@@ -245,4 +243,4 @@ const SampleGrid& GpuField::grid() const { return impl_->def.grid; }
 
 std::string GpuField::device() const { return device_string(); }
 
-}  // namespace mr::render
+}  // namespace mr::gpu

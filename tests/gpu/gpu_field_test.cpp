@@ -1,7 +1,7 @@
 // The GPU field (gpu_field.h) against its twin, SparseField on the same fixed box: the
 // same samples to float rounding, for both compact kernels, with balls outside the box,
 // after the ball count grows and shrinks, and with no balls.
-#include "render_support.h"
+#include "gl_test_context.h"
 
 #include <metariver/gpu_field.h>
 #include <metariver/sparse_field.h>
@@ -56,7 +56,7 @@ SampleGrid box_grid() { return SampleGrid{.origin = Vec3(0.0f), .spacing = 0.1f,
 TEST(GpuField, Poly6MatchesTheSparseFieldWithBallsInAndAroundTheBox) {
     REQUIRE_GL();
     const KernelDef k = poly6_kernel(0.45f, 1.0f);
-    auto gpu = render::GpuField::create({.kernel = k, .grid = box_grid()});
+    auto gpu = gpu::GpuField::create({.kernel = k, .grid = box_grid()});
     ASSERT_TRUE(gpu.ok()) << gpu.error().message;
     // Grow, shrink and grow again: the buffers grow to the largest frame; each build is
     // its own balls' field.
@@ -76,7 +76,7 @@ TEST(GpuField, W1MatchesTheSparseFieldOnThePeersWorkload) {
     const int n = 400, res = 48;
     const std::vector<Vec3> balls = w1_balls(n);
     const KernelDef k = w1_kernel_for(n);
-    auto gpu = render::GpuField::create({.kernel = k, .grid = w1_grid(res)});
+    auto gpu = gpu::GpuField::create({.kernel = k, .grid = w1_grid(res)});
     ASSERT_TRUE(gpu.ok()) << gpu.error().message;
     ASSERT_TRUE(gpu.value()->build(balls).ok());
     ScalarGrid g;
@@ -90,7 +90,7 @@ TEST(GpuField, W1MatchesTheSparseFieldOnThePeersWorkload) {
 
 TEST(GpuField, NoBallsIsAnEmptyFieldAndTheLastBuildIsTimed) {
     REQUIRE_GL();
-    auto gpu = render::GpuField::create({.kernel = poly6_kernel(0.45f, 1.0f), .grid = box_grid()});
+    auto gpu = gpu::GpuField::create({.kernel = poly6_kernel(0.45f, 1.0f), .grid = box_grid()});
     ASSERT_TRUE(gpu.ok());
     ASSERT_TRUE(gpu.value()->build(scattered_balls(100, 3)).ok());
     ASSERT_TRUE(gpu.value()->build({}).ok());
@@ -103,8 +103,8 @@ TEST(GpuField, NoBallsIsAnEmptyFieldAndTheLastBuildIsTimed) {
 
 TEST(GpuField, RefusesWhatItCannotRunNamingTheField) {
     // Checked before any OpenGL call: no context needed.
-    const auto refuses = [](render::GpuFieldDef def, const char* what) {
-        auto g = render::GpuField::create(def);
+    const auto refuses = [](gpu::GpuFieldDef def, const char* what) {
+        auto g = gpu::GpuField::create(def);
         ASSERT_FALSE(g.ok());
         EXPECT_NE(g.error().message.find(what), std::string::npos) << g.error().message;
     };
@@ -123,7 +123,7 @@ TEST(GpuField, RefusesWhatItCannotRunNamingTheField) {
 
 TEST(GpuField, ANonFiniteBallIsRefusedAndTheFieldKept) {
     REQUIRE_GL();
-    auto gpu = render::GpuField::create({.kernel = poly6_kernel(0.45f, 1.0f), .grid = box_grid()});
+    auto gpu = gpu::GpuField::create({.kernel = poly6_kernel(0.45f, 1.0f), .grid = box_grid()});
     ASSERT_TRUE(gpu.ok());
     std::vector<Vec3> balls = scattered_balls(200, 5);
     ASSERT_TRUE(gpu.value()->build(balls).ok());

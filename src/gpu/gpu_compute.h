@@ -1,5 +1,5 @@
 // The GPU compute stages' shared parts (gpu_pbf.cpp, gpu_field.cpp; private to
-// mr_render): the std140 parameter block every shader sees at uniform binding 0 (the
+// mr_gpu): the std140 parameter block every shader sees at uniform binding 0 (the
 // binning grid and the counts, then each stage's own constants), the common GLSL (the
 // kernels, the cell of a point, the 27-cell walk), the counting sort that bins items
 // into the grid's cells, and the small helpers every pass uses.
@@ -13,7 +13,7 @@
 #include <initializer_list>
 #include <string>
 
-namespace mr::render::gpu {
+namespace mr::gpu {
 
 inline constexpr uint32_t kGroup = 128;       // item and cell passes
 inline constexpr uint32_t kScanBlock = 1024;  // cells per scan work group (512 threads, 2 each)
@@ -112,4 +112,4 @@ struct Binning {
     void destroy();
 };
 
-}  // namespace mr::render::gpu
+}  // namespace mr::gpu
