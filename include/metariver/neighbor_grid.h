@@ -145,6 +145,14 @@ public:
 
 private:
     static constexpr uint32_t kNoBlock = 0xFFFFFFFFu;
+    // build()'s stages, in order: the layout for the binned box (returns its dense cell
+    // count), each binned particle's cell key, the buckets counted, the counting sort into
+    // order_ (each hash bucket then sorted by key), the sorted positions and cell runs.
+    double choose_layout(const Aabb& box, size_t binned);
+    void cell_keys(std::span<const Vec3> positions, std::span<const uint8_t> active);
+    void count_buckets(std::span<const uint8_t> active, double dense_cells, size_t binned);
+    void sort_by_bucket(std::span<const uint8_t> active, size_t binned);
+    void record_runs(std::span<const Vec3> positions, size_t binned);
 
     /// Dense or blocked: the non-empty x-row ranges around cell (cx, cy, cz), which may
     /// lie outside the box (rows outside it are left out), in the 27 cells' order.

@@ -137,6 +137,14 @@ public:
 
 private:
     void clear_grid();
+    // build()'s stages: the sample grid (around the balls or the fixed box, checked), each
+    // ball's sample box and the (ball, block) pair count (checked against the cap), the
+    // counting sort of balls by block (returns the non-empty blocks' slot count), and the
+    // per-block gather.
+    Result<SampleGrid> build_grid(std::span<const Vec3> balls, const SparseFieldDef& def) const;
+    Result<double> ball_boxes(std::span<const Vec3> balls, const SampleGrid& g, const SparseFieldDef& def);
+    size_t bin_balls(size_t nblocks);
+    void splat_blocks(std::span<const Vec3> balls, const KernelDef& kdef, size_t slots);
 
     SampleGrid grid_;
     int bx_ = 0, by_ = 0, bz_ = 0;

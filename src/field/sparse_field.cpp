@@ -220,6 +220,38 @@ Status SparseField::build(std::span<const Vec3> balls, const SparseFieldDef& def
     }
     if (balls.size() >= std::numeric_limits<uint32_t>::max()) return Error{"sparse field: too many balls"};
 
+    Result<SampleGrid> grid = build_grid(balls, def);
+    if (!grid) return grid.error();
+    const SampleGrid g = *grid;
+    const int bx = (g.nx + B - 1) / B, by = (g.ny + B - 1) / B, bz = (g.nz + B - 1) / B;
+    const size_t nblocks = static_cast<size_t>(bx) * by * bz;
+    if (nblocks >= static_cast<size_t>(std::numeric_limits<int32_t>::max())) {
+        return Error{"sparse field: too many blocks"};
+    }
+    Result<double> ball_blocks = ball_boxes(balls, g, def);
+    if (!ball_blocks) return ball_blocks.error();
+    const double pairs = *ball_blocks;
+
+    grid_ = g;
+    bx_ = bx;
+    by_ = by;
+    bz_ = bz;
+    directory_.resize(nblocks);
+    std::fill(directory_.begin(), directory_.end(), kNoBlock);
+    stats_.balls = balls.size();
+    stats_.blocks = nblocks;
+    stats_.ball_blocks = static_cast<size_t>(pairs);
+    if (nblocks == 0 || balls.empty()) {
+        stats_.ms_bin = ms_since(t0);
+        return Ok{};
+    }
+    const size_t slots = bin_balls(nblocks);
+    stats_.ms_bin = ms_since(t0);
+    splat_blocks(balls, def.kernel, slots);
+    return Ok{};
+}
+
+Result<SampleGrid> SparseField::build_grid(std::span<const Vec3> balls, const SparseFieldDef& def) const {
     SampleGrid g;
     if (def.domain == DomainMode::BallBounds) {
         Result<SampleGrid> r = grid_around(balls, def.resolution, def.bounds_offset, def.max_samples);
@@ -235,15 +267,12 @@ Status SparseField::build(std::span<const Vec3> balls, const SparseFieldDef& def
         }
     }
 
-    const int bx = (g.nx + B - 1) / B, by = (g.ny + B - 1) / B, bz = (g.nz + B - 1) / B;
-    const size_t nblocks = static_cast<size_t>(bx) * by * bz;
-    if (nblocks >= static_cast<size_t>(std::numeric_limits<int32_t>::max())) {
-        return Error{"sparse field: too many blocks"};
-    }
+    return g;
+}
 
+Result<double> SparseField::ball_boxes(std::span<const Vec3> balls, const SampleGrid& g, const SparseFieldDef& def) {
     // 1. Sample boxes, and the (ball, block) pair count before anything is sized by it.
     const float radius = def.kernel.radius;
-    const float sup2 = radius * radius;
     boxes_.resize(balls.size());
     double pairs = 0.0;
     const auto sample_range = [&](float c, float o, int n, int& lo, int& hi) {
@@ -273,20 +302,10 @@ Status SparseField::build(std::span<const Vec3> balls, const SparseFieldDef& def
                      std::to_string(def.max_ball_blocks) + " (kernel radius too large for the spacing?)"};
     }
 
-    grid_ = g;
-    bx_ = bx;
-    by_ = by;
-    bz_ = bz;
-    directory_.resize(nblocks);
-    std::fill(directory_.begin(), directory_.end(), kNoBlock);
-    stats_.balls = balls.size();
-    stats_.blocks = nblocks;
-    stats_.ball_blocks = static_cast<size_t>(pairs);
-    if (nblocks == 0 || balls.empty()) {
-        stats_.ms_bin = ms_since(t0);
-        return Ok{};
-    }
+    return pairs;
+}
 
+size_t SparseField::bin_balls(size_t nblocks) {
     // 2. Counting sort: count, prefix sum, fill in ball order.
     const auto for_blocks = [&](const BallBox& box, auto&& f) {
         for (int bk = box.k0 / B; bk <= box.k1 / B; ++bk)
@@ -324,11 +343,14 @@ Status SparseField::build(std::span<const Vec3> balls, const SparseFieldDef& def
         block_min_.resize(slots);
         block_max_.resize(slots);
     }
-    stats_.ms_bin = ms_since(t0);
+    return slots;
+}
 
+void SparseField::splat_blocks(std::span<const Vec3> balls, const KernelDef& kdef, size_t slots) {
+    const float radius = kdef.radius;
+    const float sup2 = radius * radius;
     // 4. Per-block gather, in parallel; each task writes only its own block.
     const auto t1 = std::chrono::steady_clock::now();
-    const KernelDef kdef = def.kernel;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, slots), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t s = r.begin(); s != r.end(); ++s) {
             const size_t blk = block_of_slot_[s];
@@ -362,7 +384,6 @@ Status SparseField::build(std::span<const Vec3> balls, const SparseFieldDef& def
         }
     });
     stats_.ms_splat = ms_since(t1);
-    return Ok{};
 }
 
 Status SparseField::from_dense(const ScalarGrid& d) {

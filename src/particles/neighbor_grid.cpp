@@ -50,13 +50,21 @@ void NeighborGrid::build(std::span<const Vec3> positions, std::span<const uint8_
         run_start_.push_back(0);
         return;
     }
+    origin_ = box.min;
+    const double dense_cells = choose_layout(box, binned);
+    cell_keys(positions, active);
+    count_buckets(active, dense_cells, binned);
+    sort_by_bucket(active, binned);
+    record_runs(positions, binned);
+}
+
+double NeighborGrid::choose_layout(const Aabb& box, size_t binned) {
     // Dense cells over the box when there are at most ~32 cells per particle and the box
     // is finite (clearing and prefix-summing 32 counters per particle is far cheaper
     // than 27 hash lookups per cell run). Else blocks of 4^3, 8^3 or 16^3 cells (the
     // smallest whose directory has at most ~4 entries per particle), cells allocated
     // only in occupied blocks (at most 64 per particle). Else a hash table of the next
     // power of two >= 2 binned.
-    origin_ = box.min;
     // Same float arithmetic as cell_coord(), so the box's far corner lands in the last cell.
     const auto cells = [&](float hi, float lo) {
         const float c = std::floor((hi - lo) * inv_cell_);
@@ -90,6 +98,11 @@ void NeighborGrid::build(std::span<const Vec3> positions, std::span<const uint8_
         }
     }
 
+    return dense_cells;
+}
+
+void NeighborGrid::cell_keys(std::span<const Vec3> positions, std::span<const uint8_t> active) {
+    const size_t n = positions.size();
     // Cell keys. Binned positions are >= the box's corner, so (v - o) / cell >= 0 and
     // truncation is floor() (the same cell as cell_coord()); clamped to the box (NaN:
     // the last cell).
@@ -106,10 +119,13 @@ void NeighborGrid::build(std::span<const Vec3> positions, std::span<const uint8_
             particle_key_[i] = uint64_t(x) | (uint64_t(y) << 21) | (uint64_t(z) << 42);
         }
     }
+}
+
+void NeighborGrid::count_buckets(std::span<const uint8_t> active, double dense_cells, size_t binned) {
+    const size_t n = active.size();
     const auto kx = [](uint64_t key) { return int(key & 0x1FFFFF); };
     const auto ky = [](uint64_t key) { return int((key >> 21) & 0x1FFFFF); };
     const auto kz = [](uint64_t key) { return int(key >> 42); };
-
     // Buckets, counted into start_[b] (made inclusive sums below).
     if (layout_ == Layout::Blocked) {
         // Mark the occupied blocks (the directory entry parked in particle_bucket_), give
@@ -174,7 +190,10 @@ void NeighborGrid::build(std::span<const Vec3> positions, std::span<const uint8_
             ++start_[b];
         }
     }
+}
 
+void NeighborGrid::sort_by_bucket(std::span<const uint8_t> active, size_t binned) {
+    const size_t n = active.size();
     // Counting sort: inclusive prefix sums give each bucket's end; filling backwards in
     // index order moves them to each bucket's start, ties in index order (stable).
     {
@@ -216,6 +235,9 @@ void NeighborGrid::build(std::span<const Vec3> positions, std::span<const uint8_
             }
         }
     }
+}
+
+void NeighborGrid::record_runs(std::span<const Vec3> positions, size_t binned) {
     // + kSortedPad finite floats past the last: loops may read a block of 4 or 8 past
     // the end of a range (sorted_x() spans the binned ones only).
     sx_.resize(binned + kSortedPad);

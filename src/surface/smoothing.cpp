@@ -48,6 +48,7 @@
 #include <metariver/surface.h>
 
 #include "field_probe.h"
+#include "smoothing_shares.h"
 #include "smoothing_simd.h"
 
 #include <tbb/blocked_range.h>
@@ -70,14 +71,11 @@ namespace mr {
 namespace {
 
 using P4 = SmoothingWorkspace::P4;
+using smoothing_shares::for_split;
+using smoothing_shares::ms_since;
+using smoothing_shares::kMinSplit;
+using smoothing_shares::Shares;
 
-double ms_since(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
-
-/// The least number of elements worth splitting over the threads (on two busy cores a
-/// parallel_for costs tens of microseconds).
-constexpr size_t kMinSplit = 2048;
 /// Chebyshev steps come in cycles of at most this many: longer cycles amplify the
 /// middle of the band in between (50x at 20 steps on [0.1, 2]) and with it float error.
 constexpr int kChebyshevCycle = 8;
@@ -86,38 +84,6 @@ constexpr int kChebyshevCycle = 8;
 constexpr float kMinWeight = 0.05f;
 /// SmoothingWorkspace::moving_index of a vertex that does not move.
 constexpr uint32_t kFixed = 0xffffffffu;
-
-/// [0, n) in equal contiguous shares, one per thread when n is worth splitting (else
-/// one); for passes that count per share and then fill from the counts' offsets, which
-/// come out in element order whatever the number of shares.
-struct Shares {
-    static constexpr size_t kMax = 8;  ///< shares at most (callers keep per-share counts in arrays of it)
-    size_t n = 0, count = 1;
-    explicit Shares(size_t n_, size_t min_split = kMinSplit) : n(n_) {
-        const size_t threads = static_cast<size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
-        count = n < min_split ? 1 : std::min(threads, kMax);
-    }
-    size_t begin(size_t c) const { return n * c / count; }
-    /// f(c, lo, hi) for every share c, in parallel (a blocked_range of shares: the one
-    /// parallel_for form metariver calls, which the TSan build annotates).
-    template <class F>
-    void run(F&& f) const {
-        if (count == 1) return f(size_t{0}, size_t{0}, n);
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 1), [&](const tbb::blocked_range<size_t>& r) {
-            for (size_t c = r.begin(); c != r.end(); ++c) f(c, begin(c), begin(c + 1));
-        });
-    }
-};
-
-/// f(lo, hi) over [0, n) for work whose elements are independent (no sums): one equal
-/// share per thread, so a few thousand vertices keep both cores busy (fixed chunks of
-/// 4096 left 4,153 moving vertices as 4,096 + 57).
-template <class F>
-void for_split(size_t n, F&& f) {
-    Shares(n).run([&](size_t, size_t lo, size_t hi) {
-        if (lo < hi) f(lo, hi);
-    });
-}
 
 float smoothstep01(float x) {
     x = std::clamp(x, 0.0f, 1.0f);
@@ -371,17 +337,14 @@ size_t SmoothingWorkspace::capacity_bytes() const {
            step_sizes.capacity() * sizeof(float);
 }
 
-void smooth_surface(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspace& ws, const SmoothingField* field,
-                    const SmoothingGround* ground) {
-    using Clock = std::chrono::steady_clock;
-    ws.stats = SmoothingStats{};
-    if (def.method == SmoothingMethod::None) return;
-    const size_t nv = mesh.positions.size();
-    ws.stats.vertices = nv;
-    if (nv == 0 || mesh.indices.empty() || def.iterations <= 0) return;
+namespace {
 
-    // Feature weights.
-    auto t0 = Clock::now();
+/// Feature weights (the field behind each vertex; 0 for hidden vertices) and the list of
+/// the moving vertices (ws.moving, ws.moving_index).
+void feature_weights(const SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspace& ws,
+                     const SmoothingField* field, const SmoothingGround* ground) {
+    const size_t nv = mesh.positions.size();
+    const auto t0 = std::chrono::steady_clock::now();
     ws.weight.resize(nv);
     const SparseField* f = field && def.feature_count > 0.0f ? field->field : nullptr;
     const float depth = f ? lone_ball_iso_distance(field->kernel, field->threshold) : 0.0f;
@@ -469,10 +432,15 @@ void smooth_surface(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspa
         }
     });
     ws.stats.ms_weights = ms_since(t0);
-    if (ws.moving.empty()) return;  // nothing moves: the mesh keeps its normals too
 
-    t0 = Clock::now();
-    if (!build_fans(mesh, ws)) return;  // a malformed mesh is left as it is
+}
+
+/// The fans of the moving vertices and the steps' compact form; false (the mesh left as
+/// it is) when the mesh is malformed.
+bool prepare_steps(const SurfaceMesh& mesh, SmoothingWorkspace& ws) {
+    const size_t nv = mesh.positions.size();
+    const auto t0 = std::chrono::steady_clock::now();
+    if (!build_fans(mesh, ws)) return false;  // a malformed mesh is left as it is
     // Pin the moving vertices on an open boundary (weight 0: they keep their place); the
     // rest move by w / degree.
     const size_t nm = ws.moving.size();
@@ -519,10 +487,15 @@ void smooth_surface(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspa
     ws.stats.moving = nm - ws.stats.pinned;
     ws.stats.mean_weight = wsum / double(nv);
     ws.stats.ms_rings = ms_since(t0);
+    return true;
+}
 
+/// The position steps (smoothing_step_sizes), then the smoothed positions into the mesh.
+void position_steps(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspace& ws) {
+    const size_t nm = ws.moving.size();
     // Position steps, double-buffered over the moving vertices' compact positions; then
     // the smoothed positions back into the mesh.
-    t0 = Clock::now();
+    const auto t0 = std::chrono::steady_clock::now();
     P4* src = ws.a.data();
     P4* dst = ws.b.data();
     fill_step_sizes(def, ws.step_sizes);
@@ -536,6 +509,11 @@ void smooth_surface(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspa
     });
     ws.stats.ms_smooth = ms_since(t0);
 
+}
+
+/// Normals of the moving vertices, the volume given back, the normal passes.
+void normals_and_volume(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspace& ws) {
+    const size_t nv = mesh.positions.size(), nm = ws.moving.size();
     // Normals of the moving vertices from their smoothed fans, and the change of the
     // enclosed volume to first order: the volume is (1/6) sum over the triangles of
     // a . (b x c), whose gradient at a vertex is a sixth of its fan's area normal s_v
@@ -545,7 +523,7 @@ void smooth_surface(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspa
     // exact change (a pass over the listed triangles, before and after) left +0.14 and
     // +0.03 %; it cost as much as the normals, and this costs nothing beside them.
     // Then the volume given back along the normals.
-    t0 = Clock::now();
+    const auto t0 = std::chrono::steady_clock::now();
     if (mesh.normals.size() != nv) mesh.normals.resize(nv, Vec3(0.0f, 1.0f, 0.0f));  // a mesh made elsewhere
     const bool restore = def.method == SmoothingMethod::Laplacian && def.keep_volume;
     ws.area_normal.resize(nm);
@@ -597,6 +575,23 @@ void smooth_surface(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspa
         });
     }
     ws.stats.ms_normals = ms_since(t0);
+}
+
+}  // namespace
+
+void smooth_surface(SurfaceMesh& mesh, const SmoothingDef& def, SmoothingWorkspace& ws, const SmoothingField* field,
+                    const SmoothingGround* ground) {
+    ws.stats = SmoothingStats{};
+    if (def.method == SmoothingMethod::None) return;
+    const size_t nv = mesh.positions.size();
+    ws.stats.vertices = nv;
+    if (nv == 0 || mesh.indices.empty() || def.iterations <= 0) return;
+
+    feature_weights(mesh, def, ws, field, ground);
+    if (ws.moving.empty()) return;  // nothing moves: the mesh keeps its normals too
+    if (!prepare_steps(mesh, ws)) return;
+    position_steps(mesh, def, ws);
+    normals_and_volume(mesh, def, ws);
 }
 
 }  // namespace mr
