@@ -19,7 +19,7 @@ scenes=(
   "pool|900|30,40,26,16,2,16|--scene $OUT/pool.toml"
   "river|1200|30,40,45,44,8,53|"
   "nile|1500|30,45,14,27,3.5,29|--preset paper-nile --heightmap $SHARED/metawater/nile.png"
-  "pyrenees|1800|30,45,40,74,5,18|--heightmap $SHARED/real/pyrenees.png --area-scale 3 --height-scale 15"
+  "pyrenees|1800|30,45,40,74,5,18|--heightmap assets/heightmaps/real/pyrenees.png --area-scale 3 --height-scale 15"
 )
 looks=(
   "paper|--water gouraud --no-foam"

@@ -10,7 +10,7 @@
 #          from above side by side, one JPEG per map in GALLERY_DIR (default
 #          docs/images/gallery), and one markdown row per map naming it.
 # Maps: the procedural terrains, the tunneling test's torture terrains and random maps
-# (scripts/torture_maps.py), the paper's maps and the real DEMs in ../shared.
+# (scripts/torture_maps.py), the paper's maps in ../shared and the real DEMs in assets/heightmaps/real.
 # Usage: bash scripts/map_table.sh sound|river|gallery [FRAMES] [OUT_DIR]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -86,7 +86,7 @@ for src in strict bowl flat; do
   run_map "procedural $src" --scene "$OUT/$src.toml"
 done
 for f in "$OUT"/maps/spikes.png "$OUT"/maps/cliffs.png "$OUT"/maps/random_*.png; do run_map "$(basename "$f")" --heightmap "$f"; done
-for f in "$SHARED"/metawater/*.png "$SHARED"/real/*.png; do
+for f in "$SHARED"/metawater/*.png assets/heightmaps/real/*.png; do
   [ -f "$f" ] && run_map "$(basename "$(dirname "$f")")/$(basename "$f")" --heightmap "$f"
 done
 if [ "$MODE" = sound ]; then

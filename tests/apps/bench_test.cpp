@@ -12,6 +12,7 @@
 #include <sstream>
 #include <string>
 #include <sys/wait.h>
+#include "require.h"
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
@@ -173,7 +174,7 @@ TEST_F(Bench, W3OnTheGpuBesideTheCpu) {
     EXPECT_EQ(res[0]["scenario"], "w3 nx=8");
     EXPECT_EQ(res[1]["scenario"], "w3-gpu nx=8");
     if (res[1].contains("note") && res[1]["note"].get<std::string>().rfind("skipped", 0) == 0)
-        GTEST_SKIP() << res[1]["note"];
+        MR_SKIP_OR_FAIL(res[1]["note"]);
     EXPECT_EQ(res[1]["particles"].get<int>(), 8 * 8 * 4);
     EXPECT_EQ(res[1]["stages"]["step"]["samples"].get<int>(), 3);
     EXPECT_GT(res[1]["stages"]["step"]["median_ms"].get<double>(), 0.0);
@@ -205,7 +206,7 @@ TEST_F(Bench, W1FieldOnTheGpuBesideTheCpu) {
     EXPECT_EQ(res[0]["scenario"], "w1 N=200 R=32");
     EXPECT_EQ(res[1]["scenario"], "w1-gpu N=200 R=32");
     if (res[1].contains("note") && res[1]["note"].get<std::string>().rfind("skipped", 0) == 0)
-        GTEST_SKIP() << res[1]["note"];
+        MR_SKIP_OR_FAIL(res[1]["note"]);
     EXPECT_EQ(res[1]["stages"]["field"]["samples"].get<int>(), 2);
     EXPECT_GT(res[1]["stages"]["field"]["median_ms"].get<double>(), 0.0);
     EXPECT_LT(res[1]["quality"]["max_relative_difference_vs_cpu"].get<double>(), 1e-5);
@@ -216,7 +217,7 @@ TEST_F(Bench, W1FieldOnTheGpuBesideTheCpu) {
 TEST_F(Bench, MapsRunTheDefaultRiverOnEachHeightmap) {
     const fs::path out = dir_ / "bench.json";
     const std::string maps = "../shared/heightmaps/metawater";
-    if (!fs::exists(fs::path(METARIVER_SOURCE_DIR) / maps / "nile.png")) GTEST_SKIP() << maps << " not there";
+    if (!fs::exists(fs::path(METARIVER_SOURCE_DIR) / maps / "nile.png")) MR_SKIP_OR_FAIL(maps << " not there");
     const BenchRun r = run("--heightmap " + maps + "/nile.png," + maps + "/strict17.png --warmup 30 --frames 3 --json " +
                            out.string());
     ASSERT_EQ(r.code, 0) << r.err;

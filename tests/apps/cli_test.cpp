@@ -21,6 +21,7 @@
 #include <string>
 #include <sys/wait.h>
 #include <vector>
+#include "require.h"
 
 namespace fs = std::filesystem;
 
@@ -268,7 +269,7 @@ TEST_F(Cli, RunIsDeterministicForASeed) {
 }
 
 TEST_F(Cli, PaperNileWithTheRealHeightmap) {
-    if (!fs::exists(shared_map("nile.png"))) GTEST_SKIP() << "shared heightmaps not present";
+    if (!fs::exists(shared_map("nile.png"))) MR_SKIP_OR_FAIL("no " << shared_map("nile.png"));
     const fs::path stats = dir_ / "s.json";
     CliResult r = run("run --preset paper-nile --heightmap " + shared_map("nile.png") + " --frames 800 --stats " +
                       stats.string());
@@ -286,7 +287,7 @@ TEST_F(Cli, BadHeightmaps) {
     // A truncated PNG: the signature and a cut-off header chunk.
     expect_bad("run --heightmap " + write("trunc.png", std::string("\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR\0\0", 18)).string(),
                "trunc.png");
-    if (fs::exists(shared_map("nile.png"))) {
+    if (mr::test::have_file(shared_map("nile.png"))) {
         const std::string full = slurp(shared_map("nile.png"));
         expect_bad("run --heightmap " + write("half.png", full.substr(0, full.size() / 2)).string(), "half.png");
     }

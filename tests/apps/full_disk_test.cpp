@@ -11,6 +11,7 @@
 #include <fstream>
 #include <string>
 #include <vector>
+#include "require.h"
 
 namespace fs = std::filesystem;
 
@@ -43,7 +44,7 @@ TEST_F(FullDisk, ARunThatFillsTheDiskPartWayLeavesNothingAndNamesThePath) {
     for (int f = 0; f < 20; ++f)
         room += SmallDisk::charged(fs::file_size(probe / ("surface_" + std::string(f < 10 ? "0000" : "000") + std::to_string(f) + ".obj")));
     SmallDisk disk(dir_ / "disk", room);
-    if (!disk.mounted()) GTEST_SKIP() << disk.why();
+    if (!disk.mounted()) MR_SKIP_OR_FAIL(disk.why());
 
     const fs::path objs = disk.dir() / "objs", stats = disk.dir() / "s.json";
     CliResult r = run(std::string(kRun) + " --obj-dir " + objs.string() + " --stats " + stats.string());
@@ -58,7 +59,7 @@ TEST_F(FullDisk, StatsThatDoNotFitLeaveNoFileAndTheRunTakesBackItsObjs) {
     // The OBJ folder on the real disk, the stats file on a full one: the run fails at its
     // very end and removes the OBJ files it wrote.
     SmallDisk disk(dir_ / "disk", 4096);
-    if (!disk.mounted()) GTEST_SKIP() << disk.why();
+    if (!disk.mounted()) MR_SKIP_OR_FAIL(disk.why());
     // Fill the disk: the stats file (some kB) cannot be written.
     {
         std::ofstream fill(disk.dir() / "fill", std::ios::binary);

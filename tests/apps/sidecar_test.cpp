@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <numbers>
 #include <string>
+#include "require.h"
 
 namespace {
 
@@ -58,9 +59,8 @@ TEST(Sidecar, SampleSpacingWinsOverTheBox) {
     EXPECT_EQ(bare->height, 0);
 }
 
-TEST(Sidecar, TheRealMapsOfTheSharedFolder) {
-    const std::filesystem::path real = std::filesystem::path(METARIVER_SHARED_DIR) / "heightmaps/real";
-    if (!std::filesystem::exists(real / "alps.json")) GTEST_SKIP() << "shared heightmaps not present";
+TEST(Sidecar, TheRealMapsOfTheRepository) {
+    const std::filesystem::path real = std::filesystem::path(METARIVER_SOURCE_DIR) / "assets/heightmaps/real";
     // The table of docs/scene-format.md, "Heightmap scale".
     const struct {
         const char* name;

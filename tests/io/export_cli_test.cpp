@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <set>
+#include "require.h"
 
 namespace mr {
 namespace {
@@ -130,7 +131,7 @@ TEST_F(ExportCli, RenderExportsTheWaterOfEveryImage) {
     const CliResult r = run("render --preset paper-bowl --frames 3 --size 64x48 --out " + frames.string() +
                                 " --export " + out.string() + " --format glb --range 1:2",
                             "XDG_RUNTIME_DIR=/tmp");
-    if (r.code == 1 && r.err.find("EGL") != std::string::npos) GTEST_SKIP() << "no headless OpenGL here: " << r.err;
+    if (r.code == 1 && r.err.find("EGL") != std::string::npos) MR_SKIP_OR_FAIL("no headless OpenGL here: " << r.err);
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_EQ(names(out), (std::set<std::string>{"export.json", "terrain.glb", "water_00001.glb", "water_00002.glb",
                                                  "particles_00001.glb", "particles_00002.glb"}));
@@ -143,11 +144,11 @@ TEST_F(ExportCli, RenderExportsTheWaterOfEveryImage) {
 
 TEST_F(ExportCli, TheViewersRecordExportsEveryStepWhileItRuns) {
     const std::string xvfb = test::find_program("xvfb-run");
-    if (xvfb.empty()) GTEST_SKIP() << "xvfb-run is not installed (apt-get install xvfb): the viewer's Record not run";
+    if (xvfb.empty()) MR_SKIP_OR_FAIL("xvfb-run is not installed (apt-get install xvfb): the viewer's Record not run");
     const fs::path out = dir_ / "rec";
     const CliResult r = run("view --preset paper-bowl --frames 8 --record --export " + out.string() + " --format ply",
                             "XDG_RUNTIME_DIR=/tmp " + xvfb + " -a -s '-screen 0 1024x768x24'");
-    if (r.code != 0 && r.err.find("cannot") != std::string::npos) GTEST_SKIP() << "no OpenGL 4.5 window here: " << r.err;
+    if (r.code != 0 && r.err.find("cannot") != std::string::npos) MR_SKIP_OR_FAIL("no OpenGL 4.5 window here: " << r.err);
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_NE(r.out.find("recording to " + out.string()), std::string::npos) << r.out;
     const auto j = nlohmann::json::parse(test::slurp(out / "export.json"));

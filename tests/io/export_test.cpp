@@ -18,6 +18,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <assimp/version.h>
+#include "require.h"
 #endif
 
 namespace mr {
@@ -235,8 +236,8 @@ TEST_F(ExportAssimp, ReadsTheGlbWaterTerrainAndParticlesWithTheCountsWritten) {
 #else
 
 TEST(ExportAssimp, ReadsTheExportedFiles) {
-    GTEST_SKIP() << "assimp is not installed (apt-get install libassimp-dev, then reconfigure): the OBJ, PLY and glb "
-                    "files are not read back by assimp";
+    MR_SKIP_OR_FAIL("assimp is not installed (apt-get install libassimp-dev, then reconfigure): the OBJ, PLY and glb "
+                    "files are not read back by assimp");
 }
 
 #endif
@@ -246,10 +247,10 @@ class ExportGltfValidator : public ExportFixture {};
 TEST_F(ExportGltfValidator, KhronosValidatorFindsNoErrorsInWaterTerrainParticlesAndEmptyFrames) {
     const std::string node = test::find_program("node");
     const std::filesystem::path modules = std::filesystem::path(METARIVER_SOURCE_DIR) / "build/npm/node_modules";
-    if (node.empty()) GTEST_SKIP() << "node is not installed (apt-get install nodejs npm): glb files not validated";
+    if (node.empty()) MR_SKIP_OR_FAIL("node is not installed (apt-get install nodejs npm): glb files not validated");
     if (!std::filesystem::exists(modules / "gltf-validator/package.json"))
-        GTEST_SKIP() << "gltf-validator is not installed in " << modules
-                     << " (scripts/install-deps.sh: npm install --prefix build/npm gltf-validator)";
+        MR_SKIP_OR_FAIL("gltf-validator is not installed in " << modules
+                        << " (scripts/install-deps.sh: npm install --prefix build/npm gltf-validator)");
 
     const Samples s;
     std::vector<std::filesystem::path> files{

@@ -16,6 +16,7 @@
 #include <map>
 #include <regex>
 #include <set>
+#include "require.h"
 
 namespace mr {
 namespace {
@@ -138,7 +139,7 @@ TEST_F(ExportVdb, EmptyFramesAreValidFilesWithNoVoxelsOrPoints) {
 TEST_F(ExportVdb, VdbPrintReportsTheVoxelSizeAndCountsWritten) {
     const std::string vdb_print = test::find_program("vdb_print");
     if (vdb_print.empty())
-        GTEST_SKIP() << "vdb_print is not installed (apt-get install libopenvdb-tools): VDB files not read by it";
+        MR_SKIP_OR_FAIL("vdb_print is not installed (apt-get install libopenvdb-tools): VDB files not read by it");
     const test::Sphere s = test::sphere_mesh(1.0f, 0.1f);
     VdbStats ls, pts;
     const auto water = put("water_00000.vdb", encode_vdb_level_set(mesh_view(s.mesh), 0.125f, &ls).value());

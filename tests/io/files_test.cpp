@@ -12,6 +12,7 @@
 #include <string>
 #include <unistd.h>
 #include <vector>
+#include "require.h"
 
 namespace fs = std::filesystem;
 
@@ -57,7 +58,7 @@ TEST_F(WriteFileAtomic, WritesTheWholeFileAndReplacesAnOldOne) {
 
 TEST_F(WriteFileAtomic, AFullDiskKeepsTheOldFileLeavesNoTemporaryAndNamesThePath) {
     mr::test::SmallDisk disk(dir_ / "disk", 64 * 1024);
-    if (!disk.mounted()) GTEST_SKIP() << disk.why();
+    if (!disk.mounted()) MR_SKIP_OR_FAIL(disk.why());
     const fs::path p = disk.dir() / "stats.json";
     ASSERT_TRUE(mr::write_file_atomic(p.string(), "{\"old\": true}\n").ok());
     auto s = mr::write_file_atomic(p.string(), std::string(100 * 1024, 'x'));  // more than the disk holds

@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <string>
 #include <vector>
+#include "require.h"
 
 namespace mr {
 namespace {
@@ -152,7 +153,7 @@ TEST(BulletSolver, NoSphereEndsBelowThePapersTerrainsOverALongRun) {
     const std::string dir = METARIVER_SHARED_DIR "/heightmaps/metawater/";
     for (PaperCase c : {PaperCase{"paper-engine", "strict17.png"}, PaperCase{"paper-nile-engine", "nile.png"}}) {
         const std::string path = dir + c.file;
-        if (!std::filesystem::exists(path)) GTEST_SKIP() << "no " << path;
+        if (!std::filesystem::exists(path)) MR_SKIP_OR_FAIL("no " << path);
         for (auto shape : {BulletTerrainShape::Mesh, BulletTerrainShape::Heightfield}) {
             SceneDef d = preset(c.preset).value();
             d.source.heightmap = path;
@@ -329,7 +330,7 @@ TEST(BulletSolver, SpawnsOnTheOwnSolversScheduleAndRespawnsOutsideTheRectangle) 
 TEST(BulletSolver, SameSeedSameState) {
     const std::string path = METARIVER_SHARED_DIR "/heightmaps/metawater/strict17.png";
     SceneDef d = preset("paper-engine").value();
-    if (std::filesystem::exists(path)) {
+    if (test::have_file(path)) {
         d.source.heightmap = path;
     } else {
         d.source.kind = TerrainSource::Strict;

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <vector>
+#include "require.h"
 
 namespace mr {
 namespace {
@@ -129,7 +130,7 @@ TEST(Foam, MadeWhereTheWaterIsFastAndBroken) {
 // rounding, on a sheared block whose particles are jittered (irregular normals, a broken
 // top: every potential non-zero somewhere).
 TEST(Foam, SimdPotentialsAgreeWithTheScalarTwin) {
-    if (!pbf_simd::available()) GTEST_SKIP() << "no AVX2 and FMA on this CPU";
+    if (!pbf_simd::available()) MR_SKIP_OR_FAIL("no AVX2 and FMA on this CPU");
     const Terrain t = flat_terrain();
     Particles p = block(16, 6, 16);
     shear(p, 4.0f);

@@ -13,6 +13,7 @@
 #include <map>
 #include <memory>
 #include <vector>
+#include "require.h"
 
 namespace mr {
 namespace {
@@ -376,7 +377,7 @@ TEST(Pbf, NeighbourListsGiveBitwiseTheSameStepsAsTheCellLoops) {
 // break), with and without vorticity (XSPH takes the SIMD path only without it), from its
 // first state (the block at 0.9 of the rest spacing: density error 0.26) and 1/3 s later.
 TEST(Pbf, SimdListPassesAgreeWithTheScalarTwin) {
-    if (!pbf_simd::available()) GTEST_SKIP() << "no AVX2 and FMA on this CPU";
+    if (!pbf_simd::available()) MR_SKIP_OR_FAIL("no AVX2 and FMA on this CPU");
     World w = make_world(box_map(17, 3), TerrainDef{.area_scale = 1.0f, .height_scale = 6.0f});
     const std::vector<Vec3> block = lattice(Vec3(5, 0.3f, 5), 10, 8, 10, 0.45f);  // 0.9 of the rest spacing
     const auto solver = [&](float vorticity, float skin) {

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "spring_kernel.h"
+#include "require.h"
 
 namespace mr {
 namespace {
@@ -88,7 +89,7 @@ TEST(Springs, ConserveMomentum) {
 // a few ulps either side of the reach (where a skip bound without its margin would drop
 // a live term), at distance 0, and counts that are not a multiple of 8.
 TEST(SpringKernel, Avx2EqualsThePortableLoopBitForBit) {
-    if (!spring_kernel::available()) GTEST_SKIP() << "no AVX2 here";
+    if (!spring_kernel::available()) MR_SKIP_OR_FAIL("no AVX2 here");
     Lcg rng(7);
     std::vector<float> cx(spring_kernel::kMaxCandidates + 8), cy(cx.size()), cz(cx.size());
     size_t skipped_some = 0, boundary_live = 0;

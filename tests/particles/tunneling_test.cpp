@@ -24,6 +24,7 @@
 #include <filesystem>
 #include <string>
 #include <vector>
+#include "require.h"
 
 namespace mr {
 namespace {
@@ -82,10 +83,10 @@ Worlds worlds() {
         out.all.push_back(std::move(*w));
     if (auto w = make_world("cliffs", cliffs(41, 33, 9), TerrainDef{.area_scale = 0.5f, .height_scale = 30.0f}))
         out.all.push_back(std::move(*w));
-    const std::string dir = METARIVER_SHARED_DIR "/heightmaps/";
-    for (const char* f : {"metawater/strict17.png", "metawater/strict.png", "metawater/nile.png", "metawater/bowl.png",
-                          "metawater/small.png", "metawater/flat0.png"}) {
-        auto map = load_heightmap_png(dir + f);
+    for (const char* f : {"strict17.png", "strict.png", "nile.png", "bowl.png", "small.png", "flat0.png"}) {
+        if (!test::have_file(test::paper_map(f))) continue;
+        auto map = load_heightmap_png(test::paper_map(f));
+        EXPECT_TRUE(map.ok()) << f;
         if (!map) continue;
         if (auto w = make_world(f, map.value(), TerrainDef{.area_scale = 1.0f, .height_scale = 7.0f})) {
             out.all.push_back(std::move(*w));
@@ -94,9 +95,9 @@ Worlds worlds() {
     }
     // Real DEMs as steep game terrain: 1 m per sample, 40 m of relief (slopes to 20:1
     // where the crop's relief is concentrated).
-    for (const char* f : {"real/alps.png", "real/andes_peru.png", "real/colorado_rockies.png", "real/pyrenees.png",
-                          "real/western_usa.png"}) {
-        auto map = load_heightmap_png(dir + f);
+    for (const char* f : {"alps.png", "andes_peru.png", "colorado_rockies.png", "pyrenees.png", "western_usa.png"}) {
+        auto map = load_heightmap_png(test::real_dem(f));
+        EXPECT_TRUE(map.ok()) << f;
         if (!map) continue;
         if (auto w = make_world(f, map.value(), TerrainDef{.area_scale = 1.0f, .height_scale = 40.0f})) {
             out.all.push_back(std::move(*w));
@@ -212,8 +213,8 @@ TEST(Tunneling, RobustModeLosesNothingInTenMillionParticleStepsPaperModeLosesMan
     const Worlds ws = worlds();
     ASSERT_GE(ws.all.size(), 3u) << "the procedural worlds run everywhere";
     if (ws.shared_maps < 11)
-        std::printf("note: %d of the 11 maps of %s/heightmaps are here; the procedural worlds run alone\n",
-                    ws.shared_maps, METARIVER_SHARED_DIR);
+        std::printf("note: %d of the 11 maps are here (the 5 real DEMs of the repository, the paper's 6 from %s)\n",
+                    ws.shared_maps, METARIVER_SHARED_DIR "/heightmaps/metawater");
     Tally robust, paper;
     for (const World& w : ws.all) {
         const Tally r = scenarios(w, CollisionMode::Robust);

@@ -16,6 +16,7 @@
 #include <sstream>
 #include <string>
 #include <sys/wait.h>
+#include "require.h"
 
 namespace fs = std::filesystem;
 
@@ -40,7 +41,7 @@ bool headless_gl_available(std::string& why) {
     do {                                                                              \
         std::string why;                                                              \
         if (!headless_gl_available(why)) {                                            \
-            GTEST_SKIP() << "no headless OpenGL: " << why;                            \
+            MR_SKIP_OR_FAIL("no headless OpenGL: " << why);                            \
         }                                                                             \
     } while (0)
 
@@ -72,7 +73,7 @@ TEST_F(RenderCli, AFullDiskPartWayLeavesNoFrameAndNamesThePath) {
     for (int f = 0; f < 4; ++f)
         room += mr::test::SmallDisk::charged(fs::file_size(probe / ("frame_0000" + std::to_string(f) + ".png")));
     mr::test::SmallDisk disk(dir_ / "disk", room);
-    if (!disk.mounted()) GTEST_SKIP() << disk.why();
+    if (!disk.mounted()) MR_SKIP_OR_FAIL(disk.why());
     const fs::path out = disk.dir() / "frames";
     const CliResult r = run(args + out.string());
     EXPECT_EQ(r.code, 1) << r.err;
@@ -109,7 +110,7 @@ TEST_F(RenderCli, PngSequenceHasCountAndSizeAndFramesDiffer) {
 
 TEST_F(RenderCli, Mp4WhenFfmpegIsThere) {
     REQUIRE_GL();
-    if (std::system("command -v ffmpeg >/dev/null 2>&1") != 0) GTEST_SKIP() << "ffmpeg is not installed";
+    if (std::system("command -v ffmpeg >/dev/null 2>&1") != 0) MR_SKIP_OR_FAIL("ffmpeg is not installed");
     const fs::path out = dir_ / "river.mp4";
     const CliResult r = run("render --frames 6 --size 64x40 --out " + out.string());
     ASSERT_EQ(r.code, 0) << r.err;

@@ -12,6 +12,7 @@
 #include <string>
 #include <utility>
 #include <vector>
+#include "require.h"
 
 namespace mr {
 namespace {
@@ -230,13 +231,15 @@ TEST(Carve, TheRiverRunsDownTheChannelItsCarveWasCutFor) {
     // ran down an uncarved path with 4 m sills at its diagonal steps while the carved
     // channel stayed dry (share 0.0 there before the fix).
     std::vector<std::pair<std::string, SceneDef>> maps{{"valley", default_scene()}};
-    const std::filesystem::path shared = std::filesystem::path(METARIVER_SHARED_DIR) / "heightmaps";
-    for (const char* name : {"real/alps.png", "real/andes_peru.png", "real/colorado_rockies.png", "real/pyrenees.png",
-                             "real/western_usa.png", "metawater/nile.png", "metawater/strict.png"}) {
-        if (!std::filesystem::exists(shared / name)) continue;
+    std::vector<std::pair<std::string, std::string>> files;  // name, path
+    for (const char* name : {"alps.png", "andes_peru.png", "colorado_rockies.png", "pyrenees.png", "western_usa.png"})
+        files.emplace_back(std::string("real/") + name, test::real_dem(name));
+    for (const char* name : {"nile.png", "strict.png"})
+        if (test::have_file(test::paper_map(name))) files.emplace_back(std::string("metawater/") + name, test::paper_map(name));
+    for (const auto& [name, path] : files) {
         SceneDef d = default_scene();
         d.source.kind = TerrainSource::File;
-        d.source.heightmap = (shared / name).string();
+        d.source.heightmap = path;
         maps.emplace_back(name, d);
     }
     for (auto& [name, d] : maps) {
@@ -369,17 +372,16 @@ TEST(Carve, TheRiversChannelKeepsOffTheMapsEdges) {
     // The main channel of the carved ground, away from its outlet, keeps the section's
     // half width and its levee from every edge: its banks lie inside the map. andes_peru's ran along
     // the east edge (3.7 particles/s lost over it) before keep_off_edges.
-    const std::filesystem::path shared = std::filesystem::path(METARIVER_SHARED_DIR) / "heightmaps";
-    int maps = 0;
-    for (const char* name : {"real/andes_peru.png", "metawater/nile.png"}) {
-        if (!std::filesystem::exists(shared / name)) continue;
+    std::vector<std::string> files{test::real_dem("andes_peru.png")};
+    if (test::have_file(test::paper_map("nile.png"))) files.push_back(test::paper_map("nile.png"));
+    for (const std::string& file : files) {
+        const char* name = file.c_str();
         SceneDef d = default_scene();
         d.source.kind = TerrainSource::File;
-        d.source.heightmap = (shared / name).string();
+        d.source.heightmap = file;
         d.surface = false;
         auto sim = make(d);
         ASSERT_TRUE(sim) << name;
-        ++maps;
         const Terrain& t = sim->terrain();
         const auto path = sim->main_channel();
         ASSERT_GE(path.size(), 10u) << name;
@@ -394,7 +396,6 @@ TEST(Carve, TheRiversChannelKeepsOffTheMapsEdges) {
         std::printf("%s: %d of %zu main channel cells within %d of an edge\n", name, near_edge, path.size(), margin);
         EXPECT_EQ(near_edge, 0) << name << ": the main channel runs along an edge of the map";
     }
-    if (maps == 0) GTEST_SKIP() << "no heightmaps in " << shared;
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 
 #include <memory>
 #include <string>
+#include "require.h"
 
 namespace mr::test {
 
@@ -36,5 +37,5 @@ inline std::string context_error() {
 #define REQUIRE_GL()                                                                                   \
     do {                                                                                                \
         if (!::mr::test::context())                                                                     \
-            GTEST_SKIP() << "no headless OpenGL 4.5 (EGL surfaceless): " << ::mr::test::context_error(); \
+            MR_SKIP_OR_FAIL("no headless OpenGL 4.5 (EGL surfaceless): " << ::mr::test::context_error()); \
     } while (0)

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include "require.h"
 
 namespace mr {
 namespace {
@@ -32,10 +33,9 @@ Bvh build_bvh(const Terrain& t, int leaf) {
 /// random ones of awkward sizes.
 std::vector<std::pair<std::string, Terrain>> test_terrains() {
     std::vector<std::pair<std::string, Terrain>> out;
-    const std::string dir = METARIVER_SHARED_DIR "/heightmaps/metawater/";
     for (const char* f : {"strict17.png", "nile.png", "bowl.png", "small.png"}) {
-        if (!std::filesystem::exists(dir + f)) continue;
-        auto m = load_heightmap_png(dir + f);
+        if (!test::have_file(test::paper_map(f))) continue;
+        auto m = load_heightmap_png(test::paper_map(f));
         EXPECT_TRUE(m.ok());
         auto t = Terrain::build(*m, TerrainDef{1.0f, 7.0f, true});
         EXPECT_TRUE(t.ok());

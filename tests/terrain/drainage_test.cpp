@@ -12,6 +12,7 @@
 #include <string>
 #include <utility>
 #include <vector>
+#include "require.h"
 
 namespace mr {
 namespace {
@@ -131,7 +132,7 @@ TEST(ChannelMap, AnUpdateAfterStrokesIsTheMapBuiltFromScratch) {
     std::vector<std::pair<std::string, Heightmap>> maps;
     maps.emplace_back("valley 65x97", procedural_valley(65, 97, 1));
     maps.emplace_back("rough 41x29", rough_heightmap(41, 29, 5));
-    if (auto real = load_heightmap_png(std::string(METARIVER_SHARED_DIR) + "/heightmaps/real/pyrenees.png"))
+    if (auto real = load_heightmap_png(test::real_dem("pyrenees.png")))
         maps.emplace_back("pyrenees", std::move(real.value()));
     else
         ADD_FAILURE() << real.error().message;

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include "require.h"
 
 namespace mr {
 namespace {
@@ -18,7 +19,7 @@ const std::string kPaperDir = METARIVER_SHARED_DIR "/heightmaps/metawater/";
 
 #define SKIP_WITHOUT_PAPER_MAPS()                                                      \
     do {                                                                               \
-        if (!std::filesystem::is_directory(kPaperDir)) GTEST_SKIP() << "no " << kPaperDir; \
+        if (!std::filesystem::is_directory(kPaperDir)) MR_SKIP_OR_FAIL("no " << kPaperDir); \
     } while (0)
 
 std::vector<uint8_t> read_file(const std::string& path) {

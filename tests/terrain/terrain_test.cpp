@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <filesystem>
+#include "require.h"
 
 namespace mr {
 namespace {
@@ -65,7 +66,7 @@ TEST(Terrain, PaperNileSpawnLiesOnTheChannel) {
     // README: with the paper orientation the Nile spawn volume (27, 4.6, 31) lands on
     // the river channel at the top right of the image.
     const std::string path = METARIVER_SHARED_DIR "/heightmaps/metawater/nile.png";
-    if (!std::filesystem::exists(path)) GTEST_SKIP() << "no " << path;
+    if (!std::filesystem::exists(path)) MR_SKIP_OR_FAIL("no " << path);
     auto map = load_heightmap_png(path);
     ASSERT_TRUE(map.ok());
     const Terrain t = build_ok(*map, TerrainDef{1.0f, 7.0f, true});
