@@ -1,0 +1,210 @@
+// `metariver run`'s measurements and its --stats JSON (run_stats.h).
+#include "run_stats.h"
+
+#include "driver.h"
+
+#include <metariver/foam.h>
+#include <metariver/io.h>
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <span>
+#include <vector>
+
+namespace mr::app {
+
+namespace {
+
+using json = nlohmann::json;
+
+/// One entry per outlet: cell [row, col], position [x, z] (metres), drainage cells,
+/// particles over the run, rate over the second half, whether it is the main channel's.
+json outlets_json(const OutletMeter& m, const OutletMeter::Summary& s) {
+    json a = json::array();
+    for (size_t k = 0; k < m.outlets().size(); ++k) {
+        const OutletMeter::Outlet& o = m.outlets()[k];
+        a.push_back({{"cell", {o.row, o.column}},
+                     {"position", {o.x, o.z}},
+                     {"accumulation", o.accumulation},
+                     {"particles", s.outlets[k].particles},
+                     {"rate_per_s", s.outlets[k].rate},
+                     {"main", o.main}});
+    }
+    return a;
+}
+
+/// The main outlet's rate over the second half over the inflow every source asked for
+/// (not capped); 0 without inflow.
+double outflow_over_inflow(const Simulation& sim, const OutletMeter::Summary& os) {
+    const double inflow = sim.def().spawn.total_particles_per_second();
+    return inflow > 0.0 ? os.main.rate / inflow : 0.0;
+}
+
+json terrain_json(const Terrain& t) {
+    const ConditionReport& cond = t.condition_report();
+    return {{"columns", t.columns()},
+            {"rows", t.rows()},
+            {"triangles", t.triangle_count()},
+            {"area_scale", t.area_scale()},
+            {"condition",
+             {{"mode", std::string(to_string(cond.mode))},
+              {"cells_raised", cond.cells_raised},
+              {"cells_lowered", cond.cells_lowered},
+              {"max_change_m", cond.max_change_m},
+              {"volume_m3", cond.volume_m3}}}};
+}
+
+json plausibility_json(const Simulation& sim, const RiverMeter& m) {
+    const SolverCounters& c = sim.counters();
+    const FlowMeter::Summary fs = m.flow().summary();
+    const OutletMeter::Summary os = m.outlets().summary();
+    const Percentiles final_speed = percentiles(sim.active_speeds());
+    return {{"tunneled", c.tunneled},
+            {"guarded", c.guarded},
+            {"respawned", c.respawned},
+            {"emitted", c.emitted},
+            {"sunk", c.sunk},
+            {"outflow_per_s", fs.rate},
+            {"outflow_windows_per_s", {fs.windows[0], fs.windows[1], fs.windows[2], fs.windows[3]}},
+            {"first_outflow_s", fs.first_outflow_s},
+            {"outflow_steady", fs.steady},
+            {"wet_channel_fraction", m.wet_fraction()},
+            {"density_error_mean", m.density_error_mean()},
+            {"density_error_max", m.density_error_max()},
+            {"max_speed", m.max_speed()},
+            {"final_speed", {{"median", final_speed.median}, {"p95", final_speed.p95}, {"max", final_speed.max}}},
+            {"spray_fraction", m.spray_fraction()},
+            {"outflow_over_inflow", outflow_over_inflow(sim, os)},
+            {"time_to_outlet_s", os.main.first_s},
+            {"channel_coverage", m.channel_coverage()},
+            {"main_channel_cells", sim.main_channel().size()},
+            {"main_channel", sim.main_channel()},  // [row, column] from the source to the outlet
+            {"outlets", outlets_json(m.outlets(), os)},
+            {"outlet_other", {{"particles", os.other.particles}, {"rate_per_s", os.other.rate}}}};
+}
+
+/// Diffuse particles at the last frame ([foam], issue 11), and the potentials of the
+/// active fluid particles (what the [foam] thresholds are set against); null when off.
+json foam_json(const Simulation& sim) {
+    const FoamSystem* f = sim.foam();
+    if (!f) return nullptr;
+    const FoamStats& fs = f->stats();
+    json j = {{"spray", fs.spray},
+              {"foam", fs.foam},
+              {"bubbles", fs.bubbles},
+              {"total", fs.total()},
+              {"max_particles", sim.def().foam.max_particles},
+              {"generated_total", fs.generated_total},
+              {"capped_total", fs.capped_total}};
+    const Particles& fp = sim.particles();
+    auto potential = [&](std::span<const float> v) {
+        std::vector<double> a;
+        for (size_t i = 0; i < v.size(); ++i)
+            if (fp.active[i]) a.push_back(double(v[i]));
+        const Percentiles q = percentiles(std::move(a));
+        return json{{"median", q.median}, {"p95", q.p95}, {"max", q.max}};
+    };
+    j["potentials"] = {{"trapped_air", potential(f->trapped_air())},
+                       {"wave_crest", potential(f->wave_crest())},
+                       {"kinetic_energy", potential(f->kinetic_energy())}};
+    return j;
+}
+
+json stage_ms_json(const Simulation& sim, const Checkpoints& stage_ms) {
+    json j = {{"simulate", stage_json(stage_ms.column(kStageSimulate))},
+              {"field", stage_json(stage_ms.column(kStageField))},
+              {"surface", stage_json(stage_ms.column(kStageSurface))},
+              {"total", stage_json(stage_ms.column(kStageTotal))}};
+    if (sim.foam()) j["foam"] = stage_json(stage_ms.column(kStageFoam));
+    // Part of surface (not in total).
+    if (smoothing_on(sim.def())) j["smoothing"] = stage_json(stage_ms.column(kStageSmoothing));
+    return j;
+}
+
+}  // namespace
+
+RiverMeter::RiverMeter(const Simulation& sim, long long frames)
+    : frames_(frames), outlets_(sim.terrain(), sim.channel(), sim.main_channel().back()) {}
+
+void RiverMeter::record(const Simulation& sim, long long f, double time_s) {
+    flow_.record(time_s, sim.counters().sunk);
+    outlets_.record(time_s, sim.last_exits());
+    max_speed_ = std::max(max_speed_, sim.counters().max_speed);
+    density_max_ = std::max(density_max_, sim.counters().density_error_max);
+    const bool sampled = 2 * f >= frames_ && f % 10 == 0;
+    if (sampled) {
+        wet_sum_ += sim.wet_fraction();
+        density_mean_sum_ += sim.counters().density_error_mean;
+        ++wet_n_;
+    }
+    if (sampled || f == frames_ - 1) {
+        spray_sum_ += sim.spray_fraction();
+        coverage_sum_ += sim.channel_coverage();
+        ++spray_n_;
+    }
+}
+
+json run_stats_json(const Simulation& sim, const RiverMeter& meter, const Checkpoints& stage_ms, long long frames,
+                    double dt) {
+    const SceneDef& d = sim.def();
+    const SolverCounters& c = sim.counters();
+    json j;
+    j["scene"] = d.name;
+    j["seed"] = d.seed;
+    j["frames"] = frames;
+    j["dt"] = dt;
+    j["solver"] = std::string(to_string(d.solver));
+    j["collision"] = std::string(to_string(d.collision.mode));
+    j["field_kernel"] = std::string(to_string(d.field.kernel));
+    j["terrain"] = terrain_json(sim.terrain());
+    if (const auto& z = sim.sizing())
+        j["sizing"] = {{"channel_length_m", z->channel_length_m}, {"channel_slope", z->channel_slope},
+                       {"speed_m_s", z->speed}, {"count", d.spawn.count},
+                       {"flow_rate", d.spawn.particles_per_second()}, {"capped", z->capped},
+                       {"spacing", d.pbf.spacing}, {"prefilled", sim.prefilled()}};
+    j["particles_total"] = sim.particles().size();
+    j["particles_active"] = sim.particles().active_count();
+    j["triangles"] = sim.surface().triangle_count();
+    j["vertices"] = sim.surface().vertex_count();
+    j["field_grid"] = sim.field_dims();
+    // The last frame's smoothing ([surface], issue 11).
+    const SmoothingStats& sm = sim.smoothing_stats();
+    j["surface_smoothing"] = {{"method", std::string(to_string(d.smoothing.method))},
+                              {"moving_vertices", sm.moving},
+                              {"pinned_vertices", sm.pinned},
+                              {"hidden_vertices", sm.hidden},
+                              {"mean_weight", sm.mean_weight},
+                              {"volume_change_m3", sm.volume_change}};
+    j["field_overflows"] = sim.field_overflows();
+    j["particle_steps"] = c.particle_steps;
+    j["collisions"] = c.collisions;
+    j["tunneled"] = c.tunneled;
+    j["respawned"] = c.respawned;
+    j["guarded"] = c.guarded;
+    j["plausibility"] = plausibility_json(sim, meter);
+    j["state_hash"] = fmt::format("{:016x}", sim.state_hash());
+    j["stage_ms"] = stage_ms_json(sim, stage_ms);
+    j["foam"] = foam_json(sim);
+    return j;
+}
+
+std::string run_summary(const Simulation& sim, const RiverMeter& meter, const Checkpoints& stage_ms, long long frames) {
+    const SolverCounters& c = sim.counters();
+    const FlowMeter::Summary fs = meter.flow().summary();
+    const OutletMeter::Summary os = meter.outlets().summary();
+    const Percentiles final_speed = percentiles(sim.active_speeds());
+    const Percentiles tot = percentiles(stage_ms.column(kStageTotal));
+    return fmt::format("{}: {} frames, {}/{} particles active, surface {} triangles / {} vertices, "
+                       "tunneled {}, guarded {}, respawned {}, outflow {:.1f}/s ({}), main outlet {:.1f}/s = {:.2f} of "
+                       "inflow (first at {:.2f} s), channel coverage {:.0f} %, wet {:.0f} %, spray {:.1f} %, "
+                       "final speed p95 {:.2f} m/s, frame median {:.3f} ms (p95 {:.3f})",
+                       sim.def().name, frames, sim.particles().active_count(), sim.particles().size(),
+                       sim.surface().triangle_count(), sim.surface().vertex_count(), c.tunneled, c.guarded,
+                       c.respawned, fs.rate, fs.steady ? "steady" : "not steady", os.main.rate,
+                       outflow_over_inflow(sim, os), os.main.first_s, 100.0 * meter.channel_coverage(),
+                       100.0 * meter.wet_fraction(), 100.0 * meter.spray_fraction(), final_speed.p95, tot.median,
+                       tot.p95);
+}
+
+}  // namespace mr::app
