@@ -27,14 +27,12 @@ namespace fs = std::filesystem;
 
 struct RunOptions {
     SceneOptions scene;
-    long long frames = 300;
-    double dt = 1.0 / 60.0;
-    std::string stats;
+    /// --frames (default 300), --dt, --stats, --no-progress, --report-every: a report line
+    /// every N frames (0: none); the river's warnings, sizing and conditioning printed.
+    DriverDef drive{.command = "run", .frames = 300, .progress = true, .announce = true};
     std::string obj_dir;
     std::optional<long long> obj_every;  ///< --obj-every; unset = every frame
     ExportOptions exp;                   ///< --export DIR --format ... --every N --range A:B
-    bool progress = true;                ///< --no-progress: no bar on a terminal
-    long long report_every = 0;          ///< --report-every: a report line every N frames (0: none)
 };
 
 constexpr long long kMaxFrames = 100'000'000;
@@ -42,12 +40,12 @@ constexpr long long kMaxObjEvery = 1'000'000'000;
 
 /// The first bad option (one line naming it and the range), or empty.
 std::string option_error(const RunOptions& o) {
-    if (auto e = range_error("--frames", o.frames, 1, kMaxFrames); !e.empty()) return e;
-    if (auto e = dt_error(o.dt); !e.empty()) return e;
+    if (auto e = range_error("--frames", o.drive.frames, 1, kMaxFrames); !e.empty()) return e;
+    if (auto e = dt_error(o.drive.dt); !e.empty()) return e;
     if (o.obj_every && o.obj_dir.empty()) return "--obj-every: needs --obj-dir (the folder to write to)";
     if (o.obj_every)
         if (auto e = range_error("--obj-every", *o.obj_every, 1, kMaxObjEvery); !e.empty()) return e;
-    return range_error("--report-every", o.report_every, 0, kMaxObjEvery);
+    return range_error("--report-every", o.drive.report_every, 0, kMaxObjEvery);
 }
 
 /// --obj-dir: the folder (created if missing) with terrain.obj, then surface_NNNNN.obj
@@ -92,31 +90,26 @@ private:
 };
 
 int run(const RunOptions& o) {
-    Driver d({.command = "run",
-              .frames = o.frames,
-              .dt = o.dt,
-              .progress = o.progress,
-              .report_every = o.report_every,
-              .stats = o.stats,
-              .announce = true});
+    Driver d(o.drive);
     if (auto e = option_error(o); !e.empty()) return d.fail(kExitBadInput, e);
     if (!d.resolve(o.scene) || !d.resolve_export(o.exp) || !d.create()) return d.exit_code();
-    ObjSequence objs(o.obj_dir, o.obj_every.value_or(1), o.frames);
+    ObjSequence objs(o.obj_dir, o.obj_every.value_or(1), o.drive.frames);
     // The stats path is checked after the OBJ folder, which may hold it; the export's
     // folder and terrain then.
     if (!objs.begin(d) || !d.check_stats() || !d.begin_export()) return d.exit_code();
-    RiverMeter meter(d.sim(), o.frames);
+    RiverMeter meter(d.sim(), o.drive.frames);
     const bool looped = d.loop([&](long long f) {
         meter.record(d.sim(), f, d.time_s(f));
         return objs.frame(d, f);
     });
-    if (!looped || !d.finish([&] { return run_stats_json(d.sim(), meter, d.stage_ms(), o.frames, o.dt); }))
+    const auto stats = [&] { return run_stats_json(d.sim(), meter, d.stage_ms(), o.drive.frames, o.drive.dt); };
+    if (!looped || !d.finish(stats))
         return d.exit_code();
     const Simulation& sim = d.sim();
-    fmt::print("{}\n", run_summary(sim, meter, d.stage_ms(), o.frames));
+    fmt::print("{}\n", run_summary(sim, meter, d.stage_ms(), o.drive.frames));
     if (sim.field_overflows() > 0)
         fmt::print(stderr, "metariver run: warning: field: no surface on {} of {} frames: {}; lower field.resolution\n",
-                   sim.field_overflows(), o.frames, sim.field_overflow_message());
+                   sim.field_overflows(), o.drive.frames, sim.field_overflow_message());
     if (objs.on()) fmt::print("wrote {} OBJ files to {}\n", objs.written(), o.obj_dir);
     d.print_written();
     return kExitOk;
@@ -128,15 +121,15 @@ void register_run(CLI::App& app, std::function<int()>& action) {
     auto opts = std::make_shared<RunOptions>();
     CLI::App* cmd = app.add_subcommand("run", "simulate a scene headless; deterministic for a seed");
     opts->scene.add_to(*cmd);
-    cmd->add_option("--frames", opts->frames, "frames to simulate (default 300)");
-    cmd->add_option("--dt", opts->dt, "frame time in seconds (default 1/60)");
-    cmd->add_option("--stats", opts->stats, "write run statistics as JSON to this file");
+    cmd->add_option("--frames", opts->drive.frames, "frames to simulate (default 300)");
+    cmd->add_option("--dt", opts->drive.dt, "frame time in seconds (default 1/60)");
+    cmd->add_option("--stats", opts->drive.stats, "write run statistics as JSON to this file");
     cmd->add_option("--obj-dir", opts->obj_dir, "write the water surface (and the terrain) as OBJ to this folder");
     cmd->add_option("--obj-every", opts->obj_every,
                     "with --obj-dir: write every N-th frame's surface (0, N, 2N, ... and the last), [1, 1e9]; default 1");
     opts->exp.add_to(*cmd);
-    cmd->add_flag("!--no-progress", opts->progress, "no progress bar (it is shown on a terminal only)");
-    cmd->add_option("--report-every", opts->report_every,
+    cmd->add_flag("!--no-progress", opts->drive.progress, "no progress bar (it is shown on a terminal only)");
+    cmd->add_option("--report-every", opts->drive.report_every,
                     "print a report line (resident memory, particle counters, non-finite values) every N frames; "
                     "scripts/soak.sh reads them");
     cmd->callback([opts, &action] { action = [opts] { return run(*opts); }; });

@@ -81,6 +81,10 @@ struct DriverDef {
     bool quiet = false;          ///< errors are kept (error()), not printed (bench: a skipped row)
 };
 
+/// Stage-time records Driver::stage_ms() keeps (evenly spaced frames beyond): a command
+/// that times stages of its own in a Checkpoints of this capacity keeps the same frames.
+inline constexpr size_t kTimingSamples = size_t{1} << 13;
+
 /// The columns of stage_ms(), one record per frame.
 enum DriverStage : size_t {
     kStageSimulate,   ///< the solver (FrameTimings::simulate_ms of the frame's last step)
@@ -90,6 +94,7 @@ enum DriverStage : size_t {
     kStageFoam,       ///< the diffuse particles (0 when off)
     kStageSmoothing,  ///< the smoothing alone (part of surface)
     kStageStepWall,   ///< wall time of the frame's `steps` steps
+    kStageExport,     ///< wall time of the export's frame (0 when none was due)
     kStageCount
 };
 
@@ -138,7 +143,8 @@ public:
     long long steps_done(long long frame) const { return def_.warmup + (frame + 1) * def_.steps; }
     /// Simulated seconds at the end of `frame`.
     double time_s(long long frame) const { return double(steps_done(frame)) * def_.dt; }
-    /// Stage times in ms (DriverStage columns), constant memory however many frames.
+    /// Stage times in ms (DriverStage columns), constant memory however many frames:
+    /// kTimingSamples records, thinned as Checkpoints does.
     const Checkpoints& stage_ms() const { return stage_ms_; }
     /// Wall-clock seconds since loop() started.
     double elapsed_s() const;
@@ -171,7 +177,7 @@ public:
 
 private:
     void announce() const;
-    void record_stages(double step_ms);
+    void record_stages(double step_ms, double export_ms);
 
     DriverDef def_;
     SceneDef scene_;
