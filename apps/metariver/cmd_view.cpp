@@ -4,6 +4,7 @@
 // pour, the terrain and water tools, a dropped heightmap, screenshots, Record, the stats
 // overlay) one display frame at a time until the window closes.
 #include "commands.h"
+#include "driver.h"
 #include "export_options.h"
 #include "viewer.h"
 
@@ -25,6 +26,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <regex>
 
 namespace mr::app {
@@ -53,132 +55,151 @@ struct ViewOptions {
 /// Frame numbers a recording may reach (its --range is checked against them).
 constexpr long long kMaxRecordFrames = 1'000'000'000;
 
-int fail(int code, const std::string& message) {
-    fmt::print(stderr, "metariver view: {}\n", message);
-    return code;
-}
+/// What the options say beyond the scene, checked: the window size and the texture.
+struct ViewSetup {
+    int width = 0, height = 0;
+    std::optional<Image> texture;
+};
 
-int view(const ViewOptions& o) {
+/// Every option but the scene's and the recording's, checked into `setup` (bad input).
+Status check_options(const ViewOptions& o, ViewSetup& setup) {
     const char* display = std::getenv("DISPLAY");
     const char* wayland = std::getenv("WAYLAND_DISPLAY");
     if ((!display || !*display) && (!wayland || !*wayland))
-        return fail(kExitBadInput, "no display (DISPLAY and WAYLAND_DISPLAY are not set); render headless instead: "
-                                   "metariver render --out out/render (PNG frames) or --out river.mp4");
-    int width = 0, height = 0;
-    {
-        std::smatch m;
-        if (!std::regex_match(o.size, m, std::regex("([0-9]{1,5})x([0-9]{1,5})")) ||
-            (width = std::stoi(m[1].str())) < 64 || width > 8192 || (height = std::stoi(m[2].str())) < 64 || height > 8192)
-            return fail(kExitBadInput, fmt::format("--size: expected WIDTHxHEIGHT with each in [64, 8192] (got '{}')", o.size));
-    }
-    if (!std::isfinite(o.dt) || o.dt <= 0.0 || o.dt > 1.0)
-        return fail(kExitBadInput, fmt::format("--dt: must be in (0, 1] seconds (got {})", o.dt));
-    if (o.frames < 0) return fail(kExitBadInput, fmt::format("--frames: must be >= 0 (got {})", o.frames));
+        return Error{"no display (DISPLAY and WAYLAND_DISPLAY are not set); render headless instead: "
+                     "metariver render --out out/render (PNG frames) or --out river.mp4"};
+    std::smatch m;
+    int& width = setup.width;
+    int& height = setup.height;
+    if (!std::regex_match(o.size, m, std::regex("([0-9]{1,5})x([0-9]{1,5})")) ||
+        (width = std::stoi(m[1].str())) < 64 || width > 8192 || (height = std::stoi(m[2].str())) < 64 || height > 8192)
+        return Error{fmt::format("--size: expected WIDTHxHEIGHT with each in [64, 8192] (got '{}')", o.size)};
+    if (auto e = dt_error(o.dt); !e.empty()) return Error{e};
+    if (o.frames < 0) return Error{fmt::format("--frames: must be >= 0 (got {})", o.frames)};
     std::error_code ec;
     if (!fs::is_directory(o.screenshot_dir, ec))
-        return fail(kExitBadInput, fmt::format("--screenshot-dir {}: not a folder", o.screenshot_dir));
-    std::optional<Image> texture;
+        return Error{fmt::format("--screenshot-dir {}: not a folder", o.screenshot_dir)};
     if (!o.texture.empty()) {
         auto img = load_image(o.texture, 4);
-        if (!img) return fail(kExitBadInput, "--texture " + img.error().message);
-        texture = std::move(img.value());
+        if (!img) return Error{"--texture " + img.error().message};
+        setup.texture = std::move(img.value());
     }
-    auto resolved = o.scene.resolve();
-    if (!resolved) return fail(kExitBadInput, resolved.error().message);
-    SceneDef def = resolved.value();  // the scene as the user describes it (auto centre kept)
+    return Ok{};
+}
+
+/// The window with its OpenGL 4.5 core context and Dear ImGui on it; closed, with
+/// ImGui and GLFW shut down, when it goes.
+class GlWindow {
+public:
+    /// Opens the window; error (the display cannot be opened, or has no OpenGL 4.5
+    /// core) with GLFW's message.
+    static Result<std::unique_ptr<GlWindow>> open(int width, int height, const std::string& title, bool vsync) {
+        static std::string glfw_error;
+        glfwSetErrorCallback([](int, const char* msg) { glfw_error = msg ? msg : "unknown GLFW error"; });
+        if (!glfwInit())
+            return Error{fmt::format("cannot open the display ({}); render headless instead: metariver render",
+                                     glfw_error)};
+        glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 4);
+        glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 5);
+        glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+        glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+        GLFWwindow* window = glfwCreateWindow(width, height, title.c_str(), nullptr, nullptr);
+        if (!window) {
+            glfwTerminate();
+            return Error{fmt::format("cannot create an OpenGL 4.5 core window ({}); render headless instead: "
+                                     "metariver render", glfw_error)};
+        }
+        glfwMakeContextCurrent(window);
+        glfwSwapInterval(vsync ? 1 : 0);
+        return std::unique_ptr<GlWindow>(new GlWindow(window));
+    }
+    GlWindow(const GlWindow&) = delete;
+    GlWindow& operator=(const GlWindow&) = delete;
+    ~GlWindow() {
+        ImGui_ImplOpenGL3_Shutdown();
+        ImGui_ImplGlfw_Shutdown();
+        ImGui::DestroyContext();
+        gl::keep_loaded_libraries_under_asan();  // LeakSanitizer names Mesa's libraries at exit
+        glfwDestroyWindow(window_);
+        glfwTerminate();
+    }
+
+    GLFWwindow* window() const { return window_; }
+    Input& input() { return input_; }
+
+private:
+    explicit GlWindow(GLFWwindow* window) : window_(window) {
+        install_input_callbacks(window_, input_);
+        IMGUI_CHECKVERSION();
+        ImGui::CreateContext();
+        ImGuiIO& io = ImGui::GetIO();
+        io.IniFilename = nullptr;  // no imgui.ini next to the user's files
+        ImGui::StyleColorsDark();
+        ImGui::GetStyle().WindowRounding = 4.0f;
+        ImGui_ImplGlfw_InitForOpenGL(window_, true);
+        ImGui_ImplOpenGL3_Init("#version 450 core");
+    }
+
+    GLFWwindow* window_;
+    Input input_;
+};
+
+/// The Viewer over the driver's Simulation, one display frame at a time until the window
+/// closes. Exit 1 when the renderer cannot be made.
+int run_viewer(Driver& d, GlWindow& w, const ViewOptions& o, const ViewSetup& setup, const ExportDef& record) {
+    auto renderer_result = render::Renderer::create();
+    if (!renderer_result) return d.fail(kExitFailure, renderer_result.error().message);
+    render::Renderer& renderer = *renderer_result.value();
+    if (setup.texture) {
+        const Image& t = *setup.texture;
+        if (auto s = renderer.set_terrain_texture(t.pixels, t.width, t.height); !s)
+            fmt::print(stderr, "metariver view: --texture {}: {} (drawing without it)\n", o.texture, s.error().message);
+    }
+    render::RenderSettings draw;
+    draw.particles = o.particles;
+    draw.foam = o.foam;
+    draw.flow_detail = d.sim().def().render.flow_detail;
+    if (o.bvh_level) {
+        draw.bvh = true;
+        draw.bvh_level = *o.bvh_level;
+    }
+    Viewer viewer(w.window(), w.input(), renderer, draw, d.take_simulation(), d.take_heightmap(), d.scene(), record,
+                  ViewerSettings{.screenshot_dir = o.screenshot_dir,
+                                 .screenshot = o.screenshot,
+                                 .frames = o.frames,
+                                 .dt = o.dt,
+                                 .paused = o.paused,
+                                 .record = o.record,
+                                 .texture = setup.texture.has_value()});
+    auto t_last = std::chrono::steady_clock::now();
+    for (long long frame = 0; !glfwWindowShouldClose(w.window()); ++frame) {
+        glfwPollEvents();
+        const auto now = std::chrono::steady_clock::now();
+        const double elapsed = std::chrono::duration<double>(now - t_last).count();
+        t_last = now;
+        viewer.frame(frame, elapsed);
+    }
+    viewer.finish();
+    return kExitOk;
+}
+
+int view(const ViewOptions& o) {
+    Driver d({.command = "view", .dt = o.dt});
+    ViewSetup setup;
+    if (auto s = check_options(o, setup); !s) return d.fail(kExitBadInput, s.error().message);
+    // The scene as the user describes it (auto centre kept) is what the viewer edits.
+    if (!d.resolve(o.scene)) return d.exit_code();
     // What Record writes: the export options, checked now; without --export, the folder
     // metariver_export (and the default format).
     ExportOptions exp = o.exp;
     if (!exp.enabled()) exp.dir = "metariver_export";
-    auto record_def = exp.resolve(kMaxRecordFrames, def);
-    if (!record_def) return fail(kExitBadInput, record_def.error().message);
-    record_def->frame_rate = 1.0 / o.dt;
-    record_def->solver_dt = o.dt;
-    record_def->digits = 5;
-    auto map_result = load_scene_heightmap(def);
-    if (!map_result) return fail(kExitBadInput, map_result.error().message);
-    Heightmap map = std::move(map_result.value());
-    auto sim_result = Simulation::create(def, map);
-    if (!sim_result) return fail(kExitBadInput, sim_result.error().message);
-    std::unique_ptr<Simulation> sim = std::move(sim_result.value());
-
-    static std::string glfw_error;
-    glfwSetErrorCallback([](int, const char* msg) { glfw_error = msg ? msg : "unknown GLFW error"; });
-    if (!glfwInit())
-        return fail(kExitBadInput, fmt::format("cannot open the display ({}); render headless instead: metariver render",
-                                               glfw_error));
-    glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 4);
-    glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 5);
-    glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
-    glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
-    const std::string title = fmt::format("metariver - {}", def.name);
-    GLFWwindow* window = glfwCreateWindow(width, height, title.c_str(), nullptr, nullptr);
-    if (!window) {
-        glfwTerminate();
-        return fail(kExitBadInput, fmt::format("cannot create an OpenGL 4.5 core window ({}); render headless instead: "
-                                               "metariver render", glfw_error));
-    }
-    glfwMakeContextCurrent(window);
-    glfwSwapInterval(o.vsync ? 1 : 0);
-
-    Input input;
-    install_input_callbacks(window, input);
-
-    IMGUI_CHECKVERSION();
-    ImGui::CreateContext();
-    ImGuiIO& io = ImGui::GetIO();
-    io.IniFilename = nullptr;  // no imgui.ini next to the user's files
-    ImGui::StyleColorsDark();
-    ImGui::GetStyle().WindowRounding = 4.0f;
-    ImGui_ImplGlfw_InitForOpenGL(window, true);
-    ImGui_ImplOpenGL3_Init("#version 450 core");
-
-    int code = kExitOk;
-    {
-        auto renderer_result = render::Renderer::create();
-        if (!renderer_result) {
-            code = fail(kExitFailure, renderer_result.error().message);
-        } else {
-            render::Renderer& renderer = *renderer_result.value();
-            if (texture) {
-                if (auto s = renderer.set_terrain_texture(texture->pixels, texture->width, texture->height); !s)
-                    fmt::print(stderr, "metariver view: --texture {}: {} (drawing without it)\n", o.texture,
-                               s.error().message);
-            }
-            render::RenderSettings draw;
-            draw.particles = o.particles;
-            draw.foam = o.foam;
-            draw.flow_detail = sim->def().render.flow_detail;
-            if (o.bvh_level) {
-                draw.bvh = true;
-                draw.bvh_level = *o.bvh_level;
-            }
-            Viewer viewer(window, input, renderer, draw, std::move(sim), std::move(map), def, *record_def,
-                          ViewerSettings{.screenshot_dir = o.screenshot_dir,
-                                         .screenshot = o.screenshot,
-                                         .frames = o.frames,
-                                         .dt = o.dt,
-                                         .paused = o.paused,
-                                         .record = o.record,
-                                         .texture = texture.has_value()});
-            auto t_last = std::chrono::steady_clock::now();
-            for (long long frame = 0; !glfwWindowShouldClose(window); ++frame) {
-                glfwPollEvents();
-                const auto now = std::chrono::steady_clock::now();
-                const double elapsed = std::chrono::duration<double>(now - t_last).count();
-                t_last = now;
-                viewer.frame(frame, elapsed);
-            }
-            viewer.finish();
-        }
-    }
-    ImGui_ImplOpenGL3_Shutdown();
-    ImGui_ImplGlfw_Shutdown();
-    ImGui::DestroyContext();
-    gl::keep_loaded_libraries_under_asan();  // LeakSanitizer names Mesa's libraries at exit
-    glfwDestroyWindow(window);
-    glfwTerminate();
-    return code;
+    auto record = d.export_def(exp, kMaxRecordFrames);
+    if (!record) return d.fail(kExitBadInput, record.error().message);
+    record->digits = 5;
+    if (!d.load_heightmap() || !d.create()) return d.exit_code();
+    auto window = GlWindow::open(setup.width, setup.height, fmt::format("metariver - {}", d.scene().name), o.vsync);
+    if (!window) return d.fail(kExitBadInput, window.error().message);
+    return run_viewer(d, *window.value(), o, setup, record.value());
 }
 
 }  // namespace

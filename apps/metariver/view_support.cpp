@@ -1,6 +1,8 @@
 // The viewer's parts outside its loop (view_support.h).
 #include "view_support.h"
 
+#include "driver.h"
+
 #include <metariver/io.h>
 #include <metariver/render.h>
 #include <metariver/scene_keys.h>
@@ -34,9 +36,7 @@ std::string Recording::start(const ExportDef& def, const Simulation& sim) {
 std::string Recording::step(const Simulation& sim, double dt) {
     const long long f = next_frame++;
     if (!exporter->due(f)) return {};
-    if (auto s = exporter->write_frame(f, double(f + 1) * dt, sim.surface(), sim.particles(), sim.frame(),
-                                       sim.foam() ? &sim.foam()->particles() : nullptr);
-        !s) {
+    if (auto s = write_export_frame(*exporter, f, double(f + 1) * dt, sim); !s) {
         exporter.reset();
         return s.error().message;
     }
