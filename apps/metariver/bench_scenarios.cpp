@@ -1,6 +1,8 @@
 // The workloads of `metariver bench` (bench_scenarios.h).
 #include "bench_scenarios.h"
 
+#include "driver.h"
+
 #include <metariver/export.h>
 #include <metariver/gl_context.h>
 #include <metariver/gpu_field.h>
@@ -42,18 +44,18 @@ ScenarioResult bench_simulation(const std::string& name, const SceneDef& def, co
     ScenarioResult r;
     r.name = name;
     r.note = note;
-    auto sim = Simulation::create(def, map);
-    if (!sim) {
-        r.note = "skipped: " + sim.error().message;
+    Driver d({.command = "bench", .frames = frames, .warmup = warmup, .quiet = true});  // 1/60 s per frame
+    d.set_scene(def);
+    if (!d.create(&map)) {
+        r.note = "skipped: " + d.error();
         return r;
     }
-    Simulation& s = *sim.value();
-    for (int f = 0; f < warmup; ++f) s.step(1.0f / 60.0f);
+    const Simulation& s = d.sim();
+    d.warm_up();
     const uint64_t sunk_before = s.counters().sunk;
     OutletMeter outlets(s.terrain(), s.channel(), s.main_channel().back());
     float max_speed = 0.0f, density_max = 0.0f;
-    for (int f = 0; f < frames; ++f) {
-        s.step(1.0f / 60.0f);
+    (void)d.loop([&](long long f) {
         outlets.record(double(f + 1) / 60.0, s.last_exits());
         max_speed = std::max(max_speed, s.counters().max_speed);
         density_max = std::max(density_max, s.counters().density_error_max);
@@ -65,7 +67,8 @@ ScenarioResult bench_simulation(const std::string& name, const SceneDef& def, co
         // Part of surface, not added to total (issue 11: the smoothing's share of the stage).
         if (smoothing_on(s.def())) r.sample("smoothing", t.smoothing_ms);
         r.sample("total", t.simulate_ms + t.foam_ms + t.field_ms + t.surface_ms);
-    }
+        return true;
+    });
     r.particles = s.particles().active_count();
     r.triangles = s.surface().triangle_count();
     r.params = {{"scene", def.name},
@@ -353,12 +356,13 @@ ScenarioResult bench_export(int particles, int warmup, int frames) {
     r.name = "export (default river)";
     SceneDef def = default_scene();
     if (particles) def.spawn.count = particles;
-    auto sim = Simulation::create(def);
-    if (!sim) {
-        r.note = "skipped: " + sim.error().message;
+    Driver d({.command = "bench", .frames = frames, .warmup = warmup, .quiet = true});  // 1/60 s per frame
+    d.set_scene(def);
+    if (!d.create()) {
+        r.note = "skipped: " + d.error();
         return r;
     }
-    Simulation& s = *sim.value();
+    const Simulation& s = d.sim();
     const fs::path dir = fs::temp_directory_path() / fmt::format("metariver-bench-export-{}", ::getpid());
     auto e = Exporter::begin(ExportDef{.dir = dir.string(),
                                        .formats = {kExportFormats.begin(), kExportFormats.end()},
@@ -368,13 +372,14 @@ ScenarioResult bench_export(int particles, int warmup, int frames) {
         r.note = "skipped: " + e.error().message;
         return r;
     }
-    for (int f = 0; f < warmup; ++f) s.step(1.0f / 60.0f);
-    for (int f = 0; f < frames; ++f) {
-        s.step(1.0f / 60.0f);
-        if (auto st = e.value()->write_frame(f, double(warmup + f + 1) / 60.0, s.surface(), s.particles(), s.frame()); !st) {
-            r.note = "failed: " + st.error().message;
-            return r;
-        }
+    d.warm_up();
+    const bool written = d.loop([&](long long f) {
+        auto st = e.value()->write_frame(f, double(warmup + f + 1) / 60.0, s.surface(), s.particles(), s.frame());
+        return st ? true : d.stop(kExitFailure, st.error().message);
+    });
+    if (!written) {
+        r.note = "failed: " + d.error();
+        return r;
     }
     json bytes = json::object();
     for (const ExportFormatStats& st : e.value()->stats()) {

@@ -11,6 +11,7 @@
 #include "bench_peers.h"
 #include "bench_plot.h"
 #include "bench_scenarios.h"
+#include "driver.h"
 
 #include <metariver/io.h>
 #include <metariver/workloads.h>
@@ -23,6 +24,8 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <optional>
+#include <string_view>
 #include <thread>
 #include <unistd.h>
 
@@ -172,138 +175,133 @@ PlotDef bench_plot(const std::vector<ScenarioResult>& results, const json& peers
     return plot;
 }
 
-int run_bench(const BenchOptions& o) {
-    const int threads = o.threads > 0 ? o.threads : tbb::info::default_concurrency();
-    if (o.threads < 0 || o.threads > 256) {
-        fmt::print(stderr, "metariver bench: --threads: must be in [0, 256] (got {})\n", o.threads);
-        return kExitBadInput;
-    }
-    const std::vector<std::string> known = {"paper", "river", "pbf", "w1", "w2", "w3", "export", "maps"};
-    std::vector<std::string> chosen;  // --scenario a,b: several in one run (one JSON, one plot)
-    if (o.scenario.empty() && !o.heightmaps.empty()) chosen.push_back("maps");  // --heightmap alone: just those
-    for (std::string rest = o.scenario; !rest.empty();) {
-        const size_t comma = rest.find(',');
-        chosen.push_back(rest.substr(0, comma));
-        rest = comma == std::string::npos ? "" : rest.substr(comma + 1);
-        if (std::find(known.begin(), known.end(), chosen.back()) == known.end()) {
-            fmt::print(stderr,
-                       "metariver bench: --scenario: must be one or more (comma-separated) of paper, river, pbf, w1, w2, "
-                       "w3, export, maps (got '{}')\n",
-                       o.scenario);
-            return kExitBadInput;
-        }
-    }
-    const auto want = [&](const char* s) {
-        return chosen.empty() || std::find(chosen.begin(), chosen.end(), s) != chosen.end();
-    };
-    if (want("pbf") && o.particles_given &&
-        (o.particles < kPbfMinParticles || o.particles > kPbfMaxParticles)) {
-        fmt::print(stderr, "metariver bench: --particles: the PBF river must have [{}, {}] particles (got {})\n",
-                   kPbfMinParticles, kPbfMaxParticles, o.particles);
-        return kExitBadInput;
-    }
-    const int nx_max = o.gpu ? kW3GpuMaxNx : kW3MaxNx;
-    if (o.nx_given && (o.nx < kW3MinNx || o.nx > nx_max)) {
-        fmt::print(stderr, "metariver bench: --nx: must be in [{}, {}]{} (nx * nx * nx/2 particles; got {})\n", kW3MinNx,
-                   nx_max, o.gpu ? " with --gpu" : fmt::format(" ({} with --gpu)", kW3GpuMaxNx), o.nx);
-        return kExitBadInput;
-    }
-    if (o.warmup < -1 || o.warmup > 100000) {
-        fmt::print(stderr, "metariver bench: --warmup: must be in [0, 100000] (got {})\n", o.warmup);
-        return kExitBadInput;
-    }
-    if (o.balls < 0 || o.balls > 10'000'000 || o.res < 0 || (o.res != 0 && o.res < 2) || o.res > 1024) {
-        fmt::print(stderr, "metariver bench: --balls must be in [1, 10000000] and --res in [2, 1024]\n");
-        return kExitBadInput;
-    }
-    if (o.spheres < 0 || o.spheres > 1'000'000 || o.particles < 0 || o.particles > kMaxParticles ||
-        (o.particles_given && o.particles == 0)) {
-        fmt::print(stderr, "metariver bench: --spheres must be in [1, 1000000], --particles in [1, {}]\n", kMaxParticles);
-        return kExitBadInput;
-    }
-    if (o.frames < 0 || o.frames > 100000) {
-        fmt::print(stderr, "metariver bench: --frames: must be in [1, 100000] (got {})\n", o.frames);
-        return kExitBadInput;
-    }
-    // Scenario maps: every scene resolved and its heightmap read and checked before anything
-    // runs (a broken map is an error, not a skipped row); the simulations use what was read.
+/// The scenarios --scenario (and --heightmap) chose and what they run on.
+struct BenchPlan {
+    int threads = 0;                  ///< --threads, or every core
+    std::vector<std::string> chosen;  ///< --scenario a,b: several in one run (one JSON, one plot); empty: all but maps
+    /// Scenario maps: every scene resolved and its heightmap read and checked before
+    /// anything runs (a broken map is an error, not a skipped row); the simulations use
+    /// what was read.
     struct MapScene {
         std::string file;
         SceneDef def;
         Heightmap map;
     };
-    std::vector<MapScene> map_scenes;
-    if (!o.heightmaps.empty() && !want("maps")) {
-        fmt::print(stderr, "metariver bench: --heightmap: only for scenario maps (--scenario {})\n", o.scenario);
-        return kExitBadInput;
+    std::vector<MapScene> maps;
+
+    bool want(std::string_view s) const {
+        return chosen.empty() || std::find(chosen.begin(), chosen.end(), s) != chosen.end();
     }
-    if (want("maps") && !chosen.empty()) {
-        if (o.heightmaps.empty()) {
-            fmt::print(stderr, "metariver bench: --scenario maps: needs --heightmap FILE[,FILE...]\n");
-            return kExitBadInput;
-        }
-        for (const std::string& file : o.heightmaps) {
-            SceneOptions so;
-            so.heightmap = file;
-            auto def = so.resolve();
-            auto map = def ? load_scene_heightmap(def.value()) : Result<Heightmap>(def.error());
-            if (!map) {
-                fmt::print(stderr, "metariver bench: --heightmap: {}\n", map.error().message);
-                return kExitBadInput;
-            }
-            map_scenes.push_back({file, std::move(def.value()), std::move(map.value())});
-        }
+};
+
+/// --scenario into plan.chosen; the one-line error names the known scenarios.
+Status parse_scenarios(const BenchOptions& o, BenchPlan& plan) {
+    const std::vector<std::string> known = {"paper", "river", "pbf", "w1", "w2", "w3", "export", "maps"};
+    if (o.scenario.empty() && !o.heightmaps.empty()) plan.chosen.push_back("maps");  // --heightmap alone: just those
+    for (std::string rest = o.scenario; !rest.empty();) {
+        const size_t comma = rest.find(',');
+        plan.chosen.push_back(rest.substr(0, comma));
+        rest = comma == std::string::npos ? "" : rest.substr(comma + 1);
+        if (std::find(known.begin(), known.end(), plan.chosen.back()) == known.end())
+            return Error{fmt::format("--scenario: must be one or more (comma-separated) of paper, river, pbf, w1, w2, "
+                                     "w3, export, maps (got '{}')",
+                                     o.scenario)};
     }
+    return Ok{};
+}
+
+/// The sizes and counts, checked for the chosen scenarios (one line naming the option).
+Status check_sizes(const BenchOptions& o, const BenchPlan& plan) {
+    if (plan.want("pbf") && o.particles_given && (o.particles < kPbfMinParticles || o.particles > kPbfMaxParticles))
+        return Error{fmt::format("--particles: the PBF river must have [{}, {}] particles (got {})", kPbfMinParticles,
+                                 kPbfMaxParticles, o.particles)};
+    const int nx_max = o.gpu ? kW3GpuMaxNx : kW3MaxNx;
+    if (o.nx_given && (o.nx < kW3MinNx || o.nx > nx_max))
+        return Error{fmt::format("--nx: must be in [{}, {}]{} (nx * nx * nx/2 particles; got {})", kW3MinNx, nx_max,
+                                 o.gpu ? " with --gpu" : fmt::format(" ({} with --gpu)", kW3GpuMaxNx), o.nx)};
+    if (o.warmup < -1 || o.warmup > 100000)
+        return Error{fmt::format("--warmup: must be in [0, 100000] (got {})", o.warmup)};
+    if (o.balls < 0 || o.balls > 10'000'000 || o.res < 0 || (o.res != 0 && o.res < 2) || o.res > 1024)
+        return Error{"--balls must be in [1, 10000000] and --res in [2, 1024]"};
+    if (o.spheres < 0 || o.spheres > 1'000'000 || o.particles < 0 || o.particles > kMaxParticles ||
+        (o.particles_given && o.particles == 0))
+        return Error{fmt::format("--spheres must be in [1, 1000000], --particles in [1, {}]", kMaxParticles)};
+    if (o.frames < 0 || o.frames > 100000) return Error{fmt::format("--frames: must be in [1, 100000] (got {})", o.frames)};
+    return Ok{};
+}
+
+/// Scenario maps: each --heightmap's scene (the default river on it, as `run --heightmap
+/// FILE`) and the map read, through a driver each.
+Status load_maps(const BenchOptions& o, BenchPlan& plan) {
+    if (!o.heightmaps.empty() && !plan.want("maps"))
+        return Error{fmt::format("--heightmap: only for scenario maps (--scenario {})", o.scenario)};
+    if (!plan.want("maps") || plan.chosen.empty()) return Ok{};
+    if (o.heightmaps.empty()) return Error{"--scenario maps: needs --heightmap FILE[,FILE...]"};
+    for (const std::string& file : o.heightmaps) {
+        SceneOptions so;
+        so.heightmap = file;
+        Driver d({.command = "bench", .quiet = true});
+        if (!d.resolve(so) || !d.load_heightmap()) return Error{"--heightmap: " + d.error()};
+        plan.maps.push_back({file, d.scene(), d.take_heightmap()});
+    }
+    return Ok{};
+}
+
+/// Every option checked and the plan made before anything runs.
+Status make_plan(const BenchOptions& o, BenchPlan& plan) {
+    plan.threads = o.threads > 0 ? o.threads : tbb::info::default_concurrency();
+    if (o.threads < 0 || o.threads > 256)
+        return Error{fmt::format("--threads: must be in [0, 256] (got {})", o.threads)};
+    if (auto s = parse_scenarios(o, plan); !s) return s;
+    if (auto s = check_sizes(o, plan); !s) return s;
+    if (auto s = load_maps(o, plan); !s) return s;
     if (!o.json_path.empty()) {
         const fs::path dir = fs::path(o.json_path).parent_path();
         std::error_code ec;
-        if (!dir.empty() && !fs::is_directory(dir, ec)) {
-            fmt::print(stderr, "metariver bench: --json {}: folder '{}' does not exist\n", o.json_path, dir.string());
-            return kExitBadInput;
-        }
+        if (!dir.empty() && !fs::is_directory(dir, ec))
+            return Error{fmt::format("--json {}: folder '{}' does not exist", o.json_path, dir.string())};
     }
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
-    const int frames = o.frames;
-    std::vector<ScenarioResult> results;
-    PeerRequest peer_request{.peers_dir = o.peers_dir, .threads = threads};  // the W1/W2 sizes run, for --peers
+    return Ok{};
+}
 
-    if (want("paper")) {
-        struct PaperScene {
-            const char* preset;
-            const char* map;
-        };
-        for (const PaperScene& ps : {PaperScene{"paper-full", "strict17.png"}, PaperScene{"paper-nile", "nile.png"},
-                                     PaperScene{"paper-bowl", "bowl.png"}}) {
-            SceneDef d = preset(ps.preset).value();
-            const fs::path map = fs::path(o.maps_dir) / ps.map;
-            std::string note;
-            if (fs::exists(map)) {
-                d.source.kind = TerrainSource::File;
-                d.source.heightmap = map.string();
-            } else if (d.source.kind == TerrainSource::File) {
-                results.push_back(ScenarioResult{.name = ps.preset, .note = "skipped: " + map.string() + " not found (--maps DIR)"});
-                continue;
-            }
-            // The paper's own physics and pipeline; 1500 frames fill every spawn slot.
-            results.push_back(bench_simulation(ps.preset, d, 1500, frames ? frames : 300, note));
+/// The paper's scenes (own physics and pipeline; 1500 frames fill every spawn slot), on
+/// the paper's heightmaps from --maps where the preset needs one.
+void run_paper(const BenchOptions& o, std::vector<ScenarioResult>& results) {
+    struct PaperScene {
+        const char* preset;
+        const char* map;
+    };
+    for (const PaperScene& ps : {PaperScene{"paper-full", "strict17.png"}, PaperScene{"paper-nile", "nile.png"},
+                                 PaperScene{"paper-bowl", "bowl.png"}}) {
+        SceneDef d = preset(ps.preset).value();
+        const fs::path map = fs::path(o.maps_dir) / ps.map;
+        if (fs::exists(map)) {
+            d.source.kind = TerrainSource::File;
+            d.source.heightmap = map.string();
+        } else if (d.source.kind == TerrainSource::File) {
+            results.push_back(ScenarioResult{.name = ps.preset, .note = "skipped: " + map.string() + " not found (--maps DIR)"});
+            continue;
         }
+        results.push_back(bench_simulation(ps.preset, d, 1500, o.frames ? o.frames : 300));
     }
-    if (want("river")) {
+}
+
+/// The springs river at each size, the default scene (the PBF river, measured once it has
+/// filled the channel), the PBF river at about n particles in steady flow (big rivers
+/// measure fewer frames: the warm-up dominates the wall time anyway).
+void run_rivers(const BenchOptions& o, const BenchPlan& plan, std::vector<ScenarioResult>& results) {
+    const int frames = o.frames;
+    if (plan.want("river")) {
         std::vector<int> sizes = {1000, 10000, 50000, 100000};
         if (o.particles) sizes = {o.particles};
         for (int n : sizes) {
             const int f = frames ? frames : (n >= 50000 ? 60 : 120);
             results.push_back(bench_simulation(fmt::format("river {}", n), river_scene(n), 30, f));
         }
-        if (!o.particles) {
-            // The default scene: the PBF river (source at the channel head, outlets recycled),
-            // measured once it has filled the channel.
+        if (!o.particles)
             results.push_back(bench_simulation("default (pbf river)", default_scene(), 600, frames ? frames : 120));
-        }
     }
-    if (want("pbf")) {
-        // The PBF river at about n particles in steady flow; big rivers measure fewer
-        // frames (the warm-up dominates the wall time anyway).
+    if (plan.want("pbf")) {
         std::vector<int> sizes = {4000, 16000, 50000, 100000};
         if (o.particles) sizes = {o.particles};
         const int warmup = o.warmup >= 0 ? o.warmup : kPbfWarmupFrames;
@@ -316,23 +314,28 @@ int run_bench(const BenchOptions& o) {
             results.push_back(std::move(r));
         }
     }
-    if (want("w1")) {
+}
+
+/// W1, W2 and W3 at the peers' sizes (or the one asked for); the sizes go to --peers.
+void run_workloads(const BenchOptions& o, const BenchPlan& plan, std::vector<ScenarioResult>& results,
+                   PeerRequest& peers) {
+    const int frames = o.frames;
+    if (plan.want("w1")) {
         std::vector<std::pair<int, int>> cases = {{50, 32}, {1000, 64}, {1000, 128}, {10000, 128}, {10000, 256}};
         if (o.balls || o.res) cases = {{o.balls ? o.balls : 1000, o.res ? o.res : 128}};
         for (auto [n, res] : cases) {
             results.push_back(bench_w1(n, res, frames ? frames : 10));
             if (o.gpu) results.push_back(bench_w1_gpu(n, res, frames ? frames : 10));
         }
-        peer_request.w1_cases = cases;
+        peers.w1_cases = cases;
     }
-    if (want("w2")) {
+    if (plan.want("w2")) {
         std::vector<int> sizes = {1000, 10000};
         if (o.spheres) sizes = {o.spheres};
         for (int n : sizes) results.push_back(bench_w2(n));
-        peer_request.w2_sizes = sizes;
+        peers.w2_sizes = sizes;
     }
-
-    if (want("w3")) {
+    if (plan.want("w3")) {
         // The anchor's sizes (pbf_anchor/README.md): 16,384, 48,668 and 97,556 particles.
         std::vector<int> sides = {32, 46, 58};
         if (o.nx) sides = {o.nx};
@@ -342,66 +345,86 @@ int run_bench(const BenchOptions& o) {
         if (o.gpu)
             for (int nx : sides) results.push_back(bench_w3_gpu(nx, o.warmup >= 0 ? o.warmup : 3, frames ? frames : 20));
         std::erase_if(sides, [](int nx) { return nx > kW3MaxNx; });
-        peer_request.w3_nx = sides;
+        peers.w3_nx = sides;
     }
+}
 
+/// Every chosen scenario, in the tables' order.
+std::vector<ScenarioResult> run_scenarios(const BenchOptions& o, const BenchPlan& plan, PeerRequest& peers) {
+    std::vector<ScenarioResult> results;
+    if (plan.want("paper")) run_paper(o, results);
+    run_rivers(o, plan, results);
+    run_workloads(o, plan, results, peers);
     // The default river on each --heightmap (as `run --heightmap FILE`), surface on, measured
     // after 30 s of flow (the channel starts full: particles.prefill): the frame budget
     // of the river table (docs/river.md).
-    for (const MapScene& m : map_scenes)
+    for (const BenchPlan::MapScene& m : plan.maps)
         results.push_back(bench_simulation(fmt::format("default on {}", fs::path(m.file).filename().string()), m.def,
-                                           m.map, o.warmup >= 0 ? o.warmup : kMapsWarmupFrames, frames ? frames : 120));
+                                           m.map, o.warmup >= 0 ? o.warmup : kMapsWarmupFrames,
+                                           o.frames ? o.frames : 120));
+    if (plan.want("export")) results.push_back(bench_export(o.particles, 600, o.frames ? o.frames : 30));
+    return results;
+}
 
-    if (want("export")) results.push_back(bench_export(o.particles, 600, frames ? frames : 30));
+/// bench_peers.cpp: the installed peers on the same sizes, printed beside ours.
+json run_peers_beside(const std::vector<ScenarioResult>& results, const PeerRequest& request, int threads) {
+    std::vector<std::string> missing;
+    const std::vector<PeerRow> peer_rows = run_peers(request, missing);
+    std::vector<OursRow> ours;
+    const auto med = [](const ScenarioResult& r, const char* s) {
+        return r.stage_ms.count(s) ? percentiles(r.stage_ms.at(s)).median : 0.0;
+    };
+    for (const auto& r : results)
+        if (r.params.contains("N") && r.params.contains("R") && r.name.rfind("w1 ", 0) == 0)  // not the GPU rows
+            ours.push_back({.workload = "w1", .n = r.params["N"].get<int>(), .r = r.params["R"].get<int>(),
+                            .field_surface_ms = med(r, "total"), .surface_ms = med(r, "surface"),
+                            .triangles = r.triangles});
+        else if (r.params.contains("spheres"))
+            ours.push_back({.workload = "w2", .n = r.params["spheres"].get<int>(), .step_ms = med(r, "step")});
+        else if (r.params.contains("nx") && r.name.rfind("w3 ", 0) == 0)  // not the GPU rows
+            ours.push_back({.workload = "w3", .n = int(r.particles), .r = r.params["nx"].get<int>(),
+                            .step_ms = med(r, "step")});
+    return print_peers_side_by_side(ours, peer_rows, missing, threads);
+}
 
+/// --json: the machine and every result, and the plot beside it (bench.json -> bench.svg)
+/// when a PBF river or W3 ran.
+Status write_results(const std::string& path, const std::vector<ScenarioResult>& results, const json* peers,
+                     int threads) {
+    json j;
+    j["machine"] = machine_json(threads);
+    json arr = json::array();
+    for (const auto& r : results) arr.push_back(result_json(r, threads));
+    j["results"] = arr;
+    if (peers) j["peers"] = *peers;
+    const bool plotted = std::any_of(results.begin(), results.end(), [](const ScenarioResult& r) {
+        return r.name.rfind("pbf ", 0) == 0 || r.name.rfind("w3", 0) == 0;
+    });
+    const std::string svg_path = fs::path(path).replace_extension(".svg").string();
+    if (plotted) j["plot"] = svg_path;
+    if (auto s = write_file_atomic(path, j.dump(2) + "\n"); !s) return s;
+    fmt::print("wrote {}\n", path);
+    if (plotted) {
+        if (auto s = write_file_atomic(svg_path, plot_svg(bench_plot(results, peers ? *peers : json()))); !s) return s;
+        fmt::print("wrote {}\n", svg_path);
+    }
+    return Ok{};
+}
+
+int run_bench(const BenchOptions& o) {
+    Driver d({.command = "bench"});  // the exit code and the one-line errors
+    BenchPlan plan;
+    if (auto s = make_plan(o, plan); !s) return d.fail(kExitBadInput, s.error().message);
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(plan.threads));
+    PeerRequest peer_request{.peers_dir = o.peers_dir, .threads = plan.threads};  // the W1/W2 sizes run, for --peers
+    const std::vector<ScenarioResult> results = run_scenarios(o, plan, peer_request);
     print_table(results);
     print_pbf_summary(results);
-    json peers_json;
-    if (o.peers) {  // bench_peers.cpp: run the installed peers on the same sizes, print side by side
-        std::vector<std::string> missing;
-        const std::vector<PeerRow> peer_rows = run_peers(peer_request, missing);
-        std::vector<OursRow> ours;
-        const auto med = [](const ScenarioResult& r, const char* s) {
-            return r.stage_ms.count(s) ? percentiles(r.stage_ms.at(s)).median : 0.0;
-        };
-        for (const auto& r : results)
-            if (r.params.contains("N") && r.params.contains("R") && r.name.rfind("w1 ", 0) == 0)  // not the GPU rows
-                ours.push_back({.workload = "w1", .n = r.params["N"].get<int>(), .r = r.params["R"].get<int>(),
-                                .field_surface_ms = med(r, "total"), .surface_ms = med(r, "surface"),
-                                .triangles = r.triangles});
-            else if (r.params.contains("spheres"))
-                ours.push_back({.workload = "w2", .n = r.params["spheres"].get<int>(), .step_ms = med(r, "step")});
-            else if (r.params.contains("nx") && r.name.rfind("w3 ", 0) == 0)  // not the GPU rows
-                ours.push_back({.workload = "w3", .n = int(r.particles), .r = r.params["nx"].get<int>(),
-                                .step_ms = med(r, "step")});
-        peers_json = print_peers_side_by_side(ours, peer_rows, missing, threads);
-    }
-    if (!o.json_path.empty()) {
-        json j;
-        j["machine"] = machine_json(threads);
-        json arr = json::array();
-        for (const auto& r : results) arr.push_back(result_json(r, threads));
-        j["results"] = arr;
-        if (o.peers) j["peers"] = peers_json;
-        // The plot beside the JSON (bench.json -> bench.svg) when a PBF river or W3 ran.
-        const bool plotted = std::any_of(results.begin(), results.end(), [](const ScenarioResult& r) {
-            return r.name.rfind("pbf ", 0) == 0 || r.name.rfind("w3", 0) == 0;
-        });
-        const std::string svg_path = fs::path(o.json_path).replace_extension(".svg").string();
-        if (plotted) j["plot"] = svg_path;
-        if (auto s = write_file_atomic(o.json_path, j.dump(2) + "\n"); !s) {
-            fmt::print(stderr, "metariver bench: {}\n", s.error().message);
-            return kExitFailure;
-        }
-        fmt::print("wrote {}\n", o.json_path);
-        if (plotted) {
-            if (auto s = write_file_atomic(svg_path, plot_svg(bench_plot(results, peers_json))); !s) {
-                fmt::print(stderr, "metariver bench: {}\n", s.error().message);
-                return kExitFailure;
-            }
-            fmt::print("wrote {}\n", svg_path);
-        }
-    }
+    std::optional<json> peers;
+    if (o.peers) peers = run_peers_beside(results, peer_request, plan.threads);
+    if (!o.json_path.empty())
+        if (auto s = write_results(o.json_path, results, peers ? &*peers : nullptr, plan.threads); !s)
+            return d.fail(kExitFailure, s.error().message);
     return kExitOk;
 }
 
