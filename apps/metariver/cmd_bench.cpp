@@ -226,7 +226,8 @@ Status check_sizes(const BenchOptions& o, const BenchPlan& plan) {
     if (o.spheres < 0 || o.spheres > 1'000'000 || o.particles < 0 || o.particles > kMaxParticles ||
         (o.particles_given && o.particles == 0))
         return Error{fmt::format("--spheres must be in [1, 1000000], --particles in [1, {}]", kMaxParticles)};
-    if (o.frames < 0 || o.frames > 100000) return Error{fmt::format("--frames: must be in [1, 100000] (got {})", o.frames)};
+    if (o.frames < 0 || o.frames > 100000)
+        return Error{fmt::format("--frames: must be in [1, 100000] (got {})", o.frames)};
     return Ok{};
 }
 
@@ -279,7 +280,8 @@ void run_paper(const BenchOptions& o, std::vector<ScenarioResult>& results) {
             d.source.kind = TerrainSource::File;
             d.source.heightmap = map.string();
         } else if (d.source.kind == TerrainSource::File) {
-            results.push_back(ScenarioResult{.name = ps.preset, .note = "skipped: " + map.string() + " not found (--maps DIR)"});
+            const std::string note = "skipped: " + map.string() + " not found (--maps DIR)";
+            results.push_back(ScenarioResult{.name = ps.preset, .note = note});
             continue;
         }
         results.push_back(bench_simulation(ps.preset, d, 1500, o.frames ? o.frames : 300));

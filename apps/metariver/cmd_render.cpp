@@ -192,7 +192,8 @@ public:
         height_ = height;
         if (!mp4_) {
             if (auto s = d.outputs().make_folder("--out", out_); !s) return d.stop(kExitBadInput, s.error().message);
-            if (!folder_writable(out_)) return d.stop(kExitBadInput, fmt::format("--out {}: folder is not writable", out_));
+            if (!folder_writable(out_))
+                return d.stop(kExitBadInput, fmt::format("--out {}: folder is not writable", out_));
             return true;
         }
         const fs::path out(out_);
@@ -235,7 +236,8 @@ public:
             return d.stop(kExitFailure, fmt::format("--out {}: ffmpeg failed (exit status {})", out_, status));
         fs::rename(mp4_tmp_, out_, ec);
         if (ec)
-            return d.stop(kExitFailure, fmt::format("--out {}: cannot move the video into place: {}", out_, ec.message()));
+            return d.stop(kExitFailure,
+                          fmt::format("--out {}: cannot move the video into place: {}", out_, ec.message()));
         d.outputs().add_file(out_);
         return true;
     }

@@ -77,7 +77,7 @@ struct DriverDef {
     bool progress = false;       ///< the progress bar (drawn only on a terminal, for >= 10 frames)
     long long report_every = 0;  ///< a report line (report.h) every N frames; 0: none
     std::string stats;           ///< --stats FILE (JSON); empty: none
-    bool announce = false;       ///< create() prints the scene's warnings, the river's sizing and the terrain's conditioning
+    bool announce = false;       ///< create() prints the scene's warnings, the river's sizing, the conditioning
     bool quiet = false;          ///< errors are kept (error()), not printed (bench: a skipped row)
 };
 

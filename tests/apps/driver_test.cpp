@@ -51,7 +51,7 @@ TEST_F(AppDriver, StepsWarmupPlusFramesTimesStepsLikeASimulationSteppedByHand) {
     std::vector<long long> seen;
     ASSERT_TRUE(d.loop([&](long long f) {
         seen.push_back(f);
-        EXPECT_EQ(d.sim().frame(), static_cast<uint64_t>(d.steps_done(f))) << "the frame's steps are taken before its work";
+        EXPECT_EQ(d.sim().frame(), static_cast<uint64_t>(d.steps_done(f))) << "the frame's steps come before its work";
         return true;
     }));
     EXPECT_EQ(seen, (std::vector<long long>{0, 1, 2, 3, 4, 5, 6}));
