@@ -74,7 +74,8 @@ public:
         if (!on() || (f % every_ != 0 && f != frames_ - 1)) return true;
         const std::string path = (fs::path(dir_) / fmt::format("surface_{:0{}}.obj", f, digits_)).string();
         const std::string comment = fmt::format("metariver water surface, frame {}", f);
-        if (auto s = write_surface_obj(path, d.sim().surface(), comment); !s) return d.stop(kExitFailure, s.error().message);
+        if (auto s = write_surface_obj(path, d.sim().surface(), comment); !s)
+            return d.stop(kExitFailure, s.error().message);
         d.outputs().add_file(path);
         ++written_;
         return true;
