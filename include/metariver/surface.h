@@ -13,6 +13,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string_view>
 #include <vector>
 
@@ -84,6 +85,21 @@ struct SurfaceWorkspace {
     struct Impl;
     std::unique_ptr<Impl> impl;
 };
+
+/// Water given as depths over a heightfield (a solver's HeightfieldWater on the
+/// terrain's grid: solver.h) as a mesh, appended to `out` (its indices offset past the
+/// vertices it holds, so a particle surface and a heightfield surface make one mesh).
+/// `bed` and `depth` hold rows x columns samples, row-major (index i * columns + j, as
+/// Terrain::vertices()): the bed's positions and the water's depth above them, metres. A
+/// cell (the square between samples (i, j) and (i + 1, j + 1)) is wet when the depths at
+/// its four corners are all > 0; each wet cell gives two triangles split as the terrain's
+/// mesh splits it, counter-clockwise seen from above (normals up). A vertex is its
+/// sample's bed position raised by the depth, one per sample of a wet cell, with the
+/// normalised area-weighted mean of its wet triangles' normals (smooth). Nothing is
+/// appended when the sizes do not match rows x columns or either is < 2. `scratch`
+/// (optional, reused by the caller: no allocation once warm) holds a vertex index per sample.
+void append_heightfield_surface(std::span<const Vec3> bed, std::span<const float> depth, int rows, int columns,
+                                SurfaceMesh& out, std::vector<uint32_t>* scratch = nullptr);
 
 /// extract_surface on a SparseField, block-parallel (oneTBB) and skipping blocks whose
 /// value range cannot cross the threshold. Gives the mesh extract_surface gives on
