@@ -31,7 +31,7 @@ long long counter_balance(const Simulation& sim, long long frames_done) {
     const long long active = static_cast<long long>(sim.particles().active_count());
     const long long total = static_cast<long long>(sim.particles().size());
     long long expected = 0;
-    if (d.solver == SolverKind::Pbf)
+    if (sim.solver_entry().respawn_to_pool)  // PBF's lattice source
         expected = static_cast<long long>(c.emitted) - static_cast<long long>(c.sunk) - static_cast<long long>(c.respawned);
     else if (d.spawn.has_rate())
         expected = static_cast<long long>(c.emitted) - static_cast<long long>(c.sunk);

@@ -73,7 +73,8 @@ public:
     /// with dt = integrator.fixed_dt when set, else frame_dt (integrator.substeps is
     /// not used: Bullet substeps by its own fixed step).
     void step_frame(float frame_dt) override;
-    const Particles& particles() const override;
+    const Particles& particles() const;
+    const Particles* water_particles() const override { return &particles(); }
     const SolverCounters& counters() const override;
     uint64_t frame() const override;
     void set_spawn_center(const Vec3& center) override;

@@ -10,6 +10,7 @@
 #include <metariver/core.h>
 #include <metariver/emitters.h>
 #include <metariver/neighbor_grid.h>
+#include <metariver/solver.h>
 #include <metariver/terrain.h>
 
 #include <array>
@@ -299,21 +300,6 @@ struct IntegratorDef {
     int substeps = 1;            ///< integration steps per frame, [1, 1000]
 };
 
-/// Counters a solver accumulates; tests and --stats read them.
-struct SolverCounters {
-    uint64_t particle_steps = 0;  ///< active particle integrations
-    uint64_t collisions = 0;      ///< terrain hits handled
-    uint64_t tunneled = 0;        ///< particle-steps ending below the mesh (lifted by the radius) after the collision response, before any guard
-    uint64_t respawned = 0;       ///< particles re-spawned after leaving the terrain bounds
-    uint64_t guarded = 0;         ///< robust mode: particle-steps the heightfield guard had to lift (each one also tunneled)
-    uint64_t emitted = 0;         ///< particles emitted by a flow-rate source (activations and recycles)
-    uint64_t sunk = 0;            ///< particles taken out by a sink (recycled to the source)
-    // Latest step's state (not cumulative):
-    float density_error_mean = 0.0f;  ///< PBF: mean over active particles of max(rho/rho0 - 1, 0)
-    float density_error_max = 0.0f;   ///< PBF: max of rho/rho0 - 1
-    float max_speed = 0.0f;           ///< fastest active particle, m/s
-};
-
 /// Depth below the mesh (metres) that tests and the Bullet solver tolerate for a
 /// particle found at the end of a frame (Bullet's contacts rest a hair inside the
 /// mesh). The own solvers count any depth > 0 as tunneled, before correcting it.
@@ -326,31 +312,6 @@ void add_spring_forces_pairs(Particles& p, const SpringDef& def);
 void add_spring_forces_grid(Particles& p, const NeighborGrid& grid, const SpringDef& def);
 /// Cell size the grid needs for these springs (their reach), metres.
 float spring_reach(const SpringDef& def);
-
-/// What the Simulation drives: one implementation per `solver` scene value (the
-/// paper's springs here; Bullet and PBF elsewhere). All share spawning rules, counters
-/// and read-only particle views so stats compare like with like.
-class Solver {
-public:
-    virtual ~Solver() = default;
-    /// Advances one rendered frame (spawning, substeps, collision, respawn).
-    virtual void step_frame(float frame_dt) = 0;
-    virtual const Particles& particles() const = 0;
-    virtual const SolverCounters& counters() const = 0;
-    virtual uint64_t frame() const = 0;
-    /// Moves the spawn volume's centre (future activations and respawns start there).
-    virtual void set_spawn_center(const Vec3& center) = 0;
-    /// Pours water: moves the spawn centre to `center` and (re)spawns `count` particles
-    /// there at once, taking inactive particles first, then the oldest-poured ones.
-    virtual void pour(const Vec3& center, int count) = 0;
-    /// Non-fatal advice about the scene as this solver runs it on its terrain (e.g. a
-    /// flow rate the source cannot deliver), one line each, naming the field.
-    virtual std::vector<std::string> warnings() const { return {}; }
-    /// Where the outlet-edge sink (SinkKind::Edges) took particles during the latest
-    /// step_frame: each one's position at exit (just past the terrain's edge), in the
-    /// solver's deterministic order. Empty for solvers without sinks.
-    virtual std::span<const Vec3> last_exits() const { return {}; }
-};
 
 /// The parts the own solvers share: one particle set over one terrain, its spawning and
 /// the lattice source (the emitters), the sink, terrain collision and respawn, and the
@@ -368,8 +329,10 @@ public:
     /// One integration step of dt seconds (forces, integrate, collide, respawn).
     virtual void step(float dt) = 0;
 
-    const Particles& particles() const override { return particles_; }
+    const Particles& particles() const { return particles_; }
     Particles& particles_mut() { return particles_; }
+    const Particles* water_particles() const override { return &particles_; }
+    Particles* editable_particles() override { return &particles_; }
     const SolverCounters& counters() const override { return counters_; }
     uint64_t frame() const override { return frame_; }
 
@@ -377,7 +340,7 @@ public:
     /// Interaction: adds `velocity` x (1 - (d / radius)^2)^2 to every active particle
     /// within `radius` of `center` (d: the 3D distance) and wakes it if it slept.
     /// Returns how many it pushed.
-    size_t push(const Vec3& center, float radius, const Vec3& velocity);
+    size_t push(const Vec3& center, float radius, const Vec3& velocity) override;
     void pour(const Vec3& center, int count) override;
     std::vector<std::string> warnings() const override;
     /// step_frame clears the list; every step() (substep) appends its exits.
@@ -397,7 +360,7 @@ public:
     /// order, starting at the first inactive one; extra positions are ignored.
     void place(std::span<const Vec3> positions);
     /// The same with each particle's velocity (`velocities` as long as `positions`).
-    void place(std::span<const Vec3> positions, std::span<const Vec3> velocities);
+    void place(std::span<const Vec3> positions, std::span<const Vec3> velocities) override;
 
     /// Places particle i at a random point of the spawn volume with the initial velocity.
     void spawn(size_t i);

@@ -11,6 +11,7 @@
 #include <metariver/sparse_field.h>
 #include <metariver/particles.h>
 #include <metariver/scene_view.h>
+#include <metariver/solver_registry.h>
 #include <metariver/surface.h>
 #include <metariver/terrain.h>
 
@@ -43,13 +44,6 @@ struct TerrainSourceDef {
     uint32_t seed = 1;      ///< procedural seed
 };
 
-enum class SolverKind {
-    Springs,  ///< the paper's own physics: gravity, springs, terrain collision
-    Bullet,   ///< the paper's engine physics (2.4) on Bullet: rigid spheres vs the terrain
-    Pbf,      ///< Position Based Fluids (Macklin and Mueller 2013) with the robust terrain collision
-};
-std::string_view to_string(SolverKind s);
-
 /// [render]: how the scene asks to be drawn. Only the renderer reads it (render, view);
 /// the simulation does not.
 struct RenderLookDef {
@@ -60,7 +54,7 @@ struct RenderLookDef {
 struct SceneDef {
     std::string name = "default";
     uint32_t seed = 1;  ///< particle spawn seed
-    SolverKind solver = SolverKind::Springs;
+    SolverKind solver = SolverKind::Springs;  ///< a name in the SolverRegistry the Simulation is created with
     TerrainSourceDef source;
     TerrainDef terrain;
     SpawnDef spawn;
@@ -343,14 +337,20 @@ struct ApplyResult {
     std::string rebuild_key;        ///< when not applied: the first key that needs a rebuild
 };
 
-/// Owns one scene's terrain, tree, particles, solver, field and surface.
-/// step(dt) advances one frame and rebuilds the surface; views are read-only.
+/// Owns one scene's terrain, tree, solver, field and surface.
+/// step(dt) advances one frame and rebuilds the surface from the solver's water:
+/// particles -> field -> marching cubes -> smoothing, and a heightfield -> a triangle
+/// grid over its wet cells (append_heightfield_surface), in one mesh. Views are read-only.
 class Simulation {
 public:
-    /// Validates the scene, loads/generates the heightmap, builds terrain and tree.
-    static Result<std::unique_ptr<Simulation>> create(const SceneDef& def);
+    /// Validates the scene, loads/generates the heightmap, builds terrain and tree, and
+    /// the solver `solvers` registers under def.solver (an unknown name is an error
+    /// naming `solver` and the known ones). The Simulation keeps a copy of the entry.
+    static Result<std::unique_ptr<Simulation>> create(const SceneDef& def,
+                                                      const SolverRegistry& solvers = SolverRegistry::builtin());
     /// The same with a heightmap the caller already has.
-    static Result<std::unique_ptr<Simulation>> create(const SceneDef& def, const Heightmap& map);
+    static Result<std::unique_ptr<Simulation>> create(const SceneDef& def, const Heightmap& map,
+                                                      const SolverRegistry& solvers = SolverRegistry::builtin());
     /// The solver and the tree refer to this object's own terrain: a copy or a move
     /// would leave them pointing at the old one.
     Simulation(const Simulation&) = delete;
@@ -371,8 +371,9 @@ public:
     /// Sculpts the terrain under the running water (one brush stroke, Terrain::sculpt):
     /// the tree's boxes, the drainage network, the main channel and the source's lattice
     /// follow, and particles the ground rose over are lifted onto it (counted in
-    /// terrain_lifts(), not as tunneled). Error for the Bullet solver (its world holds
-    /// its own copy of the terrain) or a bad brush; nothing changed then. The renderer
+    /// terrain_lifts(), not as tunneled). Error for a solver whose entry refuses it
+    /// (SolverEntry::no_sculpt: Bullet's world holds its own copy of the terrain) or a
+    /// bad brush; nothing changed then. The renderer
     /// shows it after Renderer::set_scene(sim, true).
     Result<TerrainEdit> sculpt(const Brush& brush);
     /// Undoes a stroke of sculpt() (newest first), with the same updates.
@@ -389,15 +390,24 @@ public:
     /// footprint would leave the terrain's rectangle, naming particles.spawn_center.
     Status move_source(const Vec3& center);
     /// Interaction: pushes the water within `radius` metres of `center` with `velocity`
-    /// (m/s at the centre, falling to 0 at the rim: ParticleSolver::push), waking any
-    /// that slept. Error for the Bullet solver, or a radius that is not finite and > 0,
+    /// (m/s at the centre, falling to 0 at the rim: Solver::push), waking any that
+    /// slept. Error for a solver whose entry refuses it (SolverEntry::no_push: Bullet),
+    /// or a radius that is not finite and > 0,
     /// or a velocity that is not finite. Returns how many particles it pushed.
     Result<size_t> push(const Vec3& center, float radius, const Vec3& velocity);
 
     const SceneDef& def() const { return def_; }
     const Terrain& terrain() const { return terrain_; }
     const Bvh& bvh() const { return bvh_; }
-    const Particles& particles() const { return solver_->particles(); }
+    /// The solver's particles; empty for a solver whose water is a heightfield only.
+    const Particles& particles() const {
+        const Particles* p = solver_->water_particles();
+        return p ? *p : no_particles_;
+    }
+    /// The solver's heightfield water; null for a solver whose water is particles only.
+    const HeightfieldWater* heightfield() const { return solver_->water_heightfield(); }
+    /// The registry entry of this scene's solver (a copy, taken at create()).
+    const SolverEntry& solver_entry() const { return solver_entry_; }
     const SolverCounters& counters() const { return solver_->counters(); }
     /// Non-fatal advice: scene_warnings(def) plus the solver's on this terrain (e.g. a
     /// flow rate its source cannot deliver, and what it was capped to).
@@ -423,7 +433,8 @@ public:
     uint64_t field_overflows() const { return field_overflows_; }
     /// Why the last such frame's field was refused; empty when none was.
     const std::string& field_overflow_message() const { return field_overflow_message_; }
-    /// FNV-1a hash of the particles' positions and velocities (determinism checks).
+    /// FNV-1a hash of the particles' positions, velocities and activity, then of the
+    /// heightfield's depths and velocities when the solver has one (determinism checks).
     uint64_t state_hash() const;
     /// The terrain's drainage network (automatic source, wet-channel measure). After a
     /// sculpt() or restore() it is updated when it is next read (here, by main_channel(),
@@ -437,9 +448,10 @@ public:
     /// Fraction of the active particles inside the wet channel (WetChannelDef defaults
     /// scaled to the terrain: width max(3 m, 3 samples), depth 3 m).
     float wet_fraction() const;
-    /// spray_fraction() of the current particles at the scene's scale: pbf: pbf.spacing
-    /// and pbf.kernel_radius; springs: spacing springs.min_distance (1 m when 0); bullet:
-    /// spacing 2 * bullet.sphere_radius; kernel radius 2 * spacing for both.
+    /// spray_fraction() of the current particles at the scene's scale
+    /// (SolverEntry::spray_scale): pbf: pbf.spacing and pbf.kernel_radius; springs:
+    /// spacing springs.min_distance (1 m when 0); bullet: spacing 2 * bullet.sphere_radius;
+    /// kernel radius 2 * spacing for both.
     float spray_fraction() const;
     /// |velocity| of every active particle, m/s, in index order.
     std::vector<double> active_speeds() const;
@@ -464,13 +476,15 @@ public:
     size_t prefilled() const { return prefilled_; }
 
 private:
-    Simulation(const SceneDef& def, Terrain terrain, Bvh bvh, std::optional<RiverSize> sizing);
+    Simulation(const SceneDef& def, Terrain terrain, Bvh bvh, std::optional<RiverSize> sizing, SolverEntry solver);
 
     SceneDef def_;
     SceneDef requested_;
     Terrain terrain_;
     Bvh bvh_;
+    SolverEntry solver_entry_;
     std::unique_ptr<Solver> solver_;
+    Particles no_particles_;  ///< particles() of a solver without particles
     std::vector<Vec3> balls_;
     ScalarGrid field_;
     SparseField sparse_;
@@ -478,6 +492,7 @@ private:
     SurfaceWorkspace surface_ws_;
     SmoothingWorkspace smooth_ws_;
     SurfaceMesh surface_;
+    std::vector<uint32_t> heightfield_scratch_;  ///< append_heightfield_surface's
     FrameTimings timings_;
     uint64_t field_overflows_ = 0;
     uint64_t terrain_lifts_ = 0;
@@ -499,6 +514,12 @@ private:
     void prefill_channel();
     float prefill_share() const;
     void configure_field();
+    /// The foam's step on the latest frame's particles ([foam]).
+    void step_foam(float frame_dt);
+    /// field -> marching cubes -> smoothing over `p` into surface_ (cleared first).
+    void build_particle_surface(const Particles& p);
+    /// The heightfield's triangle grid appended to surface_.
+    void append_heightfield(const HeightfieldWater& w);
     void after_terrain_edit(const TerrainEdit& edit);
     /// main_path_ and coverage_ from the source at def_.spawn.center (`asked`: the source as
     /// the scene gave it, which says whether it follows the main head).

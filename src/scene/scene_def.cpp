@@ -23,15 +23,6 @@ std::string_view to_string(TerrainSource s) {
     return "?";
 }
 
-std::string_view to_string(SolverKind s) {
-    switch (s) {
-        case SolverKind::Springs: return "springs";
-        case SolverKind::Bullet: return "bullet";
-        case SolverKind::Pbf: return "pbf";
-    }
-    return "?";
-}
-
 std::string collision_mode_unused(SolverKind solver, CollisionMode mode) {
     if (solver == SolverKind::Bullet)
         return "solver = \"bullet\" does not use it ([bullet] has its contact settings)";

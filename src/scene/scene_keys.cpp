@@ -26,6 +26,15 @@ FieldRef field_ref(E* p) {
                    [](void* f, int i) { *static_cast<E*>(f) = static_cast<E>(i); },
                    [](const void* f) { return to_string(*static_cast<const E*>(f)); }};
 }
+// The solver: a name, seen as its index among the built-in solvers (the key's choices).
+FieldRef field_ref(SolverKind* p) {
+    return EnumRef{p, [](const void* f) { return builtin_solver_index(*static_cast<const SolverKind*>(f)); },
+                   [](void* f, int i) {
+                       if (i >= 0 && size_t(i) < std::size(kBuiltinSolverNames))
+                           *static_cast<SolverKind*>(f) = SolverKind{kBuiltinSolverNames[size_t(i)]};
+                   },
+                   [](const void* f) { return static_cast<const SolverKind*>(f)->name; }};
+}
 // Where a key lives: `d.<expr>`.
 #define MR_FIELD(expr) [](SceneDef& d) { return field_ref(&d.expr); }
 
@@ -90,7 +99,6 @@ constexpr KeyReaders kBulletSubsteps{"solver = bullet, max_substeps > 0",
 constexpr KeyReaders kBulletSleep{"solver = bullet without bullet.springs",
                                   [](S d) { return d.solver == SolverKind::Bullet && !d.bullet.springs; }};
 
-constexpr std::string_view kSolvers[] = {"springs", "bullet", "pbf"};
 constexpr std::string_view kSources[] = {"valley", "strict", "bowl", "flat", "file"};
 constexpr std::string_view kConditions[] = {"none", "fill", "breach", "carve", "auto"};
 constexpr std::string_view kShapes[] = {"box", "disc", "point"};
@@ -146,7 +154,7 @@ using K = KeyType;
 const SceneKey kKeys[] = {
     // root
     {.name = "name", .type = K::String, .readers = kAll, .help = "Shown in reports.", .field = MR_FIELD(name)},
-    {.name = "solver", .type = K::Choice, .choices = kSolvers, .readers = kAll,
+    {.name = "solver", .type = K::Choice, .choices = kBuiltinSolverNames, .readers = kAll,
      .help = "pbf: Position Based Fluids (the default river, docs/river.md); springs: the paper's own physics; bullet: its "
              "engine physics (rigid spheres on Bullet, [bullet], docs/bullet.md).",
      .field = MR_FIELD(solver)},

@@ -114,14 +114,6 @@ bool resolve_source(const Terrain& t, const ChannelMap& m, SpawnDef& spawn) {
     return true;
 }
 
-/// Particles per second that fill kRiverFill (three quarters) of the carved section at
-/// `speed`: a river a couple of layers deep on the channel's floor, inside its walls.
-float section_rate(const SceneDef& def, float area_scale, float speed) {
-    const CarveDef c = carve_def(def, area_scale);
-    const float s = def.pbf.spacing;
-    return kRiverFill * c.floor_m * c.depth_m * speed / (s * s * s);
-}
-
 /// Radius of the source's footprint, metres: a disc's, or the larger half extent of a box.
 float source_footprint(const SpawnDef& spawn) {
     return std::max(spawn.half_extent.x, spawn.shape == SourceShape::Disc ? 0.0f : spawn.half_extent.z);
@@ -145,32 +137,25 @@ std::vector<std::pair<int, int>> main_channel_path(const Terrain& t, const Chann
 
 }  // namespace detail
 
-Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh, std::optional<RiverSize> sizing)
+Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh, std::optional<RiverSize> sizing,
+                       SolverEntry solver)
     : def_(def),
       terrain_(std::move(terrain)),
       bvh_(std::move(bvh)),
+      solver_entry_(std::move(solver)),
       channel_(ChannelMap::build(terrain_)),
       sizing_(sizing) {  // before the prefill, which reads it
     SpawnDef spawn = def_.spawn;
     if (resolve_source(terrain_, channel_, spawn)) def_.spawn = spawn;
     measure_main_channel(def.spawn);
     configure_field();
-    switch (def_.solver) {
-        case SolverKind::Springs:
-            solver_ = std::make_unique<SpringSolver>(terrain_, bvh_, spawn, def_.springs, def_.collision,
-                                                     def_.integrator, def_.seed, def_.sink);
-            break;
-        case SolverKind::Pbf:
-            solver_ = std::make_unique<PbfSolver>(terrain_, bvh_, spawn, def_.pbf, def_.collision, def_.integrator,
-                                                  def_.seed, def_.sink);
-            if (def_.foam.enabled) foam_.emplace(def_.foam, def_.pbf.kernel_radius, def_.integrator.gravity);
-            if (def_.spawn.prefill && terrain_.condition_report().mode == TerrainCondition::Carve) prefill_channel();
-            break;
-        case SolverKind::Bullet:
-            solver_ = std::make_unique<BulletSolver>(terrain_, spawn, def_.springs, def_.integrator, def_.bullet,
-                                                     def_.seed);
-            break;
-    }
+    // def_.spawn is the resolved source (`spawn`) from here on.
+    solver_ = solver_entry_.create(def_, terrain_, bvh_);
+    if (!solver_) return;  // create() reports it
+    if (solver_entry_.foam_kernel_radius && def_.foam.enabled)
+        foam_.emplace(def_.foam, solver_entry_.foam_kernel_radius(def_), def_.integrator.gravity);
+    if (solver_entry_.prefills && def_.spawn.prefill && terrain_.condition_report().mode == TerrainCondition::Carve)
+        prefill_channel();
 }
 
 void Simulation::configure_field() {
@@ -197,7 +182,7 @@ void Simulation::configure_field() {
 float Simulation::prefill_share() const {
     // The section's rate (size_river before a ceiling lowered it) against the source's:
     // a thinner river than the section starts as thin.
-    const float section = section_rate(def_, terrain_.area_scale(), sizing_ ? sizing_->speed : kRiverSpeed);
+    const float section = detail::section_rate(def_, terrain_.area_scale(), sizing_ ? sizing_->speed : kRiverSpeed);
     const float rate = float(def_.spawn.particles_per_second());
     return section > 0.0f && rate > 0.0f ? std::min(1.0f, rate / section) : 1.0f;
 }
@@ -218,7 +203,7 @@ void Simulation::prefill_channel() {
                             .most = size_t(std::max(sp.count, 0)) / 2,
                             .share = prefill_share()};
     const ChannelFill fill = fill_channel(terrain_, main_path_, fd);
-    static_cast<ParticleSolver&>(*solver_).place(fill.position, fill.velocity);
+    solver_->place(fill.position, fill.velocity);
     prefilled_ = fill.position.size();
 }
 
@@ -233,25 +218,16 @@ std::vector<std::string> Simulation::warnings() const {
     return w;
 }
 
-Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def) {
+Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, const SolverRegistry& solvers) {
+    if (auto e = solvers.find(def.solver); !e) return e.error();
     if (auto v = validate(def); !v) return v.error();
     auto map = load_scene_heightmap(def);
     if (!map) return map.error();
-    return create(def, map.value());
+    return create(def, map.value(), solvers);
 }
 
 bool smoothing_on(const SceneDef& def) {
     return def.surface && def.smoothing.method != SmoothingMethod::None && def.smoothing.iterations > 0;
-}
-
-bool is_river(const SceneDef& def) {
-    return def.solver == SolverKind::Pbf && def.sink.kind == SinkKind::Edges &&
-           (def.spawn.has_rate() || def.spawn.auto_rate());
-}
-
-TerrainCondition resolved_condition(const SceneDef& def) {
-    if (def.terrain.condition != TerrainCondition::Auto) return def.terrain.condition;
-    return is_river(def) ? TerrainCondition::Carve : TerrainCondition::None;
 }
 
 float flow_radius(const SceneDef& def) {
@@ -267,7 +243,7 @@ SceneView Simulation::view() const {
     return SceneView{.terrain = &terrain_,
                      .bvh = &bvh_,
                      .paper_rows = def_.terrain.paper_row_orientation,
-                     .particles = &solver_->particles(),
+                     .particles = &particles(),
                      .surface = &surface_,
                      .foam = f ? &f->particles() : nullptr,
                      .flow_radius = flow_radius(def_),
@@ -277,120 +253,6 @@ SceneView Simulation::view() const {
 
 SmoothingGround smoothing_ground(const Terrain& t) {
     return {.vertices = t.vertices().data(), .columns = t.columns(), .rows = t.rows(), .spacing = t.area_scale()};
-}
-
-namespace {
-/// A PBF value with "auto" (`automatic`) resolved: 0 for a river, `still` for still water.
-float river_or_still(const SceneDef& def, float value, float automatic, float still) {
-    if (value != automatic) return value;
-    return is_river(def) ? 0.0f : still;
-}
-}  // namespace
-
-float resolved_sleep_threshold(const SceneDef& def) {
-    return river_or_still(def, def.pbf.sleep_threshold, kAutoSleep, kSleepThreshold);
-}
-
-float resolved_damping(const SceneDef& def) { return river_or_still(def, def.pbf.damping, kAutoDamping, kStillDamping); }
-
-float resolved_wall_density(const SceneDef& def) {
-    return river_or_still(def, def.pbf.wall_density, kAutoWallDensity, kStillWallDensity);
-}
-
-float resolved_contact_band(const SceneDef& def) {
-    return river_or_still(def, def.pbf.contact_band, kAutoContactBand, kStillContactBand);
-}
-
-namespace {
-/// The spacing the carve and the source's basin are sized for (SceneDef::carve_spacing).
-float carve_spacing_of(const SceneDef& def) { return def.carve_spacing > 0.0f ? def.carve_spacing : def.pbf.spacing; }
-}  // namespace
-
-CarveDef carve_def(const SceneDef& def, float area_scale) {
-    // A flat bed three samples (or four spacings) wide, walls 1.5 samples (or two
-    // spacings) wide on each side, two spacings deep.
-    const float d = carve_spacing_of(def);
-    const float floor = std::max(3.0f * area_scale, 4.0f * d);
-    return CarveDef{.width_m = floor + 2.0f * std::max(1.5f * area_scale, 2.0f * d), .floor_m = floor, .depth_m = 2.0f * d};
-}
-
-std::vector<std::pair<int, int>> keep_off_edges(std::span<const std::pair<int, int>> path, int rows, int columns,
-                                                int margin) {
-    std::vector<std::pair<int, int>> out;
-    if (path.empty()) return out;
-    const int mi = std::clamp(margin, 0, rows / 4), mj = std::clamp(margin, 0, columns / 4);
-    auto step_to = [&](std::pair<int, int> c) {  // straight 8-connected steps from out.back()
-        if (out.empty()) {
-            out.push_back(c);
-            return;
-        }
-        auto [i, j] = out.back();
-        while (i != c.first || j != c.second) {
-            i += (c.first > i) - (c.first < i);
-            j += (c.second > j) - (c.second < j);
-            out.emplace_back(i, j);
-        }
-    };
-    for (size_t k = 0; k < path.size(); ++k) {
-        auto [i, j] = path[k];
-        if (k > 0 && k + 1 < path.size()) {
-            i = std::clamp(i, mi, std::max(mi, rows - 1 - mi));
-            j = std::clamp(j, mj, std::max(mj, columns - 1 - mj));
-        }
-        step_to({i, j});
-    }
-    return out;
-}
-
-float river_speed(float slope) {
-    const float s = std::isfinite(slope) ? std::max(slope, kCarveLeastSlope) : 1.0f;
-    return std::clamp(kRiverSpeedPerRootSlope * std::sqrt(s), kRiverTransitSpeed, kRiverSpeed);
-}
-
-RiverSize size_river(const SceneDef& def, float area_scale, float channel_length_m, float channel_slope) {
-    RiverSize r;
-    r.channel_length_m = channel_length_m;
-    r.channel_slope = channel_slope;
-    r.speed = river_speed(channel_slope);
-    r.rate = std::clamp(section_rate(def, area_scale, r.speed), kRiverMinRate, kRiverMaxRate);
-    // The budget: the particles on their way (the rate times the time they spend on the
-    // channel at kRiverTransitSpeed, twice over: slower reaches, the source's basin,
-    // eddies) plus the particles the source's pile holds.
-    const float transit_s = channel_length_m / kRiverTransitSpeed;
-    const double want = double(r.rate) * double(transit_s) * kRiverBudgetMargin + kRiverSourcePile;
-    r.count = int(std::clamp(std::ceil(want), double(kRiverMinCount), double(kRiverMaxCount)));
-    if (want > double(kRiverMaxCount)) {  // the budget's ceiling: a thinner river, not gaps
-        r.rate = std::max(kRiverMinRate, float((kRiverMaxCount - kRiverSourcePile) / (transit_s * kRiverBudgetMargin)));
-        r.capped = true;
-    }
-    return r;
-}
-
-void scale_river_lengths(SceneDef& d, float spacing, float max_field_resolution) {
-    const float k = spacing / d.pbf.spacing;
-    if (!(k > 0.0f) || !std::isfinite(k) || k == 1.0f) return;
-    d.pbf.spacing = spacing;
-    d.pbf.kernel_radius *= k;
-    d.collision.radius *= k;
-    d.collision.offset *= k;
-    d.field.radius *= k;
-    d.field.bounds_offset *= k;
-    d.field.resolution = std::min(max_field_resolution, d.field.resolution / k);
-    if (d.carve_spacing == 0.0f) {  // the source with the channel it was sized for
-        d.spawn.half_extent *= k;
-        d.spawn.auto_height *= k;
-    }
-}
-
-float auto_spacing(const SceneDef& def, const Terrain& t) {
-    // Two particles per sample at the scene's spacing per metre of area_scale (the bed,
-    // three samples wide, holds six across at any scale), at most kAutoSpacingAcross
-    // across the terrain's shorter side.
-    float d = def.pbf.spacing * t.area_scale();
-    const Vec3 e = t.bounds().extent();
-    const float shorter = std::min(e.x, e.z);
-    if (shorter > 0.0f) d = std::min(d, shorter / kAutoSpacingAcross);
-    return std::clamp(d, kAutoSpacingMin, kAutoSpacingMax);
 }
 
 namespace detail {
@@ -409,7 +271,10 @@ Status field_box_fits(const FieldDef& f, const Terrain& t) {
 }
 }  // namespace detail
 
-Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, const Heightmap& map) {
+Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, const Heightmap& map,
+                                                       const SolverRegistry& solvers) {
+    const auto entry = solvers.find(def.solver);
+    if (!entry) return entry.error();
     if (auto v = validate(def); !v) return v.error();
     SceneDef resolved = def;
     resolved.terrain.condition = resolved_condition(def);
@@ -462,7 +327,7 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, cons
             CarveDef carve = carve_def(resolved, terrain->area_scale());
             carve.basin_center = spawn.center;
             carve.basin_radius_m =
-                spawn.shape == SourceShape::Point ? 0.0f : source_footprint(spawn) + carve_spacing_of(resolved);
+                spawn.shape == SourceShape::Point ? 0.0f : source_footprint(spawn) + detail::carve_spacing_of(resolved);
             // Off the map's edges by the section's half width and the levee (1.5 samples).
             const float as = terrain->area_scale();
             const int margin = int(std::ceil((0.5f * carve.width_m) / as + 1.5f));
@@ -487,30 +352,46 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, cons
     auto bvh = Bvh::build(terrain.value(), BvhDef{.leaf_triangles = def.collision.leaf_triangles});
     if (!bvh) return bvh.error();
     std::unique_ptr<Simulation> sim(
-        new Simulation(resolved, std::move(terrain.value()), std::move(bvh.value()), sizing));
+        new Simulation(resolved, std::move(terrain.value()), std::move(bvh.value()), sizing, *entry.value()));
+    if (!sim->solver_) return Error{fmt::format("solver: \"{}\"'s factory built no solver", def.solver.name)};
     if (auto v = validate_on_terrain(sim->def(), sim->terrain()); !v) return v.error();  // resolved source
     sim->requested_ = def;
     return sim;
 }
 
 void Simulation::step(float frame_dt) {
-    auto t0 = Clock::now();
+    const auto t0 = Clock::now();
     solver_->step_frame(frame_dt);
     timings_.simulate_ms = ms_since(t0);
-    if (foam_) {
-        t0 = Clock::now();
-        const float dt = def_.integrator.fixed_dt > 0.0f ? def_.integrator.fixed_dt : frame_dt;
-        foam_->step(solver_->particles(), terrain_, dt, solver_->frame());
-        timings_.foam_ms = ms_since(t0);
-    }
-
+    step_foam(frame_dt);
     if (!def_.surface) {
         timings_.field_ms = timings_.surface_ms = timings_.smoothing_ms = 0.0;
         smooth_ws_.stats = SmoothingStats{};
         return;
     }
-    t0 = Clock::now();
-    solver_->particles().gather_active_positions(balls_);
+    // The surface from what the solver gives: particles, a heightfield, or both (one mesh).
+    if (const Particles* p = solver_->water_particles()) {
+        build_particle_surface(*p);
+    } else {
+        surface_.clear();
+        timings_.field_ms = timings_.surface_ms = timings_.smoothing_ms = 0.0;
+        smooth_ws_.stats = SmoothingStats{};
+    }
+    if (const HeightfieldWater* w = solver_->water_heightfield()) append_heightfield(*w);
+}
+
+void Simulation::step_foam(float frame_dt) {
+    const Particles* p = solver_->water_particles();
+    if (!foam_ || !p) return;
+    const auto t0 = Clock::now();
+    const float dt = def_.integrator.fixed_dt > 0.0f ? def_.integrator.fixed_dt : frame_dt;
+    foam_->step(*p, terrain_, dt, solver_->frame());
+    timings_.foam_ms = ms_since(t0);
+}
+
+void Simulation::build_particle_surface(const Particles& p) {
+    auto t0 = Clock::now();
+    p.gather_active_positions(balls_);
     if (def_.field.kernel == FieldKernel::Poly6) {
         if (auto b = sparse_.build(balls_, sparse_def_); !b) {
             ++field_overflows_;
@@ -543,6 +424,13 @@ void Simulation::step(float frame_dt) {
     timings_.surface_ms = ms_since(t0);
 }
 
+void Simulation::append_heightfield(const HeightfieldWater& w) {
+    // On the terrain's grid: each vertex is its bed sample raised by the depth.
+    const auto t0 = Clock::now();
+    append_heightfield_surface(terrain_.vertices(), w.depth, w.rows, w.columns, surface_, &heightfield_scratch_);
+    timings_.surface_ms += ms_since(t0);
+}
+
 std::array<int, 3> Simulation::field_dims() const {
     if (def_.field.kernel == FieldKernel::Poly6) {
         const SampleGrid& g = sparse_.grid();
@@ -564,23 +452,9 @@ float Simulation::channel_coverage() const {
 }
 
 float Simulation::spray_fraction() const {
-    float spacing = 1.0f, kernel = 2.0f;
-    switch (def_.solver) {
-        case SolverKind::Pbf:
-            spacing = def_.pbf.spacing;
-            kernel = def_.pbf.kernel_radius;
-            break;
-        case SolverKind::Springs:
-            spacing = def_.springs.min_distance > 0.0f ? def_.springs.min_distance : 1.0f;
-            kernel = 2.0f * spacing;
-            break;
-        case SolverKind::Bullet:
-            spacing = 2.0f * def_.bullet.sphere_radius;
-            kernel = 2.0f * spacing;
-            break;
-    }
+    const SprayScale scale = solver_entry_.spray_scale ? solver_entry_.spray_scale(def_) : SprayScale{};
     const Particles& p = particles();
-    return mr::spray_fraction(terrain_, p.position, p.active, kernel, spacing);
+    return mr::spray_fraction(terrain_, p.position, p.active, scale.kernel_radius, scale.spacing);
 }
 
 std::vector<double> Simulation::active_speeds() const {
@@ -605,6 +479,10 @@ uint64_t Simulation::state_hash() const {
     mix(p.position.data(), p.position.size() * sizeof(Vec3));
     mix(p.velocity.data(), p.velocity.size() * sizeof(Vec3));
     mix(p.active.data(), p.active.size());
+    if (const HeightfieldWater* w = solver_->water_heightfield()) {
+        mix(w->depth.data(), w->depth.size() * sizeof(float));
+        mix(w->velocity.data(), w->velocity.size() * sizeof(Vec3));
+    }
     return h;
 }
 

@@ -58,13 +58,9 @@ Result<ApplyResult> Simulation::apply(const SceneDef& next) {
     if (!r.rebuild_key.empty()) return r;
     if (auto f = detail::field_box_fits(edited.field, terrain_); !f) return f.error();
     if (auto v = validate_on_terrain(edited, terrain_); !v) return v.error();
-    // Each solver takes the keys it reads (the budget's key asks for a rebuild above, so
-    // a refusal is not reached).
-    bool taken = true;
-    if (auto* pbf = dynamic_cast<PbfSolver*>(solver_.get()))
-        taken = pbf->set_params(edited.spawn, edited.pbf, edited.collision, edited.integrator, edited.sink);
-    else if (auto* springs = dynamic_cast<SpringSolver*>(solver_.get()))
-        taken = springs->set_params(edited.spawn, edited.springs, edited.collision, edited.integrator, edited.sink);
+    // The solver takes the keys it reads by its registry entry's rule (the budget's key
+    // asks for a rebuild above, so a refusal is not reached).
+    const bool taken = !solver_entry_.apply || solver_entry_.apply(*solver_, edited);
     if (!taken) {
         r.rebuild_key = "particles.count";
         return r;
@@ -77,8 +73,8 @@ Result<ApplyResult> Simulation::apply(const SceneDef& next) {
     configure_field();
     if (foam_changed) {
         foam_.reset();
-        if (def_.solver == SolverKind::Pbf && def_.foam.enabled)
-            foam_.emplace(def_.foam, def_.pbf.kernel_radius, def_.integrator.gravity);
+        if (solver_entry_.foam_kernel_radius && def_.foam.enabled)
+            foam_.emplace(def_.foam, solver_entry_.foam_kernel_radius(def_), def_.integrator.gravity);
     }
     r.applied = true;
     return r;
@@ -113,18 +109,18 @@ Status Simulation::move_source(const Vec3& center) {
 }
 
 Result<size_t> Simulation::push(const Vec3& center, float radius, const Vec3& velocity) {
-    auto* ps = dynamic_cast<ParticleSolver*>(solver_.get());
-    if (!ps) return Error{"push: solver = \"bullet\" moves its own bodies; push with pbf or springs"};
+    if (!solver_entry_.no_push.empty())
+        return Error{fmt::format("push: solver = \"{}\" {}", solver_entry_.kind.name, solver_entry_.no_push)};
     if (!std::isfinite(radius) || !(radius > 0.0f))
         return Error{fmt::format("push: radius: must be finite and > 0 metres (got {})", radius)};
     if (!std::isfinite(center.x + center.y + center.z) || !std::isfinite(velocity.x + velocity.y + velocity.z))
         return Error{"push: centre and velocity: must be finite"};
-    return ps->push(center, radius, velocity);
+    return solver_->push(center, radius, velocity);
 }
 
 Result<TerrainEdit> Simulation::sculpt(const Brush& brush) {
-    if (!dynamic_cast<ParticleSolver*>(solver_.get()))
-        return Error{"sculpt: solver = \"bullet\" holds its own copy of the terrain; sculpt with pbf or springs"};
+    if (!solver_entry_.no_sculpt.empty())
+        return Error{fmt::format("sculpt: solver = \"{}\" {}", solver_entry_.kind.name, solver_entry_.no_sculpt)};
     auto e = terrain_.sculpt(brush);
     if (!e) return e.error();
     after_terrain_edit(e.value());
@@ -132,7 +128,7 @@ Result<TerrainEdit> Simulation::sculpt(const Brush& brush) {
 }
 
 void Simulation::restore(const TerrainEdit& edit) {
-    if (!dynamic_cast<ParticleSolver*>(solver_.get())) return;
+    if (!solver_entry_.no_sculpt.empty()) return;
     terrain_.restore(edit);
     after_terrain_edit(edit);
 }
@@ -143,7 +139,6 @@ void Simulation::after_terrain_edit(const TerrainEdit& e) {
     // The network is updated over the changed samples when next read (refresh_channel).
     SampleRect& r = channel_stale_;
     r = {std::min(r.i0, e.i0), std::max(r.i1, e.i1), std::min(r.j0, e.j0), std::max(r.j1, e.j1)};
-    auto& ps = static_cast<ParticleSolver&>(*solver_);
     // The triangles of the cells around the changed samples moved: particles over them
     // that are now under the ground (plus the collision's clearance) go up onto it, with
     // no downward speed, and start their next step there (not a crossing to count).
@@ -152,8 +147,9 @@ void Simulation::after_terrain_edit(const TerrainEdit& e) {
     const float xa = o.x + float(e.j0 - 1) * s, xb = o.x + float(e.j1 + 1) * s;
     const float za = o.z + float(e.i0 - 1) * s, zb = o.z + float(e.i1 + 1) * s;
     const float clearance = def_.collision.radius + def_.collision.offset;
-    Particles& p = ps.particles_mut();
-    for (size_t i = 0; i < p.size(); ++i) {
+    Particles* water = solver_->editable_particles();  // null: no particles to lift
+    for (size_t i = 0; water && i < water->size(); ++i) {
+        Particles& p = *water;
         if (!p.active[i]) continue;
         Vec3& x = p.position[i];
         if (x.x < xa || x.x > xb || x.z < za || x.z > zb || !terrain_.contains_xz(x.x, x.z)) continue;
@@ -164,7 +160,7 @@ void Simulation::after_terrain_edit(const TerrainEdit& e) {
         p.velocity[i].y = std::max(p.velocity[i].y, 0.0f);
         ++terrain_lifts_;
     }
-    ps.set_spawn_center(def_.spawn.center);  // the source's lattice over the new ground
+    solver_->set_spawn_center(def_.spawn.center);  // the source's lattice over the new ground
 }
 
 }  // namespace mr
