@@ -1,6 +1,7 @@
 #include "commands.h"
 #include "sidecar.h"
 
+#include <metariver/scene_keys.h>
 #include <metariver/terrain.h>
 
 #include <fmt/format.h>
@@ -33,6 +34,9 @@ Result<SidecarScale> real_scale_of(const SceneDef& def) {
     return s;
 }
 
+/// collision.mode of the key table: --collision takes its choices.
+const SceneKey& collision_mode_key() { return *find_scene_key("collision.mode"); }
+
 }  // namespace
 
 void SceneOptions::add_to(CLI::App& cmd) {
@@ -43,7 +47,11 @@ void SceneOptions::add_to(CLI::App& cmd) {
     p->excludes(s);
     cmd.add_option("--heightmap", heightmap, "PNG heightmap (8/16-bit); replaces the scene's terrain");
     cmd.add_option("--seed", seed, "particle spawn seed (overrides the scene's)");
-    cmd.add_option("--collision", collision, "override collision mode: paper, robust or none");
+    std::string modes;
+    const auto choices = collision_mode_key().choices;
+    for (size_t i = 0; i < choices.size(); ++i)
+        modes += fmt::format("{}{}", i == 0 ? "" : (i + 1 == choices.size() ? " or " : ", "), choices[i]);
+    cmd.add_option("--collision", collision, "override collision mode: " + modes);
     cmd.add_option("--area-scale", area_scale,
                    "metres between heightmap samples, (0, 10000] (overrides terrain.area_scale and --real-scale)");
     cmd.add_option("--height-scale", height_scale,
@@ -73,10 +81,8 @@ Result<SceneDef> SceneOptions::resolve(bool need_heightmap) const {
         def.seed = *seed;
     }
     if (!collision.empty()) {
-        if (collision == "paper") def.collision.mode = CollisionMode::Paper;
-        else if (collision == "robust") def.collision.mode = CollisionMode::Robust;
-        else if (collision == "none") def.collision.mode = CollisionMode::None;
-        else return Error{fmt::format("--collision: must be one of paper, robust, none (got '{}')", collision)};
+        const SceneKey& mode = collision_mode_key();
+        if (const std::string e = set_choice(mode, mode.field(def), collision); !e.empty()) return Error{"--collision: " + e};
         if (const std::string why = collision_mode_unused(def.solver, def.collision.mode); !why.empty())
             return Error{"--collision: " + why};
     }

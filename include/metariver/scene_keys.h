@@ -1,12 +1,15 @@
 // metariver scene keys: the one table of every key a scene file can hold (name, type,
-// unit, range, default, help, which solver or mode reads it). It drives the TOML reader
-// (key lookup, types, ranges), validate()'s ranges, the viewer's parameter panel, the
-// reference in docs/scene-format.md (scene_reference_markdown(), checked equal by a test)
-// and the commented scene files `metariver scene --preset NAME` prints (scene_to_toml()).
+// unit, range, default, help, which scenes read it, what a live edit of it needs). It
+// drives the TOML reader (key lookup, types, ranges, which keys a file may set where),
+// validate()'s ranges, Simulation::apply's rebuilds, the viewer's parameter panel, the
+// CLI's choices (--collision), the reference in docs/scene-format.md
+// (scene_reference_markdown(), checked equal by a test) and the commented scene files
+// `metariver scene --preset NAME` prints (scene_to_toml()).
 #pragma once
 
 #include <metariver/scene.h>
 
+#include <functional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -53,13 +56,66 @@ struct EnumRef {
 /// Where a key's value lives in a SceneDef.
 using FieldRef = std::variant<bool*, int*, uint32_t*, float*, Vec3*, std::string*, EnumRef>;
 
-/// Which solver or mode reads a key: the words for the reference and the viewer, and the
-/// test on a scene (null: every scene). validate() checks a key's range only where it
-/// is read; the viewer's panel shows only the keys the edited scene reads.
+/// A scene file as the reader's refusals see it: the scene as written (the file's values,
+/// the base scene's where the file is silent) and what the file holds.
+struct SceneFileView {
+    const SceneDef& def;
+    /// Whether the file holds `name`: a key ("particles.flow_rate") or, for a section's
+    /// name, that section as a table ("surface": [surface] rather than surface = false).
+    std::function<bool(std::string_view name)> wrote;
+};
+
+/// What a condition of a key's readers is about; the TOML reader reports a file's
+/// refusals in this order (the largest mistake first).
+enum class ReadScope {
+    Section,  ///< the scene reads nothing of the key's section ([bullet] outside Bullet)
+    Solver,   ///< the scene's solver does not read the key (seed in PBF)
+    Value,    ///< another key's value makes it irrelevant (sink.min without a box sink)
+};
+
+/// One condition for a scene to read a key, and what the reader says to a file that sets
+/// the key in a scene where it fails ("ignored when surface.method = \"none\" (...): remove
+/// it or choose a method"), after the key's name, or after its section's for a Section
+/// condition (whatever the value; a table of the section that holds no key the scene
+/// reads is refused too, an empty [bullet]).
+struct ReadIf {
+    bool (*holds)(const SceneDef& d) = nullptr;
+    std::string (*refusal)(const SceneFileView& f) = nullptr;
+    ReadScope scope = ReadScope::Value;
+    /// The values that do what the scene does without the key (foam.enabled = false
+    /// outside PBF, litres_per_particle = 0 without a rate): accepted though not read;
+    /// null: none. Not for a Section condition.
+    bool (*agrees)(const SceneDef& d) = nullptr;
+};
+
+/// Which scenes read a key: the words for the reference and the viewer, and the conditions
+/// (all hold: the scene reads it; none: every scene). validate() checks a key's range only
+/// where it is read; the viewer's panel shows only the keys the edited scene reads; the
+/// TOML reader refuses a key a file sets where it is not read, with the message of the
+/// first condition that fails (scene_toml.cpp). The one place that says who reads a key.
 struct KeyReaders {
     std::string_view text;
-    bool (*reads)(const SceneDef& d) = nullptr;
-    bool operator()(const SceneDef& d) const { return !reads || reads(d); }
+    std::span<const ReadIf> conditions;
+
+    bool operator()(const SceneDef& d) const { return failing(d) == nullptr; }
+    /// The first condition `d` fails, or null when `d` reads the key.
+    const ReadIf* failing(const SceneDef& d) const {
+        for (const ReadIf& c : conditions)
+            if (!c.holds(d)) return &c;
+        return nullptr;
+    }
+};
+
+/// What a live edit of a key (Simulation::apply, the viewer's panel) needs.
+enum class KeyEdit {
+    /// The solver reads it: applied in place, except by a solver that builds its world
+    /// once from its defs (Bullet), where it needs a new Simulation.
+    Solver,
+    /// Read after the solver (the field, the surface, the renderer, reports): applied in place.
+    Live,
+    /// What the terrain, the tree, the particle arrays, the random stream or the carve were
+    /// built from: a new Simulation.
+    Rebuild,
 };
 
 /// Words a number-typed key also takes (`count = "auto"`, `spawn_center = "channel"`).
@@ -79,6 +135,7 @@ struct SceneKey {
     std::span<const std::string_view> choices;  ///< Choice only, in the enum's order
     KeyWords words;         ///< optional
     KeyReaders readers;
+    KeyEdit edit = KeyEdit::Solver;
     std::string_view help;
     FieldRef (*field)(SceneDef& d) = nullptr;
 
@@ -130,6 +187,9 @@ std::string key_value_toml(const SceneKey& key, const SceneDef& d);
 /// "" when the key's value in `d` is inside its range (a word always is), else the
 /// message without the key ("must be in (0, 64] (got -2)").
 std::string key_range_error(const SceneKey& key, const SceneDef& d);
+/// Sets the field `f` of Choice key `k` (k.field(d), or a list entry's) to `value`: "" or
+/// the message without the key ("must be one of paper, robust, none (got 'x')").
+std::string set_choice(const SceneKey& k, const FieldRef& f, std::string_view value);
 /// Copies the value of field `from` into `to`, the same field of another SceneDef (or
 /// list entry).
 void copy_field(const FieldRef& from, const FieldRef& to);

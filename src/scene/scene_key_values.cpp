@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <type_traits>
@@ -110,6 +111,18 @@ std::string field_range_error(const SceneKey& k, const FieldRef& f) {
     else if (auto* p = std::get_if<float*>(&f)) v = **p, got = fmt::format("{}", **p);
     if (k.range.contains(v)) return {};
     return fmt::format("must be {} (got {})", k.range.phrase(), got);
+}
+
+std::string set_choice(const SceneKey& k, const FieldRef& f, std::string_view value) {
+    const auto it = std::find(k.choices.begin(), k.choices.end(), value);
+    if (it == k.choices.end()) {
+        std::string all;
+        for (auto c : k.choices) all += fmt::format("{}{}", all.empty() ? "" : ", ", c);
+        return fmt::format("must be one of {} (got '{}')", all, value);
+    }
+    const EnumRef& e = std::get<EnumRef>(f);
+    e.set(e.field, static_cast<int>(it - k.choices.begin()));
+    return {};
 }
 
 void copy_field(const FieldRef& from, const FieldRef& to) {

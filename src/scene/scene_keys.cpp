@@ -1,9 +1,12 @@
 // The table of scene keys (include/metariver/scene_keys.h): every key a scene file can
-// hold, with its type, unit, range, who reads it and its help. The TOML reader, validate(),
-// the viewer's panel, the reference in docs/scene-format.md and `metariver scene --preset`
-// all list keys from here. The cross-key rules (a key another key makes irrelevant, a key
-// a solver does not read) stay in scene_toml.cpp; `readers` says the same in words.
+// hold, with its type, unit, range, who reads it (scene_key_readers.h: the conditions and
+// the reader's messages where they fail), what a live edit of it needs and its help. The
+// TOML reader (which keys a file may set), validate(), Simulation::apply, the viewer's
+// panel, the CLI's choices, the reference in docs/scene-format.md and `metariver scene
+// --preset` all take keys from here.
 #include <metariver/scene_keys.h>
+
+#include "scene_key_readers.h"
 
 #include <fmt/format.h>
 
@@ -42,62 +45,8 @@ constexpr KeyRange closed(double lo, double hi) { return {.lo = lo, .hi = hi}; }
 constexpr KeyRange above(double lo, double hi) { return {.lo = lo, .hi = hi, .lo_open = true}; }  // (lo, hi]
 constexpr KeyRange big_vec(double lo) { return {.lo = lo, .hi = 1e6}; }
 
-// Who reads a key (include/metariver/scene_keys.h, KeyReaders).
-using S = const SceneDef&;
-bool with_rate(S d) { return d.spawn.auto_rate() ? d.solver == SolverKind::Pbf : d.spawn.has_rate(); }
-bool springs_on(S d) { return d.solver == SolverKind::Springs || (d.solver == SolverKind::Bullet && d.bullet.springs); }
-constexpr KeyReaders kAll{"every scene"};
-constexpr KeyReaders kNotPbf{"solver = springs, bullet", [](S d) { return d.solver != SolverKind::Pbf; }};
-constexpr KeyReaders kNotBullet{"solver = springs, pbf", [](S d) { return d.solver != SolverKind::Bullet; }};
-constexpr KeyReaders kPbf{"solver = pbf", [](S d) { return d.solver == SolverKind::Pbf; }};
-constexpr KeyReaders kBullet{"solver = bullet", [](S d) { return d.solver == SolverKind::Bullet; }};
-constexpr KeyReaders kFile{"terrain.source = file", [](S d) { return d.source.kind == TerrainSource::File; }};
-constexpr KeyReaders kProcedural{"a procedural terrain.source", [](S d) { return d.source.kind != TerrainSource::File; }};
-constexpr KeyReaders kValley{"terrain.source = valley", [](S d) { return d.source.kind == TerrainSource::Valley; }};
-constexpr KeyReaders kAutoCentre{"spawn_center auto, channel", [](S d) { return d.spawn.auto_center; }};
-constexpr KeyReaders kNotPoint{"source_shape box, disc", [](S d) { return d.spawn.shape != SourceShape::Point; }};
-constexpr KeyReaders kNoRate{"a scene without a particle rate", [](S d) { return !with_rate(d); }};
-constexpr KeyReaders kRate{"a scene with a particle rate", [](S d) { return with_rate(d); }};
-constexpr KeyReaders kPbfRate{"solver = pbf with a particle rate",
-                              [](S d) { return d.solver == SolverKind::Pbf && with_rate(d); }};
-constexpr KeyReaders kPbfOrCarve{"solver = pbf; terrain.condition = carve",
-                                 [](S d) { return d.solver == SolverKind::Pbf || d.terrain.condition == TerrainCondition::Carve; }};
-constexpr KeyReaders kScorr{"solver = pbf, scorr_k > 0", [](S d) { return d.solver == SolverKind::Pbf && d.pbf.scorr_k > 0.0f; }};
-constexpr KeyReaders kSinkBox{"sink.kind = box", [](S d) { return d.solver != SolverKind::Bullet && d.sink.kind == SinkKind::Box; }};
-constexpr KeyReaders kSpringsK{"solver = springs; bullet with bullet.springs", [](S d) { return springs_on(d); }};
-constexpr KeyReaders kSpringsOn{"springs.stiffness's readers, with stiffness > 0",
-                                [](S d) { return springs_on(d) && d.springs.stiffness > 0.0f; }};
-constexpr KeyReaders kSpringMode{"solver = springs, stiffness > 0",
-                                 [](S d) { return d.solver == SolverKind::Springs && d.springs.stiffness > 0.0f; }};
-constexpr KeyReaders kContact{"solver = springs, pbf; collision.mode paper, robust",
-                              [](S d) { return d.solver != SolverKind::Bullet && d.collision.mode != CollisionMode::None; }};
-constexpr KeyReaders kPbfContact{"solver = pbf, collision.mode = robust",
-                                 [](S d) { return d.solver == SolverKind::Pbf && d.collision.mode != CollisionMode::None; }};
-constexpr KeyReaders kPbfCarved{"solver = pbf with terrain.condition carve (auto: carve for a river)", [](S d) {
-                                    return d.solver == SolverKind::Pbf && resolved_condition(d) == TerrainCondition::Carve;
-                                }};
-constexpr KeyReaders kRobust{"solver = springs, pbf; collision.mode = robust",
-                             [](S d) { return d.solver != SolverKind::Bullet && d.collision.mode == CollisionMode::Robust; }};
-constexpr KeyReaders kSurface{"a scene with the surface on", [](S d) { return d.surface; }};
-constexpr KeyReaders kRadius{"the surface with field.kernel radius_over_r, poly6",
-                             [](S d) { return d.surface && d.field.kernel != FieldKernel::InverseSquare; }};
-constexpr KeyReaders kSmoothing{"surface.method laplacian, taubin", [](S d) { return d.surface && d.smoothing.method != SmoothingMethod::None; }};
-constexpr KeyReaders kSmoothingOn{"smoothing (method not none, iterations > 0)", [](S d) { return smoothing_on(d); }};
-constexpr KeyReaders kLaplacian{"surface.method = laplacian",
-                                [](S d) { return smoothing_on(d) && d.smoothing.method == SmoothingMethod::Laplacian; }};
-constexpr KeyReaders kLambda{"surface.method taubin; laplacian with steps = uniform", [](S d) {
-                                 return smoothing_on(d) && (d.smoothing.method == SmoothingMethod::Taubin || d.smoothing.steps == SmoothingSteps::Uniform);
-                             }};
-constexpr KeyReaders kPassBand{"surface.method taubin; laplacian with steps = chebyshev", [](S d) {
-                                   return smoothing_on(d) && (d.smoothing.method == SmoothingMethod::Taubin || d.smoothing.steps == SmoothingSteps::Chebyshev);
-                               }};
-constexpr KeyReaders kFeatures{"smoothing with field.kernel = poly6",
-                               [](S d) { return smoothing_on(d) && d.field.kernel == FieldKernel::Poly6; }};
-constexpr KeyReaders kFoam{"solver = pbf, foam.enabled", [](S d) { return d.solver == SolverKind::Pbf && d.foam.enabled; }};
-constexpr KeyReaders kBulletSubsteps{"solver = bullet, max_substeps > 0",
-                                     [](S d) { return d.solver == SolverKind::Bullet && d.bullet.max_substeps > 0; }};
-constexpr KeyReaders kBulletSleep{"solver = bullet without bullet.springs",
-                                  [](S d) { return d.solver == SolverKind::Bullet && !d.bullet.springs; }};
+// Who reads a key, and what the reader says to a file that sets it elsewhere.
+using namespace key_readers;
 
 constexpr std::string_view kSources[] = {"valley", "strict", "bowl", "flat", "file"};
 constexpr std::string_view kConditions[] = {"none", "fill", "breach", "carve", "auto"};
@@ -151,41 +100,45 @@ constexpr KeyWords kCentreWords{kCentres, [](S d) { return d.spawn.auto_center ?
                                 }};
 
 using K = KeyType;
+using E = KeyEdit;
 const SceneKey kKeys[] = {
     // root
-    {.name = "name", .type = K::String, .readers = kAll, .help = "Shown in reports.", .field = MR_FIELD(name)},
-    {.name = "solver", .type = K::Choice, .choices = kBuiltinSolverNames, .readers = kAll,
+    {.name = "name", .type = K::String, .readers = kAll, .edit = E::Live, .help = "Shown in reports.", .field = MR_FIELD(name)},
+    {.name = "solver", .type = K::Choice, .choices = kBuiltinSolverNames, .readers = kAll, .edit = E::Rebuild,
      .help = "pbf: Position Based Fluids (the default river, docs/river.md); springs: the paper's own physics; bullet: its "
              "engine physics (rigid spheres on Bullet, [bullet], docs/bullet.md).",
      .field = MR_FIELD(solver)},
-    {.name = "seed", .type = K::Seed, .range = closed(0, 4294967295.0), .readers = kNotPbf,
+    {.name = "seed", .type = K::Seed, .range = closed(0, 4294967295.0), .readers = kSeed, .edit = E::Rebuild,
      .help = "Particle spawn RNG seed (refused with solver = \"pbf\", as --seed is: its lattice source places every "
              "particle, nothing is random).",
      .field = MR_FIELD(seed)},
     // [terrain]
-    {.name = "terrain.source", .type = K::Choice, .choices = kSources, .readers = kAll,
+    {.name = "terrain.source", .type = K::Choice, .choices = kSources, .readers = kAll, .edit = E::Rebuild,
      .help = "valley: procedural valley with a winding river channel; strict, bowl: procedural equivalents of the paper's "
              "strict17.png and bowl.png; flat; file: the PNG of terrain.heightmap.",
      .field = MR_FIELD(source.kind)},
-    {.name = "terrain.heightmap", .type = K::String, .readers = kFile,
+    {.name = "terrain.heightmap", .type = K::String, .readers = kFile, .edit = E::Rebuild,
      .help = "PNG (8/16-bit gray, gray+alpha, RGB, RGBA; red channel), relative to the scene file; setting it implies "
              "source = \"file\" (--heightmap).",
      .field = MR_FIELD(source.heightmap)},
-    {.name = "terrain.width", .type = K::Int, .unit = "samples", .range = closed(2, kMaxHeightmapSide), .readers = kProcedural,
+    {.name = "terrain.width", .type = K::Int, .unit = "samples", .range = closed(2, kMaxHeightmapSide),
+     .readers = kProcedural, .edit = E::Rebuild,
      .help = "Samples along x.", .field = MR_FIELD(source.width)},
-    {.name = "terrain.height", .type = K::Int, .unit = "samples", .range = closed(2, kMaxHeightmapSide), .readers = kProcedural,
+    {.name = "terrain.height", .type = K::Int, .unit = "samples", .range = closed(2, kMaxHeightmapSide),
+     .readers = kProcedural, .edit = E::Rebuild,
      .help = "Samples along z.", .field = MR_FIELD(source.height)},
-    {.name = "terrain.seed", .type = K::Seed, .range = closed(0, 4294967295.0), .readers = kValley,
+    {.name = "terrain.seed", .type = K::Seed, .range = closed(0, 4294967295.0), .readers = kValley, .edit = E::Rebuild,
      .help = "Procedural seed (only the valley is random).", .field = MR_FIELD(source.seed)},
-    {.name = "terrain.area_scale", .type = K::Float, .unit = "m", .range = above(0, 1e4), .words = kAreaScaleWords, .readers = kAll,
+    {.name = "terrain.area_scale", .type = K::Float, .unit = "m", .range = above(0, 1e4), .words = kAreaScaleWords,
+     .readers = kAll, .edit = E::Rebuild,
      .help = "Metres between neighbouring samples (--area-scale; \"Heightmap scale\" below); \"auto\": 1 m, raised so that the "
              "terrain's shorter side is at least 16 m (a 2 x 2 map at 1 m is a 1 m terrain).", .field = MR_FIELD(terrain.area_scale)},
-    {.name = "terrain.height_scale", .type = K::Float, .unit = "m", .range = above(0, 1e5), .readers = kAll,
+    {.name = "terrain.height_scale", .type = K::Float, .unit = "m", .range = above(0, 1e5), .readers = kAll, .edit = E::Rebuild,
      .help = "Metres for a normalised height of 1 (--height-scale).", .field = MR_FIELD(terrain.height_scale)},
-    {.name = "terrain.paper_row_orientation", .type = K::Bool, .readers = kAll,
+    {.name = "terrain.paper_row_orientation", .type = K::Bool, .readers = kAll, .edit = E::Rebuild,
      .help = "Image row r -> z = (H-1-r) area_scale (the paper, Unity); false: z = r area_scale.",
      .field = MR_FIELD(terrain.paper_row_orientation)},
-    {.name = "terrain.condition", .type = K::Choice, .choices = kConditions, .readers = kAll,
+    {.name = "terrain.condition", .type = K::Choice, .choices = kConditions, .readers = kAll, .edit = E::Rebuild,
      .help = "Drainage conditioning before the mesh is built. fill: priority-flood filling with a 0.1 % slope; breach: a "
              "channel carved from each depression through its rim; carve: breach, then the river's main channel (source to "
              "outlet) cut in: a flat bed max(3 samples, 4 pbf.spacing) wide and 2 pbf.spacing deep that never rises (least slope 2 %), "
@@ -194,7 +147,8 @@ const SceneKey kKeys[] = {
              "reports what it changed (docs/river.md).",
      .field = MR_FIELD(terrain.condition)},
     // [particles]
-    {.name = "particles.count", .type = K::Int, .range = closed(1, kMaxParticles), .words = kCountWords, .readers = kAll,
+    {.name = "particles.count", .type = K::Int, .range = closed(1, kMaxParticles), .words = kCountWords,
+     .readers = kAll, .edit = E::Rebuild,
      .help = "Particle budget, or \"auto\": a PBF river sizes it to its main channel (docs/river.md, \"Sizing\"); other "
              "solvers take 4000.",
      .field = MR_FIELD(spawn.count)},
@@ -208,13 +162,14 @@ const SceneKey kKeys[] = {
      .help = "Frames between two activations without a particle rate; 0 = all at once.", .field = MR_FIELD(spawn.interval)},
     {.name = "particles.initial_velocity", .type = K::Vec3, .unit = "m/s", .range = closed(-1e4, 1e4), .readers = kAll,
      .help = "Velocity given at (re)spawn.", .field = MR_FIELD(spawn.initial_velocity)},
-    {.name = "particles.auto_height", .type = K::Float, .unit = "m", .range = closed(0, 1e4), .readers = kAutoCentre,
+    {.name = "particles.auto_height", .type = K::Float, .unit = "m", .range = closed(0, 1e4),
+     .readers = kAutoCentre, .edit = E::Rebuild,
      .help = "Height of an \"auto\" or \"channel\" centre above the ground; the source is moved inward until its "
              "footprint is inside the terrain and raised until half of the ground under it is 0.5 m below its bottom.",
      .field = MR_FIELD(spawn.auto_height)},
-    {.name = "particles.source_shape", .type = K::Choice, .choices = kShapes, .readers = kNotBullet,
+    {.name = "particles.source_shape", .type = K::Choice, .choices = kShapes, .readers = kShape,
      .help = "box | disc (radius spawn_half_extent.x) | point.", .field = MR_FIELD(spawn.shape)},
-    {.name = "particles.flow_rate", .type = K::Float, .unit = "1/s", .range = closed(0, 1e7), .words = kRateWords, .readers = kNotBullet,
+    {.name = "particles.flow_rate", .type = K::Float, .unit = "1/s", .range = closed(0, 1e7), .words = kRateWords, .readers = kFlowRate,
      .help = "Particles (or litres, with litres_per_particle) per second; 0: one every spawn_interval frames; \"auto\": a "
              "PBF river sizes it to its carved channel (`run` prints the values it chose; a number here keeps count "
              "\"auto\" sized to it). Above particles.count per second: a warning; PBF: above what the lattice source can "
@@ -222,7 +177,7 @@ const SceneKey kKeys[] = {
      .field = MR_FIELD(spawn.flow_rate)},
     {.name = "particles.litres_per_particle", .type = K::Float, .unit = "l", .range = closed(0, 1e9), .readers = kRate,
      .help = "> 0: flow_rate is in litres per second, each particle this many litres.", .field = MR_FIELD(spawn.litres_per_particle)},
-    {.name = "particles.prefill", .type = K::Bool, .readers = kPbfCarved,
+    {.name = "particles.prefill", .type = K::Bool, .readers = kPbfCarved, .edit = E::Rebuild,
      .help = "Fill the carved main channel with water at the start (three quarters of its depth, moving down it at "
              "0.75 m/s, at most half the budget), so the river runs from the first frame instead of after its front "
              "crossed the channel (docs/river.md, \"Quadratic bed friction and a channel that starts full\").",
@@ -233,7 +188,8 @@ const SceneKey kKeys[] = {
              "side (docs/river.md, \"A source that follows the ground\").",
      .field = MR_FIELD(spawn.follow_ground)},
     // [pbf]
-    {.name = "pbf.spacing", .type = K::Float, .unit = "m", .range = closed(1e-3, 1e3), .words = kSpacingWords, .readers = kPbfOrCarve,
+    {.name = "pbf.spacing", .type = K::Float, .unit = "m", .range = closed(1e-3, 1e3), .words = kSpacingWords,
+     .readers = kPbfOrCarve, .edit = E::Rebuild,
      .help = "Rest spacing (below 1 mm the kernel constants overflow); a carved channel's depth and width. \"auto\": a "
              "self-sized river's spacing from its terrain (docs/river.md, \"Spacing and scale\"): 0.5 m per metre of "
              "area_scale, at most the shorter side / 32; the kernel, collision and field lengths and the source scale with "
@@ -285,7 +241,7 @@ const SceneKey kKeys[] = {
              "friction as tuned), 1.5 otherwise (a pool's first slosh stays in its bowl).",
      .field = MR_FIELD(pbf.contact_band)},
     // [sink]
-    {.name = "sink.kind", .type = K::Choice, .choices = kSinks, .readers = kNotBullet,
+    {.name = "sink.kind", .type = K::Choice, .choices = kSinks, .readers = kSinkKind,
      .help = "none: particles respawn only when they leave the terrain's box | box: entering [min, max] | edges: leaving "
              "the terrain's rectangle over an edge (its outlets). Sunk particles are recycled to the source.",
      .field = MR_FIELD(sink.kind)},
@@ -307,7 +263,7 @@ const SceneKey kKeys[] = {
              "neighbour grid, parallel, the same forces (tested).",
      .field = MR_FIELD(springs.mode)},
     // [collision]
-    {.name = "collision.mode", .type = K::Choice, .choices = kCollisionModes, .readers = kNotBullet,
+    {.name = "collision.mode", .type = K::Choice, .choices = kCollisionModes, .readers = kCollision,
      .help = "paper: the leaf of the new position, eq. 4 | robust: the swept segment through the whole tree, watertight, "
              "a guard (0 tunneling) | none. solver = \"pbf\": robust or none (it slides, never reflects).",
      .field = MR_FIELD(collision.mode)},
@@ -315,16 +271,16 @@ const SceneKey kKeys[] = {
      .help = "Fraction of speed lost at a bounce; solver = \"pbf\": the bed friction, the share of a particle's motion "
              "along the ground it loses in each step the terrain holds it (still water 0.02: docs/river.md, \"Bed friction\").",
      .field = MR_FIELD(collision.damping)},
-    {.name = "collision.friction_speed", .type = K::Float, .unit = "m/s", .range = closed(0, 1e3), .readers = kPbfContact,
+    {.name = "collision.friction_speed", .type = K::Float, .unit = "m/s", .range = closed(0, 1e3), .readers = kBedFriction,
      .help = "The bed friction's law: 0 = the share damping at every speed (linear drag); > 0 = the share damping x "
              "speed / friction_speed, at most 0.5 (quadratic drag, as a river bed's: slow sheets spread, fast chutes "
              "are held; docs/river.md, \"Quadratic bed friction and a channel that starts full\").",
      .field = MR_FIELD(collision.friction_speed)},
-    {.name = "collision.offset", .type = K::Float, .unit = "m", .range = closed(0, 10), .readers = kContact,
+    {.name = "collision.offset", .type = K::Float, .unit = "m", .range = closed(0, 10), .readers = kOffset,
      .help = "Placed above the hit point.", .field = MR_FIELD(collision.offset)},
-    {.name = "collision.bvh_leaf_triangles", .type = K::Int, .range = closed(2, 4096), .readers = kAll,
+    {.name = "collision.bvh_leaf_triangles", .type = K::Int, .range = closed(2, 4096), .readers = kAll, .edit = E::Rebuild,
      .help = "AABB tree leaf size (every scene builds the tree; the viewer draws it).", .field = MR_FIELD(collision.leaf_triangles)},
-    {.name = "collision.radius", .type = K::Float, .unit = "m", .range = closed(0, 100), .readers = kNotBullet,
+    {.name = "collision.radius", .type = K::Float, .unit = "m", .range = closed(0, 100), .readers = kCollision,
      .help = "Particle radius: the centre stays this far above the ground (the terrain lifted vertically; exact on flat "
              "ground); the tunneled counter reads it.",
      .field = MR_FIELD(collision.radius)},
@@ -335,62 +291,64 @@ const SceneKey kKeys[] = {
     // [integrator]
     {.name = "integrator.dt", .type = K::Float, .unit = "s", .range = {.lo = 0, .hi = 1, .lo_open = true, .zero_too = true},
      .readers = kAll, .help = "Fixed step; 0: the frame time (the paper).", .field = MR_FIELD(integrator.fixed_dt)},
-    {.name = "integrator.substeps", .type = K::Int, .range = closed(1, 1000), .readers = kNotBullet,
+    {.name = "integrator.substeps", .type = K::Int, .range = closed(1, 1000), .readers = kSubsteps,
      .help = "Solver steps per frame (Bullet: bullet.dt, max_substeps).", .field = MR_FIELD(integrator.substeps)},
     // [field]
-    {.name = "field.kernel", .type = K::Choice, .choices = kKernels, .readers = kSurface,
+    {.name = "field.kernel", .type = K::Choice, .choices = kKernels, .readers = kSurface, .edit = E::Live,
      .help = "inverse_square: eq. 2, 1/r^2 | radius_over_r: the paper's code (both reach every grid sample: refused "
              "above 5,000 balls) | poly6: compact, sparse blocks, parallel.",
      .field = MR_FIELD(field.kernel)},
-    {.name = "field.bounds", .type = K::Choice, .choices = kBounds, .readers = kSurface,
+    {.name = "field.bounds", .type = K::Choice, .choices = kBounds, .readers = kSurface, .edit = E::Live,
      .help = "particles: the particles' box grown by bounds_offset (the paper) | terrain: the terrain's box, fixed "
              "(poly6 only).",
      .field = MR_FIELD(field.bounds)},
-    {.name = "field.radius", .type = K::Float, .unit = "m", .range = above(0, 1e4), .readers = kRadius,
+    {.name = "field.radius", .type = K::Float, .unit = "m", .range = above(0, 1e4), .readers = kRadius, .edit = E::Live,
      .help = "Metaball radius (radius_over_r); poly6: the support radius.", .field = MR_FIELD(field.radius)},
-    {.name = "field.resolution", .type = K::Float, .unit = "1/m", .range = above(0, 64), .readers = kAll,
+    {.name = "field.resolution", .type = K::Float, .unit = "1/m", .range = above(0, 64), .readers = kAll, .edit = E::Live,
      .help = "Grid cells per metre; also the default voxel size of --export --format vdb.", .field = MR_FIELD(field.resolution)},
-    {.name = "field.bounds_offset", .type = K::Float, .unit = "m", .range = closed(0, 1e4), .readers = kSurface,
+    {.name = "field.bounds_offset", .type = K::Float, .unit = "m", .range = closed(0, 1e4), .readers = kSurface, .edit = E::Live,
      .help = "The particles' box grows by this on every side.", .field = MR_FIELD(field.bounds_offset)},
-    {.name = "field.threshold", .type = K::Float, .range = above(0, 1e9), .readers = kSurface,
+    {.name = "field.threshold", .type = K::Float, .range = above(0, 1e9), .readers = kSurface, .edit = E::Live,
      .help = "Iso value: inside where the field is above it.", .field = MR_FIELD(field.threshold)},
     // [surface]
-    {.name = "surface.enabled", .type = K::Bool, .readers = kAll,
+    {.name = "surface.enabled", .type = K::Bool, .readers = kAll, .edit = E::Live,
      .help = "Build the field and the marching-cubes surface every frame; the root key `surface = true/false` is the same "
              "switch (a file has one or the other: TOML allows a name once).",
      .field = MR_FIELD(surface)},
-    {.name = "surface.method", .type = K::Choice, .choices = kMethods, .readers = kSurface,
+    {.name = "surface.method", .type = K::Choice, .choices = kMethods, .readers = kSmoothingMethod, .edit = E::Live,
      .help = "none: the mesh as extracted | laplacian: feature-weighted Laplacian steps as splashsurf does (Loeschner et "
              "al. 2023), then the volume given back | taubin: lambda|mu steps (Taubin 1995), keep the volume, flatten less.",
      .field = MR_FIELD(smoothing.method)},
-    {.name = "surface.steps", .type = K::Choice, .choices = kSteps, .readers = kLaplacian,
+    {.name = "surface.steps", .type = K::Choice, .choices = kSteps, .readers = kLaplacian, .edit = E::Live,
      .help = "chebyshev: step sizes that damp the band [pass_band, 2] of mesh frequencies evenly (Taubin, Zhang, Golub "
              "1996: 8 steps damp it to 0.05, 16 uniform steps of 1 leave 0.19) | uniform: every step lambda.",
      .field = MR_FIELD(smoothing.steps)},
-    {.name = "surface.iterations", .type = K::Int, .range = closed(0, 100), .readers = kSmoothing,
+    {.name = "surface.iterations", .type = K::Int, .range = closed(0, 100), .readers = kSmoothing, .edit = E::Live,
      .help = "Steps (each a pass over the moving vertices).", .field = MR_FIELD(smoothing.iterations)},
-    {.name = "surface.lambda", .type = K::Float, .range = above(0, 1), .readers = kLambda,
+    {.name = "surface.lambda", .type = K::Float, .range = above(0, 1), .readers = kLambda, .edit = E::Live,
      .help = "Share of the way to the neighbours' mean per step.", .field = MR_FIELD(smoothing.lambda)},
-    {.name = "surface.pass_band", .type = K::Float, .range = {.lo = 0, .hi = 1, .lo_open = true, .hi_open = true}, .readers = kPassBand,
+    {.name = "surface.pass_band", .type = K::Float, .range = {.lo = 0, .hi = 1, .lo_open = true, .hi_open = true},
+     .readers = kPassBand, .edit = E::Live,
      .help = "Mesh frequency (0 to 2) below which shapes are kept: taubin's k_PB (mu = 1 / (k_PB - 1 / lambda)), "
              "chebyshev's band [pass_band, 2].",
      .field = MR_FIELD(smoothing.pass_band)},
-    {.name = "surface.feature_count", .type = K::Float, .range = {.lo = 2, .hi = 1000, .zero_too = true}, .readers = kFeatures,
+    {.name = "surface.feature_count", .type = K::Float, .range = {.lo = 2, .hi = 1000, .zero_too = true},
+     .readers = kFeatures, .edit = E::Live,
      .help = "0: off (every vertex moves fully). The poly6 field one lone particle's iso distance inside the surface is "
              "about the number of particles behind a vertex (a lone drop 1, a touching pair 1.4, still water 2 to 4): at "
              "or below feature_count / 2 a vertex does not move, from feature_count on it moves fully (smoothstep between).",
      .field = MR_FIELD(smoothing.feature_count)},
-    {.name = "surface.keep_volume", .type = K::Bool, .readers = kLaplacian,
+    {.name = "surface.keep_volume", .type = K::Bool, .readers = kLaplacian, .edit = E::Live,
      .help = "Move the smoothed vertices along their normals by what the steps took from the enclosed volume.",
      .field = MR_FIELD(smoothing.keep_volume)},
-    {.name = "surface.normal_iterations", .type = K::Int, .range = closed(0, 100), .readers = kSmoothingOn,
+    {.name = "surface.normal_iterations", .type = K::Int, .range = closed(0, 100), .readers = kSmoothingOn, .edit = E::Live,
      .help = "Passes that average each recomputed normal with its neighbours'.", .field = MR_FIELD(smoothing.normal_iterations)},
-    {.name = "surface.smooth_hidden", .type = K::Bool, .readers = kSmoothingOn,
+    {.name = "surface.smooth_hidden", .type = K::Bool, .readers = kSmoothingOn, .edit = E::Live,
      .help = "Smooth the vertices below the terrain too (the river's bed, about half of its mesh, hidden by the "
              "ground); false: they stay as extracted.",
      .field = MR_FIELD(smoothing.smooth_hidden)},
     // [foam]
-    {.name = "foam.enabled", .type = K::Bool, .readers = kPbf,
+    {.name = "foam.enabled", .type = K::Bool, .readers = kFoamSwitch,
      .help = "Make diffuse particles (on in the default scene, off in the other presets; enabled = false is accepted in "
              "any scene).",
      .field = MR_FIELD(foam.enabled)},
@@ -428,37 +386,38 @@ const SceneKey kKeys[] = {
     {.name = "foam.drag", .type = K::Float, .range = closed(0, 1), .readers = kFoam,
      .help = "Share of a bubble's velocity difference to the fluid removed per frame.", .field = MR_FIELD(foam.drag)},
     // [render]
-    {.name = "render.flow_detail", .type = K::Bool, .readers = kAll,
+    {.name = "render.flow_detail", .type = K::Bool, .readers = kAll, .edit = E::Live,
      .help = "Realistic water: ripples and foam streaks advected along the flow, stronger where it is fast, none on "
              "still water (docs/rendering.md, \"Flow detail\"); render --no-flow and the viewer's key L turn it off.",
      .field = MR_FIELD(render.flow_detail)},
     // [bullet]
-    {.name = "bullet.terrain", .type = K::Choice, .choices = kBulletTerrains, .readers = kBullet,
+    {.name = "bullet.terrain", .type = K::Choice, .choices = kBulletTerrains, .readers = kBullet, .edit = E::Rebuild,
      .help = "mesh: btBvhTriangleMeshShape of the terrain's triangles (the paper's mesh collider) | heightfield: "
              "btHeightfieldTerrainShape (the same samples, the same diagonal split).",
      .field = MR_FIELD(bullet.terrain)},
-    {.name = "bullet.sphere_radius", .type = K::Float, .unit = "m", .range = above(0, 1e3), .readers = kBullet,
+    {.name = "bullet.sphere_radius", .type = K::Float, .unit = "m", .range = above(0, 1e3), .readers = kBullet, .edit = E::Rebuild,
      .help = "Collider radius of every particle.", .field = MR_FIELD(bullet.sphere_radius)},
-    {.name = "bullet.mass", .type = K::Float, .unit = "kg", .range = above(0, 1e6), .readers = kBullet,
+    {.name = "bullet.mass", .type = K::Float, .unit = "kg", .range = above(0, 1e6), .readers = kBullet, .edit = E::Rebuild,
      .help = "Per sphere.", .field = MR_FIELD(bullet.mass)},
-    {.name = "bullet.friction", .type = K::Float, .range = closed(0, 100), .readers = kBullet,
+    {.name = "bullet.friction", .type = K::Float, .range = closed(0, 100), .readers = kBullet, .edit = E::Rebuild,
      .help = "Contact friction (Bullet's default 0.5).", .field = MR_FIELD(bullet.friction)},
-    {.name = "bullet.restitution", .type = K::Float, .range = closed(0, 1), .readers = kBullet, .help = "Bounciness.",
+    {.name = "bullet.restitution", .type = K::Float, .range = closed(0, 1), .readers = kBullet, .edit = E::Rebuild,
+     .help = "Bounciness.",
      .field = MR_FIELD(bullet.restitution)},
-    {.name = "bullet.particle_collisions", .type = K::Bool, .readers = kBullet,
+    {.name = "bullet.particle_collisions", .type = K::Bool, .readers = kBullet, .edit = E::Rebuild,
      .help = "Spheres collide with each other (the paper: no).", .field = MR_FIELD(bullet.particle_collisions)},
-    {.name = "bullet.dt", .type = K::Float, .unit = "s", .range = above(0, 1), .readers = kBulletSubsteps,
+    {.name = "bullet.dt", .type = K::Float, .unit = "s", .range = above(0, 1), .readers = kBulletSubsteps, .edit = E::Rebuild,
      .help = "Bullet's fixed internal step.", .field = MR_FIELD(bullet.fixed_dt)},
-    {.name = "bullet.max_substeps", .type = K::Int, .range = closed(0, 1000), .readers = kBullet,
+    {.name = "bullet.max_substeps", .type = K::Int, .range = closed(0, 1000), .readers = kBullet, .edit = E::Rebuild,
      .help = "Internal steps per frame at most; 0 = one step of the frame time.", .field = MR_FIELD(bullet.max_substeps)},
-    {.name = "bullet.solver_iterations", .type = K::Int, .range = closed(1, 1000), .readers = kBullet,
+    {.name = "bullet.solver_iterations", .type = K::Int, .range = closed(1, 1000), .readers = kBullet, .edit = E::Rebuild,
      .help = "Sequential-impulse iterations.", .field = MR_FIELD(bullet.solver_iterations)},
-    {.name = "bullet.ccd", .type = K::Bool, .readers = kBullet,
+    {.name = "bullet.ccd", .type = K::Bool, .readers = kBullet, .edit = E::Rebuild,
      .help = "Continuous collision detection (a sphere moving more than half its radius in a step is swept).",
      .field = MR_FIELD(bullet.ccd)},
-    {.name = "bullet.sleep", .type = K::Bool, .readers = kBulletSleep,
+    {.name = "bullet.sleep", .type = K::Bool, .readers = kBulletSleep, .edit = E::Rebuild,
      .help = "Bullet's deactivation of resting spheres (spheres with springs never sleep).", .field = MR_FIELD(bullet.sleep)},
-    {.name = "bullet.springs", .type = K::Bool, .readers = kBullet,
+    {.name = "bullet.springs", .type = K::Bool, .readers = kBullet, .edit = E::Rebuild,
      .help = "The paper's eq. 3 ([springs]) as external forces: its future work.", .field = MR_FIELD(bullet.springs)},
 };
 #undef MR_FIELD
@@ -473,7 +432,8 @@ const SceneSection kSections[] = {
     {"forces", "Forces on every particle."},
     {"springs", "The paper's eq. 3: a = 0.5 k (r v/|v| - v) to each particle of a pair. Read by solver = \"springs\", "
                 "and by Bullet with bullet.springs = true (not mode); an error in a PBF scene."},
-    {"collision", "Terrain contact of solver = \"springs\" and \"pbf\"; an error in a Bullet scene (it has [bullet])."},
+    {"collision", "Terrain contact of solver = \"springs\" and \"pbf\"; an error in a Bullet scene (it has [bullet]) but for "
+                  "bvh_leaf_triangles (the tree every scene builds)."},
     {"integrator", "The time step."},
     {"field", "The metaball scalar field the surface is extracted from."},
     {"surface", "The marching-cubes surface and its smoothing (docs/rendering.md, \"Surface smoothing\"); the paper "
@@ -488,7 +448,8 @@ const SceneSection kSections[] = {
     {"bullet", "The paper's engine physics on Bullet (docs/bullet.md): solver = \"bullet\" only, at most 200,000 "
                "bodies; gravity from [forces], the frame time from [integrator]. A Bullet scene refuses what it does "
                "not do: a flow rate, litres_per_particle, a source_shape other than box, a sink, springs.mode, springs.* "
-               "without bullet.springs (stiffness 0 is fine), integrator.substeps, [collision], [pbf]; left out, the "
+               "without bullet.springs (stiffness 0 is fine), integrator.substeps, [collision] (but its "
+               "bvh_leaf_triangles), [pbf]; left out, the "
                "flow rate and sink are off and spawn_interval is the paper-engine preset's."},
 };
 

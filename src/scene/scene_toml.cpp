@@ -1,8 +1,9 @@
 // Scene files in TOML (toml++). Every key is checked: unknown keys, wrong types and
 // out-of-range values are one-line errors naming the file and the key. The keys, their
 // types and ranges come from the table in scene_keys.cpp (docs/scene-format.md is
-// generated from it); the rules between keys (what a solver or another key's value
-// makes irrelevant) are here.
+// generated from it), and so does which keys a scene reads: a key a file sets where its
+// readers say the scene does not read it (a solver that does not, another key's value
+// that makes it irrelevant) is an error with the message of the table's condition.
 #include <metariver/scene.h>
 #include <metariver/scene_keys.h>
 
@@ -147,11 +148,7 @@ public:
             case KeyType::Choice: {
                 auto s = n->value<std::string>();
                 if (!s) return fail(key, "must be a string"), true;
-                const auto it = std::find(k.choices.begin(), k.choices.end(), *s);
-                if (it == k.choices.end())
-                    return fail(key, fmt::format("must be one of {} (got '{}')", quoted(k.choices, ", ", ""), *s)), true;
-                const EnumRef& e = std::get<EnumRef>(f);
-                e.set(e.field, static_cast<int>(it - k.choices.begin()));
+                if (const std::string e = set_choice(k, f, *s); !e.empty()) return fail(key, e), true;
                 break;
             }
         }
@@ -165,9 +162,9 @@ public:
     }
 
 private:
-    static std::string quoted(std::span<const std::string_view> words, const char* sep, const char* quote = "\"") {
+    static std::string quoted(std::span<const std::string_view> words, const char* sep) {
         std::string s;
-        for (auto w : words) s += fmt::format("{}{}{}{}", s.empty() ? "" : sep, quote, w, quote);
+        for (auto w : words) s += fmt::format("{}\"{}\"", s.empty() ? "" : sep, w);
         return s;
     }
     /// What a number-typed key takes besides its words.
@@ -180,275 +177,92 @@ private:
     std::string error_;
 };
 
-/// Options the chosen solver does not read: a key that asks for something the solver
-/// does not do is an error naming the key. What each reads (src/particles/solver.cpp,
-/// pbf.cpp, bullet_solver.cpp, src/scene/simulation.cpp):
-///   [pbf]       solver = "pbf"; the others read pbf.spacing only to carve a channel
-///               (terrain.condition = "carve": its depth and width, carve_def)
-///   [bullet]    solver = "bullet"
-///   [springs]   solver = "springs"; Bullet the stiffness and distances with
-///               bullet.springs = true (not springs.mode); PBF none of it
-///   [collision] springs and PBF (PBF never reflects: no mode = "paper"); not Bullet
-///   integrator.substeps: springs and PBF (Bullet substeps by bullet.dt)
-///   seed        springs and Bullet (PBF's lattice source draws no random number)
-///   [foam]      solver = "pbf" (enabled = false is accepted anywhere)
 /// What a Bullet scene would otherwise inherit from the default river (its flow-rate
-/// source, edge sinks and spawn-all-at-once) is replaced by the paper's engine
-/// scene's spawning.
-void apply_solver_scope(const toml::table& root, Reader& r, SceneDef& d) {
-    const std::string solver = fmt::format("solver = \"{}\"", to_string(d.solver));
-    const toml::table* pt = root["particles"].as_table();
-    const toml::table* st = root["springs"].as_table();
-    auto given = [&](const char* key) { return pt && pt->get(key) != nullptr; };
-    auto in = [](const toml::table* t, const char* key) { return t && t->get(key) != nullptr; };
-
-    if (const toml::table* pbf = root["pbf"].as_table(); pbf && d.solver != SolverKind::Pbf) {
-        if (d.terrain.condition != TerrainCondition::Carve) {
-            r.fail("pbf", fmt::format("only solver = \"pbf\" reads [pbf] ({} reads pbf.spacing only to carve a "
-                                      "channel, terrain.condition = \"carve\")", solver));
-        } else {
-            for (const auto& [k, v] : *pbf)
-                if (k.str() != "spacing")
-                    r.fail("pbf." + std::string(k.str()),
-                           fmt::format("only solver = \"pbf\" reads it ({} reads pbf.spacing only, the carved "
-                                       "channel's depth)", solver));
-        }
-    }
-    if (const toml::table* ft = root["foam"].as_table(); ft && d.solver != SolverKind::Pbf)
-        for (const auto& [k, v] : *ft)
-            if (k.str() != "enabled" || d.foam.enabled)
-                r.fail("foam." + std::string(k.str()),
-                       fmt::format("only solver = \"pbf\" makes foam (diffuse particles need the fluid's kernel "
-                                   "neighbourhoods; {} has none): remove [foam]", solver));
-    if (root.get("bullet") && d.solver != SolverKind::Bullet)
-        r.fail("bullet", fmt::format("only solver = \"bullet\" reads [bullet] (this scene has {})", solver));
-    if (st && d.solver == SolverKind::Pbf)
-        r.fail("springs", "solver = \"pbf\" does not use springs (its density constraint keeps the particles "
-                          "apart: [pbf]); remove [springs]");
-    // PBF draws no random number: its lattice source places every particle it emits.
-    if (const std::string why = seed_unused(d.solver); root.get("seed") && !why.empty()) r.fail("seed", why);
-    if (const toml::table* ct = root["collision"].as_table(); ct && ct->get("mode") && d.solver == SolverKind::Pbf) {
-        if (const std::string why = collision_mode_unused(d.solver, d.collision.mode); !why.empty())
-            r.fail("collision.mode", why);
-    }
+/// source, edge sinks and spawn-all-at-once) is replaced by the paper's engine scene's
+/// spawning, where the file does not set it.
+void bullet_spawning(const toml::table& root, SceneDef& d) {
     if (d.solver != SolverKind::Bullet) return;
-
-    const std::string why = "solver = \"bullet\" does not use it (spheres spawn in the box every "
-                            "particles.spawn_interval frames, collide through Bullet and respawn below or outside the terrain)";
-    if (given("flow_rate") && (d.spawn.flow_rate > 0.0f || d.spawn.auto_rate())) r.fail("particles.flow_rate", why + "; remove it or set 0");
-    if (given("litres_per_particle") && d.spawn.litres_per_particle > 0.0f) r.fail("particles.litres_per_particle", why);
-    if (given("source_shape") && d.spawn.shape != SourceShape::Box) r.fail("particles.source_shape", why + "; only \"box\"");
-    if (root.get("collision")) r.fail("collision", collision_mode_unused(d.solver, d.collision.mode));
-    if (const toml::table* sk = root["sink"].as_table(); sk && d.sink.kind != SinkKind::None)
-        r.fail("sink.kind", why + "; only \"none\"");
-    if (in(st, "mode"))
-        r.fail("springs.mode", "solver = \"bullet\" applies the springs itself (bullet.springs); remove springs.mode");
-    if (!d.bullet.springs) {
-        const char* off = "solver = \"bullet\" applies springs only with bullet.springs = true";
-        if (in(st, "stiffness") && d.springs.stiffness != 0.0f) r.fail("springs.stiffness", fmt::format("{}; set 0 or turn them on", off));
-        for (const char* k : {"min_distance", "max_distance"})
-            if (in(st, k)) r.fail(fmt::format("springs.{}", k), off);
-    }
-    if (in(root["integrator"].as_table(), "substeps"))
-        r.fail("integrator.substeps", "solver = \"bullet\" substeps with its own fixed step (bullet.dt, "
-                                      "bullet.max_substeps); remove it");
-    // Not inherited from the default river:
+    const toml::table* pt = root["particles"].as_table();
+    auto given = [&](const char* key) { return pt && pt->get(key) != nullptr; };
     if (!given("flow_rate")) d.spawn.flow_rate = 0.0f;
     if (!given("litres_per_particle")) d.spawn.litres_per_particle = 0.0f;
     if (!given("source_shape")) d.spawn.shape = SourceShape::Box;
     if (!root.get("sink")) d.sink = SinkDef{};
+    else if (const toml::table* st = root["sink"].as_table(); st && !st->get("kind")) d.sink.kind = SinkKind::None;
     if (!given("spawn_interval")) {
         auto engine = preset("paper-engine");
         if (engine) d.spawn.interval = engine->spawn.interval;
     }
 }
 
-/// Keys another key's value makes irrelevant (issue 13, "no silent option"): a key
-/// written in the file that the scene as written never reads is an error naming the
-/// key and the key/value that makes it irrelevant, with the way out. Only keys present
-/// in the file are checked (what is inherited from the base scene is never an error);
-/// the deciding value may be inherited (a spawn_interval under the default river's
-/// flow_rate = "auto"). A value that agrees with what the scene does anyway (bullet.sleep
-/// = false with bullet.springs = true, litres_per_particle = 0 without a rate) is
-/// accepted, as springs.stiffness = 0 is in a Bullet scene without springs. Checked
-/// against the code that reads each key (after apply_solver_scope, which settles what
-/// each solver reads at all):
-///   surface.enabled = false   the smoothing keys of [surface]; surface.method = "none"
-///                       or iterations = 0: the other smoothing keys; method = "taubin":
-///                       steps, keep_volume; steps = "uniform": pass_band; "chebyshev":
-///                       lambda; a field.kernel other than poly6: feature_count > 0
-///   surface = false     [field] except resolution (Simulation::step builds no field;
-///                       field.resolution stays: the default --voxel-size of --export
-///                       --format vdb, export_options.cpp)
-///   field.kernel = "inverse_square"   field.radius (1/r^2 has none: paper_field.cpp)
-///   a particle rate     spawn_interval (ParticleSolver::step_frame: the interval only
-///                       schedules activations without a rate); a rate is flow_rate > 0,
-///                       or "auto" with solver = "pbf" (sized from the channel)
-///   no particle rate    litres_per_particle > 0 (the unit of flow_rate); flow_rate =
-///                       "auto" outside PBF (Simulation::create sets it to 0)
-///   spawn_center [x, y, z]   auto_height (resolve_source: "auto"/"channel" only)
-///   source_shape = "point"   spawn_half_extent (spawn, LatticeSource: one point)
-///   sink.kind other than "box"   sink.min, sink.max
-///   springs.stiffness = 0    min_distance, max_distance, mode (no spring force)
-///   collision.mode = "none"  damping, offset, query (no terrain contact; radius stays:
-///                            the tunneled counter reads it)
-///   collision.mode = "paper" query (the paper's response walks the AABB tree)
-///   terrain.source = "file"  width, height, seed (the PNG's size; no procedure)
-///   terrain.source = strict | bowl | flat   seed (only "valley" is random); heightmap
-///   terrain.source = valley              heightmap
-///   pbf.scorr_k = 0          scorr_n, scorr_dq (no tensile correction: pbf.cpp)
-///   foam.enabled = false     every other [foam] key (Simulation makes no FoamSystem)
-///   bullet.max_substeps = 0  bullet.dt (one Bullet step of the frame's time)
-///   bullet.springs = true    bullet.sleep = true (spheres with springs never sleep)
-/// The viewer's live editor can change any value after loading; a key is judged by the
-/// scene as written, as the solver scope is.
-void refuse_irrelevant_keys(const toml::table& root, Reader& r, const SceneDef& d) {
-    auto given = [&](const char* table, const char* key) {
-        const toml::table* t = root[table].as_table();
-        return t && t->get(key) != nullptr;
-    };
-    auto ignored = [&](const std::string& key, const std::string& when, const std::string& fix) {
-        r.fail(key, fmt::format("ignored when {}: {}", when, fix));
-    };
-    auto each = [&](const char* table, std::initializer_list<const char*> keys, const std::string& when,
-                    const std::string& fix) {
-        for (const char* k : keys)
-            if (given(table, k)) ignored(fmt::format("{}.{}", table, k), when, fix);
-    };
+/// The condition that makes the scene read no key of section `s` ([bullet] outside
+/// Bullet), or null when it reads some or only another key's value stops it.
+const ReadIf* section_unread(const SceneSection& s, const SceneDef& d) {
+    const ReadIf* first = nullptr;
+    for (const SceneKey& k : scene_keys()) {
+        if (k.section() != s.name) continue;
+        const ReadIf* c = k.readers.failing(d);
+        if (!c || c->scope != ReadScope::Section || s.name.empty()) return nullptr;
+        if (!first) first = c;
+    }
+    return first;
+}
 
-    const bool surface_table = root["surface"].is_table();
-    const std::string off = surface_table ? "surface.enabled = false" : "surface = false";
-    if (!d.surface)
-        each("field", {"kernel", "bounds", "radius", "bounds_offset", "threshold"},
-             off + " (no field or surface is built; field.resolution stays, the default voxel size of --export "
-                   "--format vdb)",
-             fmt::format("remove it or set {} = true", surface_table ? "surface.enabled" : "surface"));
-    else if (d.field.kernel == FieldKernel::InverseSquare)
-        each("field", {"radius"}, "field.kernel = \"inverse_square\" (1/r^2 has no radius)",
-             "remove it or use field.kernel = \"radius_over_r\" or \"poly6\"");
-
-    // The smoothing ([surface]): smooth_surface (src/surface/smoothing.cpp) returns at
-    // once for method "none" or 0 iterations; Taubin steps lambda|mu and never restores
-    // the volume; Laplacian's uniform steps are lambda, its Chebyshev steps come from
-    // pass_band; feature weights read a poly6 field (Simulation::step passes none else).
-    if (surface_table) {
-        const SmoothingDef& m = d.smoothing;
-        if (!d.surface)
-            each("surface", {"method", "steps", "iterations", "lambda", "pass_band", "feature_count", "keep_volume",
-                             "normal_iterations", "smooth_hidden"},
-                 "surface.enabled = false (nothing is smoothed)", "remove it or set enabled = true");
-        else if (m.method == SmoothingMethod::None)
-            each("surface", {"steps", "iterations", "lambda", "pass_band", "feature_count", "keep_volume", "normal_iterations", "smooth_hidden"},
-                 "surface.method = \"none\" (the mesh as extracted)", "remove it or choose a method");
-        else if (m.iterations == 0)
-            each("surface", {"steps", "lambda", "pass_band", "feature_count", "keep_volume", "normal_iterations", "smooth_hidden"},
-                 "surface.iterations = 0 (no smoothing step)", "remove it or give iterations");
-        else {
-            if (m.method == SmoothingMethod::Taubin)
-                each("surface", {"steps", "keep_volume"},
-                     "surface.method = \"taubin\" (lambda|mu steps, which keep the volume themselves)",
-                     "remove it or use method = \"laplacian\"");
-            else if (m.steps == SmoothingSteps::Uniform)
-                each("surface", {"pass_band"}, "surface.steps = \"uniform\" (every step is lambda)",
-                     "remove it or use steps = \"chebyshev\"");
-            else
-                each("surface", {"lambda"}, "surface.steps = \"chebyshev\" (the step sizes come from pass_band)",
-                     "remove it or use steps = \"uniform\"");
-            if (d.field.kernel != FieldKernel::Poly6 && m.feature_count != 0.0f)
-                each("surface", {"feature_count"},
-                     fmt::format("field.kernel = \"{}\" (feature weights read a poly6 field)", to_string(d.field.kernel)),
-                     "remove it or use field.kernel = \"poly6\"");
+/// Keys the scene as written never reads (issue 13, "no silent option"): a key the file
+/// sets where its readers (scene_keys(): a solver that does not read it, another key's
+/// value that makes it irrelevant) say it is not read is an error naming the key, or its
+/// section where none of that is read, with the message of the first failing condition:
+/// what makes it irrelevant and the way out. Only what the file holds is checked (what it
+/// inherits from the base scene is never an error); the deciding value may be inherited
+/// (a spawn_interval under the default river's flow_rate = "auto"). A value that agrees
+/// with what the scene does anyway (ReadIf::agrees) is accepted. The viewer's live editor
+/// can change any value after loading; a key is judged by the scene as written.
+void refuse_unread_keys(const toml::table& root, Reader& r, const SceneDef& d) {
+    const SceneFileView file{d, [&](std::string_view name) {
+                                 const size_t dot = name.find('.');
+                                 if (dot == std::string_view::npos) {
+                                     const toml::node* n = root.get(name);
+                                     return n && (n->is_table() || find_scene_key(name));
+                                 }
+                                 const toml::table* t = root[name.substr(0, dot)].as_table();
+                                 return t && t->get(name.substr(dot + 1));
+                             }};
+    // In the order of ReadScope: the sections the scene does not read at all ([bullet]
+    // outside Bullet, even an empty table of one), the keys its solver does not read,
+    // the keys another key's value makes irrelevant.
+    for (const ReadScope scope : {ReadScope::Section, ReadScope::Solver, ReadScope::Value})
+        for (const SceneSection& s : scene_sections()) {
+            const toml::table* t = s.name.empty() ? &root : root[s.name].as_table();
+            if (!t) continue;
+            if (const ReadIf* c = section_unread(s, d)) {
+                if (scope == ReadScope::Section) r.fail(std::string(s.name), c->refusal(file));
+                continue;
+            }
+            for (const SceneKey& k : scene_keys()) {
+                if (k.section() != s.name || !t->get(k.leaf())) continue;
+                const ReadIf* c = k.readers.failing(d);
+                if (!c || c->scope != scope || (c->agrees && c->agrees(d))) continue;
+                r.fail(std::string(scope == ReadScope::Section ? s.name : k.name), c->refusal(file));
+            }
         }
-    }
+    for (const SceneList& l : scene_lists())  // a list the scene as written never reads
+        if (const toml::table* t = root[l.section()].as_table(); t && t->get(l.leaf()) && !l.readers(d))
+            r.fail(std::string(l.name), fmt::format("ignored: only {} reads it; remove it", l.readers.text));
+}
 
-    // The source: a rate (flow_rate > 0, or "auto" sized for a PBF river) or one
-    // activation every spawn_interval frames. Bullet's flow_rate is 0 here already.
-    const bool auto_rate = d.spawn.auto_rate() && d.solver == SolverKind::Pbf;
-    const bool by_rate = auto_rate || (!d.spawn.auto_rate() && d.spawn.has_rate());
-    const bool flow_given = given("particles", "flow_rate");
-    if (by_rate) {
-        const std::string rate =
-            auto_rate ? fmt::format("particles.flow_rate = \"auto\"{} (the source emits at the river's sized rate)",
-                                    flow_given ? "" : " (the default river's)")
-                      : fmt::format("particles.flow_rate > 0 (the source emits {} {} per second)", d.spawn.flow_rate,
-                                    d.spawn.litres_per_particle > 0.0f ? "litres" : "particles");
-        each("particles", {"spawn_interval"}, rate, "remove it or set flow_rate = 0");
-    }
-    if (d.spawn.auto_rate() && flow_given && d.solver != SolverKind::Pbf)
+/// Values a key the scene reads cannot take in this scene (what a scene reads at all is
+/// refuse_unread_keys'): PBF slides or ignores the terrain, never reflects; "auto" sizes
+/// only a PBF river's rate.
+void refuse_values(const toml::table& root, Reader& r, const SceneDef& d) {
+    const toml::table* ct = root["collision"].as_table();
+    if (ct && ct->get("mode") && d.solver == SolverKind::Pbf)
+        if (const std::string why = collision_mode_unused(d.solver, d.collision.mode); !why.empty()) r.fail("collision.mode", why);
+    const toml::table* pt = root["particles"].as_table();
+    if (pt && pt->get("flow_rate") && d.spawn.auto_rate() && d.solver != SolverKind::Pbf)
         r.fail("particles.flow_rate",
                fmt::format("\"auto\" sizes a PBF river (solver = \"pbf\"); solver = \"{}\" would run it as 0 (one "
                            "activation every spawn_interval frames): give a rate in particles per second, or 0",
                            to_string(d.solver)));
-    if (!by_rate && given("particles", "litres_per_particle") && d.spawn.litres_per_particle > 0.0f)
-        ignored("particles.litres_per_particle",
-                flow_given ? "particles.flow_rate = 0 (it is flow_rate's unit)"
-                           : fmt::format("particles.flow_rate is 0 (solver = \"{}\" without a flow_rate; it is "
-                                         "flow_rate's unit)", to_string(d.solver)),
-                "remove it or give a flow_rate");
-    if (!d.spawn.auto_center)
-        each("particles", {"auto_height"}, "particles.spawn_center is [x, y, z] (it places an \"auto\" or \"channel\" centre)",
-             "remove it or set spawn_center = \"auto\"");
-    if (d.spawn.shape == SourceShape::Point)
-        each("particles", {"spawn_half_extent"}, "particles.source_shape = \"point\" (every particle starts at the centre)",
-             "remove it or use source_shape = \"box\" or \"disc\"");
-    if (d.sink.kind != SinkKind::Box)
-        each("sink", {"min", "max"}, fmt::format("sink.kind = \"{}\" (only a box sink has corners)",
-                                                 d.sink.kind == SinkKind::None ? "none" : "edges"),
-             "remove it or set kind = \"box\"");
-
-    // The channel's prefill needs PBF water and a carved channel to fill.
-    if (d.solver != SolverKind::Pbf)
-        each("particles", {"prefill"}, fmt::format("solver = \"{}\" (only PBF water fills the carved channel)", to_string(d.solver)),
-             "remove it or use solver = \"pbf\"");
-    else if (resolved_condition(d) != TerrainCondition::Carve)
-        each("particles", {"prefill"},
-             fmt::format("terrain.condition resolves to \"{}\" (no carved channel to fill)", to_string(resolved_condition(d))),
-             "remove it or set terrain.condition = \"carve\"");
-
-    // Springs, where the solver reads [springs] at all (solver scope refused the rest).
-    if (d.springs.stiffness == 0.0f && (d.solver == SolverKind::Springs || (d.solver == SolverKind::Bullet && d.bullet.springs)))
-        each("springs", {"min_distance", "max_distance", "mode"}, "springs.stiffness = 0 (no spring force)",
-             "remove it or give a stiffness");
-
-    if (d.solver != SolverKind::Bullet) {
-        if (d.collision.mode == CollisionMode::None)
-            each("collision", {"damping", "offset", "query", "friction_speed"},
-                 "collision.mode = \"none\" (particles pass through the terrain)", "remove it or set mode = \"robust\"");
-        else if (d.collision.mode == CollisionMode::Paper)
-            each("collision", {"query"}, "collision.mode = \"paper\" (the paper's response walks the AABB tree; query "
-                                         "picks robust mode's)",
-                 "remove it or set mode = \"robust\"");
-        if (d.solver == SolverKind::Springs)
-            each("collision", {"friction_speed"}, "solver = \"springs\" (a bounce's damping has no law; only PBF's bed friction)",
-                 "remove it or use solver = \"pbf\"");
-    }
-
-    const std::string source = fmt::format("terrain.source = \"{}\"", to_string(d.source.kind));
-    if (d.source.kind == TerrainSource::File)
-        each("terrain", {"width", "height", "seed"}, source + " (the PNG gives the size; nothing is generated)",
-             "remove it or use a procedural source");
-    else {
-        each("terrain", {"heightmap"}, source + " (a procedural terrain)", "remove it or set source = \"file\"");
-        if (d.source.kind != TerrainSource::Valley)
-            each("terrain", {"seed"}, source + " (only \"valley\" is random)", "remove it or use source = \"valley\"");
-    }
-
-    if (d.solver == SolverKind::Pbf && !d.foam.enabled)
-        each("foam", {"max_particles", "trapped_air_min", "trapped_air_max", "wave_crest_min", "wave_crest_max",
-                      "energy_min", "energy_max", "trapped_air_rate", "wave_crest_rate", "lifetime_min", "lifetime_max",
-                      "spray_neighbours", "bubble_neighbours", "buoyancy", "drag"},
-             "foam.enabled = false (no diffuse particles are made)", "remove it or set foam.enabled = true");
-    if (d.solver == SolverKind::Pbf && d.pbf.scorr_k == 0.0f)
-        each("pbf", {"scorr_n", "scorr_dq"}, "pbf.scorr_k = 0 (no tensile-instability correction)",
-             "remove it or give a scorr_k");
-    if (d.solver == SolverKind::Bullet) {
-        if (d.bullet.max_substeps == 0)
-            each("bullet", {"dt"}, "bullet.max_substeps = 0 (one Bullet step of the frame's time)",
-                 "remove it or allow substeps (max_substeps >= 1)");
-        if (d.bullet.springs && d.bullet.sleep && given("bullet", "sleep"))
-            ignored("bullet.sleep", "bullet.springs = true (spheres with springs never sleep)",
-                    "remove it or set sleep = false");
-    }
 }
 
 /// Messages stay one line whatever the file holds: control characters that reach a
@@ -535,11 +349,11 @@ Result<SceneDef> parse_scene_toml_lines(std::string_view text, const std::string
                 d.source.heightmap = (std::filesystem::path(origin).parent_path() / hp).lexically_normal().string();
         }
     }
-    if (!r.failed()) apply_solver_scope(root, r, d);
-    if (!r.failed()) refuse_irrelevant_keys(root, r, d);
-    for (const SceneList& l : scene_lists())  // a list the scene as written never reads
-        if (const toml::table* t = root[l.section()].as_table(); t && t->get(l.leaf()) && !l.readers(d))
-            r.fail(std::string(l.name), fmt::format("ignored: only {} reads it; remove it", l.readers.text));
+    if (!r.failed()) {
+        bullet_spawning(root, d);
+        refuse_unread_keys(root, r, d);
+        refuse_values(root, r, d);
+    }
     for (const SceneKey* k : given) r.check_range(*k, d);
     if (r.failed()) return Error{r.error()};
     if (d.source.kind == TerrainSource::File && d.source.heightmap.empty())

@@ -14,15 +14,10 @@
 namespace mr {
 
 namespace {
-/// A key whose change needs a new Simulation (Simulation::apply): what the terrain, the
-/// tree, the particle arrays, the random stream or the carve were built from.
+/// A key whose change needs a new Simulation (Simulation::apply): its edit rule in the
+/// table (SceneKey::edit); the Bullet world is built once from its defs.
 bool needs_rebuild(const SceneKey& k, const SceneDef& d) {
-    const std::string_view n = k.name, sec = k.section();
-    if (sec == "terrain" || sec == "bullet") return true;
-    if (d.solver == SolverKind::Bullet && sec != "field" && sec != "surface" && sec != "render" && n != "name")
-        return true;  // the Bullet world is built once from its defs
-    return n == "solver" || n == "seed" || n == "particles.count" || n == "particles.prefill" ||
-           n == "particles.auto_height" || n == "pbf.spacing" || n == "collision.bvh_leaf_triangles";
+    return k.edit == KeyEdit::Rebuild || (k.edit == KeyEdit::Solver && d.solver == SolverKind::Bullet);
 }
 
 /// Copies the value of key `k` from `from` into `to`.

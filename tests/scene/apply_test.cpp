@@ -156,6 +156,7 @@ TEST(Apply, EveryKeyIsAppliedOrAsksForARebuild) {
         ASSERT_TRUE(r.ok()) << r.error().message;
         ASSERT_EQ(r->keys, std::vector<std::string>{std::string(k.name)});
         EXPECT_EQ(sim->state_hash(), hash);
+        EXPECT_EQ(r->applied, k.edit != KeyEdit::Rebuild) << "the table's edit rule (SceneKey::edit)";
         if (r->applied) {
             ++applied;
             EXPECT_EQ(key_value_toml(k, sim->def()), key_value_toml(k, next));
@@ -168,6 +169,39 @@ TEST(Apply, EveryKeyIsAppliedOrAsksForARebuild) {
     }
     EXPECT_GT(applied, 30);
     EXPECT_GE(rebuilds, 1);  // terrain.height_scale at least
+}
+
+// The edit rules of the key table (SceneKey::edit) in a Bullet scene: its world is built
+// once from its defs, so what the solver reads needs a new Simulation; the field, the
+// surface and the renderer take an edit in place.
+TEST(Apply, ABulletSceneRebuildsForWhatItsSolverReads) {
+    SceneDef d = preset("paper-engine").value();
+    d.source.kind = TerrainSource::Strict;  // its procedural twin: no PNG needed
+    auto sim = make(d, 10);
+    ASSERT_TRUE(sim);
+    int live = 0, rebuilds = 0;
+    for (const SceneKey& k : scene_keys()) {
+        if (!k.readers(d) || k.type != KeyType::Float || k.words.apply) continue;
+        SceneDef next = sim->requested();
+        float* v = std::get<float*>(k.field(next));
+        *v = *v > 0.0f ? *v * 1.1f : 0.01f;
+        if (!validate(next)) continue;
+        SCOPED_TRACE(std::string(k.name));
+        auto r = sim->apply(next);
+        ASSERT_TRUE(r.ok()) << r.error().message;
+        EXPECT_EQ(r->applied, k.edit == KeyEdit::Live);
+        if (r->applied) {
+            ++live;
+        } else {
+            ++rebuilds;
+            EXPECT_EQ(r->rebuild_key, k.name);
+        }
+    }
+    EXPECT_GE(live, 3);      // field.threshold, radius, bounds_offset, resolution
+    EXPECT_GE(rebuilds, 5);  // bullet.*, forces.gravity, particles.*
+    const KeyEdit gravity = find_scene_key("forces.gravity")->edit, threshold = find_scene_key("field.threshold")->edit;
+    EXPECT_EQ(gravity, KeyEdit::Solver);  // live in the default river, a rebuild here
+    EXPECT_EQ(threshold, KeyEdit::Live);
 }
 
 TEST(Apply, TerrainBudgetAndAutoValuesAskForANewSimulation) {

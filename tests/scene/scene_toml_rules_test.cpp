@@ -108,7 +108,9 @@ TEST(SceneToml, KeysAnotherKeysValueMakesIrrelevantAreErrorsNamingBoth) {
                  "springs.max_distance: ignored when springs.stiffness = 0");
     // Collision: no terrain contact with mode "none"; the paper's response has one query.
     expect_error(springs + "[collision]\nmode = \"none\"\ndamping = 0.5\n", "collision.damping: ignored when collision.mode = \"none\"");
-    expect_error("[collision]\nmode = \"none\"\noffset = 0.1\n", "collision.offset: ignored when collision.mode = \"none\"");
+    expect_error("[particles]\nprefill = false\n[collision]\nmode = \"none\"\noffset = 0.1\n",
+                 "collision.offset: ignored when collision.mode = \"none\"");
+    EXPECT_TRUE(parse("[collision]\nmode = \"none\"\noffset = 0.1\n").ok()) << "the river's prefill reads it";
     // The bed friction's law is PBF's: the springs' bounce has none.
     expect_error("[collision]\nmode = \"none\"\nfriction_speed = 3\n",
                  "collision.friction_speed: ignored when collision.mode = \"none\"");
@@ -175,6 +177,38 @@ TEST(SceneToml, KeysAnotherKeysValueMakesIrrelevantAreErrorsNamingBoth) {
         auto r = parse(ok);
         EXPECT_TRUE(r.ok()) << ok << (r.ok() ? "" : r.error().message);
     }
+}
+
+// Issue 42: which keys a scene reads comes from the key table alone. Keys the table said
+// were not read but no hand-written rule refused are refused now; one the table says every
+// scene reads (the AABB tree's leaf size: Bvh::build in every scene) is no longer refused
+// with the rest of [collision] in a Bullet scene.
+TEST(SceneToml, WhatTheKeyTableSaysIsNotReadIsRefused) {
+    // The source follows the ground only as a PBF lattice emitting at a rate (solver.cpp).
+    expect_error("solver = \"springs\"\n[particles]\nfollow_ground = true\n",
+                 "particles.follow_ground: ignored when solver = \"springs\" (only PBF's lattice source follows the ground)");
+    expect_error("[particles]\nflow_rate = 0\nfollow_ground = true\n",
+                 "particles.follow_ground: ignored when particles.flow_rate = 0");
+    EXPECT_TRUE(parse("solver = \"springs\"\n[particles]\nfollow_ground = false\n").ok()) << "false agrees: it does not";
+    EXPECT_TRUE(parse("[particles]\nfollow_ground = true\n").ok()) << "the default river's";
+    // Without terrain contact PBF counts no wall density and no contact band (pbf.cpp).
+    for (const char* k : {"wall_density = 0.5", "contact_band = 1.0"})
+        expect_error(std::string("[collision]\nmode = \"none\"\n[pbf]\n") + k + "\n",
+                     "ignored when collision.mode = \"none\" (particles pass through the terrain)");
+    // Every scene builds the tree; the rest of [collision] stays refused in Bullet.
+    auto tree = parse("solver = \"bullet\"\n[collision]\nbvh_leaf_triangles = 16\n");
+    ASSERT_TRUE(tree.ok()) << tree.error().message;
+    EXPECT_EQ(tree->collision.leaf_triangles, 16);
+    expect_error("solver = \"bullet\"\n[collision]\nbvh_leaf_triangles = 16\ndamping = 0.5\n",
+                 "collision: solver = \"bullet\" does not use it");
+    // A section a scene reads nothing of is refused as a table, even empty.
+    expect_error("[bullet]\n", "bullet: only solver = \"bullet\" reads [bullet]");
+    expect_error("solver = \"springs\"\n[pbf]\n", "pbf: only solver = \"pbf\" reads [pbf]");
+    expect_error("[springs]\n", "springs: solver = \"pbf\" does not use springs");
+    EXPECT_TRUE(parse("solver = \"springs\"\n[foam]\n").ok()) << "[foam]'s refusals are its keys'";
+    // A Bullet scene reads no extra sources.
+    expect_error("solver = \"bullet\"\n[[particles.source]]\ncenter = [1, 2, 3]\nhalf_extent = [1, 1, 1]\nflow_rate = 5.0\n",
+                 "particles.source: ignored: only a scene with a particle rate reads it");
 }
 
 }  // namespace
