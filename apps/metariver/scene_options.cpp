@@ -64,7 +64,7 @@ void SceneOptions::add_to(CLI::App& cmd) {
 Result<SceneDef> SceneOptions::resolve(bool need_heightmap) const {
     SceneDef def;
     if (!scene_file.empty()) {
-        auto loaded = load_scene_file(scene_file);
+        auto loaded = load_scene_file(scene_file, heightmap);  // --heightmap replaces its terrain
         if (!loaded) return loaded.error();
         def = std::move(loaded.value());
     } else {

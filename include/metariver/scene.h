@@ -113,8 +113,9 @@ Status validate(const SceneDef& def);
 /// errors naming the key. Keys left out keep the value of `base` (default_scene()).
 Result<SceneDef> parse_scene_toml(std::string_view text, const std::string& origin,
                                   const SceneDef& base);
-/// Reads and parses a scene file.
-Result<SceneDef> load_scene_file(const std::string& path);
+/// Reads and parses a scene file. A `heightmap` replaces the file's terrain (source =
+/// "file", that PNG; --heightmap), so a file whose PNG is left to fill in loads with it.
+Result<SceneDef> load_scene_file(const std::string& path, const std::string& heightmap = {});
 
 /// Checks a scene against its terrain (source inside the terrain's rectangle, sinks
 /// that do not swallow the source); the message names the field.

@@ -283,19 +283,23 @@ std::string one_line(std::string_view s) {
     return out;
 }
 
-Result<SceneDef> parse_scene_toml_lines(std::string_view text, const std::string& origin, const SceneDef& base);
+Result<SceneDef> parse_scene_toml_lines(std::string_view text, const std::string& origin, const SceneDef& base,
+                                        const std::string& heightmap);
 
 }  // namespace
 
 Result<SceneDef> parse_scene_toml(std::string_view text, const std::string& origin, const SceneDef& base) {
-    auto d = parse_scene_toml_lines(text, origin, base);
+    auto d = parse_scene_toml_lines(text, origin, base, {});
     if (!d) return Error{one_line(d.error().message)};
     return d;
 }
 
 namespace {
 
-Result<SceneDef> parse_scene_toml_lines(std::string_view text, const std::string& origin, const SceneDef& base) {
+/// `heightmap`: when not empty, replaces the terrain of the scene as written (after its
+/// keys were judged on it).
+Result<SceneDef> parse_scene_toml_lines(std::string_view text, const std::string& origin, const SceneDef& base,
+                                        const std::string& heightmap) {
     toml::table root;
     try {
         root = toml::parse(text, origin);
@@ -356,6 +360,10 @@ Result<SceneDef> parse_scene_toml_lines(std::string_view text, const std::string
     }
     for (const SceneKey* k : given) r.check_range(*k, d);
     if (r.failed()) return Error{r.error()};
+    if (!heightmap.empty()) {
+        d.source.kind = TerrainSource::File;
+        d.source.heightmap = heightmap;
+    }
     if (d.source.kind == TerrainSource::File && d.source.heightmap.empty())
         return Error{fmt::format("{}: terrain.heightmap: required when terrain.source = \"file\"", origin)};
     if (auto v = validate(d); !v) return Error{fmt::format("{}: {}", origin, v.error().message)};
@@ -363,7 +371,7 @@ Result<SceneDef> parse_scene_toml_lines(std::string_view text, const std::string
 }
 }  // namespace
 
-Result<SceneDef> load_scene_file(const std::string& path) {
+Result<SceneDef> load_scene_file(const std::string& path, const std::string& heightmap) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec))
         return Error{fmt::format("{}: scene file not found", path)};
@@ -371,7 +379,9 @@ Result<SceneDef> load_scene_file(const std::string& path) {
     if (!in) return Error{fmt::format("{}: cannot open scene file", path)};
     std::ostringstream ss;
     ss << in.rdbuf();
-    return parse_scene_toml(ss.str(), path, default_scene());
+    auto d = parse_scene_toml_lines(ss.str(), path, default_scene(), heightmap);
+    if (!d) return Error{one_line(d.error().message)};
+    return d;
 }
 
 }  // namespace mr

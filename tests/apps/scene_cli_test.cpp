@@ -3,6 +3,7 @@
 // bad input is one line and exit code 2.
 #include <gtest/gtest.h>
 #include "cli_fixture.h"
+#include "png_test_util.h"
 
 #include <algorithm>
 #include <filesystem>
@@ -64,6 +65,44 @@ TEST_F(SceneCli, APresetWithoutItsHeightmapLeavesThePathToFillIn) {
     EXPECT_NE(with.out.find("\nheightmap = \"" + (fs::current_path() / "maps/strict17.png").string() + "\""), std::string::npos)
         << "written absolute: " << with.out;
     EXPECT_NE(with.out.find("\narea_scale = 2.0"), std::string::npos) << with.out;
+}
+
+// The issue 42 reproduction: `scene --preset P > f.toml; run --scene f.toml --heightmap
+// MAP` failed with "terrain.heightmap: required when terrain.source = file" for the
+// presets whose terrain is a PNG, though --heightmap replaces a scene's terrain. The map
+// is a 33 x 33 slope written here (every preset's source lies inside it).
+TEST_F(SceneCli, HeightmapReplacesTheTerrainOfAPrintedSceneFile) {
+    std::vector<uint8_t> px;
+    for (int r = 0; r < 33; ++r)
+        for (int c = 0; c < 33; ++c) px.push_back(static_cast<uint8_t>(20 + 3 * r + (c % 5)));
+    const auto png = mr::test::encode_png8(33, 33, 1, px);
+    const fs::path map = dir_ / "slope.png";
+    std::ofstream(map, std::ios::binary).write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+    for (const std::string preset : {"paper-full", "paper-nile", "paper-engine", "paper-nile-engine"}) {
+        SCOPED_TRACE(preset);
+        CliResult printed = run("scene --preset " + preset);
+        ASSERT_EQ(printed.code, 0) << printed.err;
+        ASSERT_NE(printed.out.find("\nheightmap = \"\""), std::string::npos) << "the path is left to fill in";
+        const fs::path file = dir_ / (preset + ".toml");
+        std::ofstream(file) << printed.out;
+        const std::string stats = (dir_ / "s.json").string();
+        CliResult ran = run("run --scene " + file.string() + " --heightmap " + map.string() +
+                            " --frames 3 --no-progress --stats " + stats);
+        EXPECT_EQ(ran.code, 0) << ran.err;
+        EXPECT_NE(ran.out.find(preset + ": 3 frames"), std::string::npos) << ran.out;
+        // The file's own PNG, when it names one, is replaced too (this one does not exist).
+        std::string named = printed.out;
+        named.replace(named.find("\nheightmap = \"\""), 16, "\nheightmap = \"missing.png\"");
+        std::ofstream(file) << named;
+        CliResult over = run("run --scene " + file.string() + " --heightmap " + map.string() + " --frames 3 --no-progress");
+        EXPECT_EQ(over.code, 0) << over.err;
+        // Without --heightmap the file still needs its PNG.
+        std::ofstream(file) << printed.out;
+        CliResult without = run("run --scene " + file.string() + " --frames 3 --no-progress");
+        EXPECT_EQ(without.code, 2);
+        EXPECT_NE(without.err.find("terrain.heightmap: required when terrain.source = \"file\""), std::string::npos)
+            << without.err;
+    }
 }
 
 TEST_F(SceneCli, UpdateDocRewritesOnlyTheReference) {
