@@ -8,7 +8,9 @@
 #include <metariver/gpu_field.h>
 #include <metariver/gpu_pbf.h>
 #include <metariver/io.h>
+#include <metariver/pbf_solver.h>
 #include <metariver/sparse_field.h>
+#include <metariver/spring_solver.h>
 #include <metariver/surface.h>
 #include <metariver/workloads.h>
 

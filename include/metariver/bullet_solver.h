@@ -4,9 +4,10 @@
 // Paper: "Real-time river simulation using metaballs", 2.4: each particle is a sphere
 // collider with a rigid body, the terrain a mesh collider, gravity and collisions come
 // from the engine, particles do not collide with each other, no springs. Here the
-// engine is Bullet 3 (Debian's libbullet-dev: single precision, single-threaded). The
-// spawning rules, respawn rules and counters are those of ParticleSolver, so the two
-// compare like with like. This header includes no Bullet header.
+// engine is Bullet 3 (Debian's libbullet-dev: single precision, single-threaded). It
+// spawns through the own solvers' Emitters part (solver_parts.h) and keeps their respawn
+// rules and counters, so the two compare like with like. This header includes no
+// Bullet header.
 #pragma once
 
 #include <metariver/particles.h>
@@ -50,10 +51,11 @@ struct BulletDef {
     bool springs = false;         ///< the paper's eq. 3 as external forces each internal step
 };
 
-/// Spheres on Bullet rigid bodies against the terrain. Mirrors ParticleSolver: one
-/// activation every spawn.interval frames (all at once for 0) at a random point of
-/// the spawn volume (same RNG, same draw order; a point less than a radius above the
-/// ground is raised to a radius above it), respawn when a sphere's centre leaves
+/// Spheres on Bullet rigid bodies against the terrain. Spawns as SpringSolver does, through
+/// the same Emitters part: one activation every spawn.interval frames (all at once for
+/// 0) at a random point of the spawn volume (the same draws in the same order; a point
+/// less than a radius above the ground is raised to a radius above it; no flow rate,
+/// one source), respawn when a sphere's centre leaves
 /// the terrain's x/z rectangle or falls below its bounds, and after every internal
 /// step counts particle_steps, tunneled (centre more than kTunnelEpsilon below the
 /// triangle mesh), respawned and collisions (sphere-terrain contact manifolds with at

@@ -18,7 +18,9 @@
 // Sphere-terrain contacts go through adjust_terrain_contact (internal edges, contact
 // points through the centre, one-sided terrain); without it a sphere dropped on flat
 // ground is kicked sideways by a neighbouring triangle's edge and rolls for ever.
-// A spawn point less than a radius above the ground is raised to one radius above it.
+// Spawning is the own solvers' (Emitters, solver_parts.h: the same draws in the same
+// order); a spawn point less than a radius above the ground is raised to one radius
+// above it, and each (re)spawn places its body (Impl::reset).
 //
 // Per internal step (Bullet's fixed step):
 //   pre-tick (springs on): forces = gravity + eq. 3 on the bodies' current positions,
@@ -27,6 +29,7 @@
 //     count tunneled (centre > kTunnelEpsilon below the triangle mesh), particle steps
 //     and sphere-terrain contact manifolds.
 #include <metariver/bullet_solver.h>
+#include <metariver/solver_parts.h>
 
 #include <btBulletDynamicsCommon.h>
 #include <BulletCollision/CollisionDispatch/btInternalEdgeUtility.h>
@@ -121,9 +124,20 @@ bool adjust_terrain_contact(btManifoldPoint& cp, const btCollisionObjectWrapper*
 
 }  // namespace
 
-struct BulletSolver::Impl {
-    Impl(const Terrain& t, SpawnDef sp, SpringDef sg, IntegratorDef in, BulletDef b, uint32_t seed)
-        : terrain(t), spawn_def(sp), springs(sg), integrator(in), def(b), rng(seed), sphere(b.sphere_radius) {}
+struct BulletSolver::Impl final : SlotState {
+    Impl(const Terrain& t, const SpawnDef& sp, SpringDef sg, IntegratorDef in, BulletDef b, uint32_t seed)
+        : terrain(t),
+          springs(sg),
+          integrator(in),
+          def(b),
+          pool(static_cast<size_t>(std::max(sp.count, 0)), sp.center),
+          // A sphere is a collider: one drawn less than a radius above the ground starts
+          // a radius above it (an engine would push it out; the own solver's points stay).
+          emitters(t, EmitterDef{.spawn = sp, .on_ground = true, .ground_lift = b.sphere_radius, .gravity = in.gravity},
+                   seed),
+          sphere(b.sphere_radius) {
+        pool.slots = this;
+    }
 
     ~Impl() {
         for (auto& body : bodies)
@@ -132,17 +146,13 @@ struct BulletSolver::Impl {
     }
 
     const Terrain& terrain;
-    SpawnDef spawn_def;
     SpringDef springs;
     IntegratorDef integrator;
     BulletDef def;
-    Lcg rng;
-    Particles particles;
-    SolverCounters counters;
-    uint64_t frame = 0;
+    ParticlePool pool;  ///< the particles' view of the bodies, the frame and the counters
+    Particles& particles = pool.particles;
+    Emitters emitters;
     uint64_t internal_steps = 0;
-    size_t next_to_activate = 0;
-    size_t next_to_pour = 0;
 
     // Shapes and bodies are declared before the world so they outlive it.
     std::vector<float> heights;  ///< heightfield samples, row i (z) major: heights[i*W + j]
@@ -163,13 +173,14 @@ struct BulletSolver::Impl {
 
     void build();
     void build_terrain();
-    void spawn(size_t i);
+    /// Slot i was (re)spawned (Emitters): its body goes where its particle is, at rest
+    /// but for the initial velocity.
+    void reset(size_t i) override;
+    void swap(size_t i, size_t j) override { std::swap(bodies[i], bodies[j]); }
+    void permute(std::span<const uint32_t> perm) override;
     void pre_tick();
     void post_tick();
     void sync_view();
-    bool out_of_bounds(const Vec3& p) const {
-        return p.y < terrain.bounds().min.y || !terrain.contains_xz(p.x, p.z) || !std::isfinite(p.y);
-    }
     float depth_below_surface(const Vec3& p) const {
         if (!terrain.contains_xz(p.x, p.z)) return 0.0f;
         return terrain.height_mesh(p.x, p.z) - p.y;
@@ -244,8 +255,7 @@ void BulletSolver::Impl::build() {
     build_terrain();
 
     sphere.calculateLocalInertia(def.mass, sphere_inertia);
-    const size_t n = static_cast<size_t>(std::max(spawn_def.count, 0));
-    particles.resize(n);
+    const size_t n = pool.size();
     bodies.reserve(n);
     for (size_t i = 0; i < n; ++i) {
         btRigidBody::btRigidBodyConstructionInfo ci(def.mass, nullptr, &sphere, sphere_inertia);
@@ -258,37 +268,21 @@ void BulletSolver::Impl::build() {
             b.setCcdMotionThreshold(0.5f * def.sphere_radius);
             b.setCcdSweptSphereRadius(0.9f * def.sphere_radius);
         }
-        particles.position[i] = spawn_def.center;
-        particles.last_position[i] = spawn_def.center;
     }
 }
 
-void BulletSolver::Impl::spawn(size_t i) {
-    // Same draws in the same order as ParticleSolver::spawn.
-    const Vec3 lo = spawn_def.center - spawn_def.half_extent;
-    const Vec3 hi = spawn_def.center + spawn_def.half_extent;
-    Vec3 p;
-    p.x = rng.uniform(lo.x, hi.x);
-    p.y = rng.uniform(lo.y, hi.y);
-    p.z = rng.uniform(lo.z, hi.z);
-    // A sphere is a collider: one drawn less than a radius above the ground starts a
-    // radius above it (an engine would push it out; the own solver's points stay).
-    if (terrain.contains_xz(p.x, p.z)) p.y = std::max(p.y, terrain.height_mesh(p.x, p.z) + def.sphere_radius);
-    particles.position[i] = p;
-    particles.last_position[i] = p;
-    particles.velocity[i] = spawn_def.initial_velocity;
-    particles.active[i] = 1;
-    particles.birth_frame[i] = static_cast<uint32_t>(frame);
-
+void BulletSolver::Impl::reset(size_t i) {
+    const Vec3 p = particles.position[i];
+    const Vec3 v = particles.velocity[i];
     btRigidBody& b = *bodies[i];
     btTransform xf;
     xf.setIdentity();
     xf.setOrigin(bt(p));
     b.setWorldTransform(xf);
     b.setInterpolationWorldTransform(xf);
-    b.setLinearVelocity(bt(spawn_def.initial_velocity));
+    b.setLinearVelocity(bt(v));
     b.setAngularVelocity(btVector3(0, 0, 0));
-    b.setInterpolationLinearVelocity(bt(spawn_def.initial_velocity));
+    b.setInterpolationLinearVelocity(bt(v));
     b.setInterpolationAngularVelocity(btVector3(0, 0, 0));
     // Forces stay: between frames they are clear; inside a step (a respawn from the
     // post-tick) they hold the gravity stepSimulation applied for its remaining steps.
@@ -299,6 +293,12 @@ void BulletSolver::Impl::spawn(size_t i) {
         world->updateSingleAabb(&b);  // teleported: the broadphase box follows now
     }
     b.activate(true);
+}
+
+void BulletSolver::Impl::permute(std::span<const uint32_t> perm) {
+    std::vector<std::unique_ptr<btRigidBody>> sorted(perm.size());
+    for (size_t k = 0; k < perm.size(); ++k) sorted[k] = std::move(bodies[perm[k]]);
+    bodies.swap(sorted);
 }
 
 void BulletSolver::Impl::pre_tick() {
@@ -321,6 +321,7 @@ void BulletSolver::Impl::pre_tick() {
 
 void BulletSolver::Impl::post_tick() {
     ++internal_steps;
+    SolverCounters& counters = pool.counters;
     for (int m = 0; m < dispatcher->getNumManifolds(); ++m) {
         const btPersistentManifold* pm = dispatcher->getManifoldByIndexInternal(m);
         if (pm->getNumContacts() == 0) continue;
@@ -330,9 +331,9 @@ void BulletSolver::Impl::post_tick() {
         if (!particles.active[i]) continue;
         ++counters.particle_steps;
         const Vec3 pos = mr_vec(bodies[i]->getWorldTransform().getOrigin());
-        if (out_of_bounds(pos)) {
+        if (outside_terrain(terrain, pos)) {
             ++counters.respawned;
-            spawn(i);
+            emitters.spawn(pool, i);
             continue;
         }
         if (depth_below_surface(pos) > kTunnelEpsilon) ++counters.tunneled;
@@ -358,38 +359,21 @@ BulletSolver::~BulletSolver() = default;
 
 void BulletSolver::step_frame(float frame_dt) {
     Impl& s = *impl_;
-    const bool due = s.spawn_def.interval == 0 || s.frame % static_cast<uint64_t>(s.spawn_def.interval) == 0;
-    if (due) {
-        const size_t n = s.spawn_def.interval == 0 ? s.particles.size() : 1;
-        for (size_t k = 0; k < n && s.next_to_activate < s.particles.size(); ++k) s.spawn(s.next_to_activate++);
-    }
+    s.emitters.activate_due(s.pool);  // the paper's activation (a flow rate is the own solvers')
     for (size_t i = 0; i < s.particles.size(); ++i) s.particles.last_position[i] = s.particles.position[i];
     const float dt = s.integrator.fixed_dt > 0.0f ? s.integrator.fixed_dt : frame_dt;
     s.world->stepSimulation(dt, s.def.max_substeps, s.def.fixed_dt);
     s.sync_view();
-    ++s.frame;
+    ++s.pool.frame;
 }
 
 const Particles& BulletSolver::particles() const { return impl_->particles; }
-const SolverCounters& BulletSolver::counters() const { return impl_->counters; }
-uint64_t BulletSolver::frame() const { return impl_->frame; }
+const SolverCounters& BulletSolver::counters() const { return impl_->pool.counters; }
+uint64_t BulletSolver::frame() const { return impl_->pool.frame; }
 uint64_t BulletSolver::internal_steps() const { return impl_->internal_steps; }
-void BulletSolver::set_spawn_center(const Vec3& center) { impl_->spawn_def.center = center; }
+void BulletSolver::set_spawn_center(const Vec3& center) { impl_->emitters.set_center(center); }
 
-void BulletSolver::pour(const Vec3& center, int count) {
-    Impl& s = *impl_;
-    s.spawn_def.center = center;
-    const size_t n = s.particles.size();
-    if (n == 0) return;
-    for (int k = 0; k < count; ++k) {
-        if (s.next_to_activate < n) {
-            s.spawn(s.next_to_activate++);
-        } else {
-            s.spawn(s.next_to_pour);
-            s.next_to_pour = (s.next_to_pour + 1) % n;
-        }
-    }
-}
+void BulletSolver::pour(const Vec3& center, int count) { impl_->emitters.pour(impl_->pool, center, count); }
 
 size_t BulletSolver::awake_count() const {
     size_t n = 0;

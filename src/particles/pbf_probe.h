@@ -2,7 +2,7 @@
 // tests reach its density sums and switch its neighbour lists through here.
 #pragma once
 
-#include <metariver/particles.h>
+#include <metariver/pbf_solver.h>
 
 #include <vector>
 

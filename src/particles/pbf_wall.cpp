@@ -2,7 +2,7 @@
 // share of a poly6 kernel that lies under the terrain, by a quadrature over the
 // heightfield's triangles near the particle, and its gradient; the closed form for a
 // plane (pbf_wall_share) the tests check it against.
-#include <metariver/particles.h>
+#include <metariver/pbf_solver.h>
 
 #include <algorithm>
 #include <cmath>
@@ -34,17 +34,18 @@ float pbf_wall_share(float distance, float h) {
 
 float PbfSolver::wall_share(const Vec3& x, Vec3& grad) const {
     grad = Vec3(0.0f);
-    const int w = terrain_.columns(), r = terrain_.rows();
+    const Terrain& terrain = water_.collider.terrain();
+    const int w = terrain.columns(), r = terrain.rows();
     if (w < 2 || r < 2) return 0.0f;
     const float h = pbf_.kernel_radius, h2 = h * h;
-    const float s = terrain_.area_scale();
+    const float s = terrain.area_scale();
     // The cells the kernel's footprint touches; nothing of the mesh there is higher than
     // their highest sample: nothing within h, no share.
     const int j0 = std::clamp(int(std::floor((x.x - h) / s)), 0, w - 2), j1 = std::clamp(int(std::floor((x.x + h) / s)), 0, w - 2);
     const int i0 = std::clamp(int(std::floor((x.z - h) / s)), 0, r - 2), i1 = std::clamp(int(std::floor((x.z + h) / s)), 0, r - 2);
     float top = -1e30f;
     for (int i = i0; i <= i1 + 1; ++i)
-        for (int j = j0; j <= j1 + 1; ++j) top = std::max(top, terrain_.sample(i, j));
+        for (int j = j0; j <= j1 + 1; ++j) top = std::max(top, terrain.sample(i, j));
     if (x.y - h >= top) return 0.0f;
     const float kc = 315.0f / (64.0f * kPi * std::pow(h, 9.0f));  // poly6's constant
     const float sample_len = h / float(kWallSamplesPerH);
@@ -91,10 +92,10 @@ float PbfSolver::wall_share(const Vec3& x, Vec3& grad) const {
     };
     for (int i = i0; i <= i1; ++i)
         for (int j = j0; j <= j1; ++j) {
-            const Vec3 p00(float(j) * s, terrain_.sample(i, j), float(i) * s);
-            const Vec3 p01(float(j + 1) * s, terrain_.sample(i, j + 1), float(i) * s);
-            const Vec3 p10(float(j) * s, terrain_.sample(i + 1, j), float(i + 1) * s);
-            const Vec3 p11(float(j + 1) * s, terrain_.sample(i + 1, j + 1), float(i + 1) * s);
+            const Vec3 p00(float(j) * s, terrain.sample(i, j), float(i) * s);
+            const Vec3 p01(float(j + 1) * s, terrain.sample(i, j + 1), float(i) * s);
+            const Vec3 p10(float(j) * s, terrain.sample(i + 1, j), float(i + 1) * s);
+            const Vec3 p11(float(j + 1) * s, terrain.sample(i + 1, j + 1), float(i + 1) * s);
             triangle(p00, p01, p10);  // u + v <= 1 (Terrain::height_mesh)
             triangle(p11, p10, p01);
         }

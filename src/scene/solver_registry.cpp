@@ -5,7 +5,9 @@
 
 #include <metariver/bullet_solver.h>
 #include <metariver/particles.h>
+#include <metariver/pbf_solver.h>
 #include <metariver/scene.h>
+#include <metariver/spring_solver.h>
 
 #include <fmt/format.h>
 

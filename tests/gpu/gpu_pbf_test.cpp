@@ -7,6 +7,7 @@
 
 #include <metariver/gpu_pbf.h>
 #include <metariver/particles.h>
+#include <metariver/pbf_solver.h>
 #include <metariver/terrain.h>
 #include <metariver/workloads.h>
 

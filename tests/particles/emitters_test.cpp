@@ -1,5 +1,7 @@
 // Emitters and sinks: flow rate, recycling at a fixed budget.
 #include <metariver/particles.h>
+#include <metariver/pbf_solver.h>
+#include <metariver/spring_solver.h>
 
 #include <gtest/gtest.h>
 

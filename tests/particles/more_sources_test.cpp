@@ -2,6 +2,8 @@
 // rate into its own volume from the one budget, every sink box takes particles out, and
 // only particles that left over an edge are recorded as outlet exits.
 #include <metariver/particles.h>
+#include <metariver/pbf_solver.h>
+#include <metariver/spring_solver.h>
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,7 @@
 // Position Based Fluids (solver = "pbf"): the density sum through the neighbour grid
 // against a brute-force twin, a resting column of water, momentum, determinism.
 #include <metariver/particles.h>
+#include <metariver/pbf_solver.h>
 
 #include "pbf_probe.h"
 #include "pbf_simd.h"

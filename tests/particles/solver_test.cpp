@@ -1,4 +1,5 @@
 #include <metariver/particles.h>
+#include <metariver/spring_solver.h>
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>

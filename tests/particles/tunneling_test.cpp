@@ -13,6 +13,8 @@
 // METARIVER_LONG_SCALE (tests/support/long_scale.h; the asan preset's 0.1) runs that
 // share of the particles (every scenario, terrain and mode; a share of the seam points).
 #include <metariver/particles.h>
+#include <metariver/pbf_solver.h>
+#include <metariver/spring_solver.h>
 
 #include "long_scale.h"
 

@@ -4,6 +4,7 @@
 // OutletMeter's assignment of exits to outlets and its rates.
 #include <metariver/neighbor_grid.h>
 #include <metariver/scene.h>
+#include <metariver/spring_solver.h>
 
 #include <gtest/gtest.h>
 
