@@ -213,7 +213,7 @@ constexpr ReadIf kPrefillCarved{.holds = [](S d) { return resolved_condition(d) 
                                                                to_string(resolved_condition(f.def))),
                                                    "remove it or set terrain.condition = \"carve\"");
                                 }};
-// A PBF lattice source follows the ground only while it emits at a rate (solver.cpp:
+// A PBF lattice source follows the ground only while it emits at a rate (particle_emitters.cpp:
 // follow_ground && by_rate()); false is what the others do.
 constexpr ReadIf kFollowPbf{.holds = [](S d) { return d.solver == SolverKind::Pbf; },
                             .refusal = [](F f) {

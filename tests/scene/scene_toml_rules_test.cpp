@@ -184,7 +184,7 @@ TEST(SceneToml, KeysAnotherKeysValueMakesIrrelevantAreErrorsNamingBoth) {
 // scene reads (the AABB tree's leaf size: Bvh::build in every scene) is no longer refused
 // with the rest of [collision] in a Bullet scene.
 TEST(SceneToml, WhatTheKeyTableSaysIsNotReadIsRefused) {
-    // The source follows the ground only as a PBF lattice emitting at a rate (solver.cpp).
+    // The source follows the ground only as a PBF lattice emitting at a rate (Emitters::build_lattices).
     expect_error("solver = \"springs\"\n[particles]\nfollow_ground = true\n",
                  "particles.follow_ground: ignored when solver = \"springs\" (only PBF's lattice source follows the ground)");
     expect_error("[particles]\nflow_rate = 0\nfollow_ground = true\n",
