@@ -27,7 +27,5 @@ row paper-bowl 300 --preset paper-bowl
 [ -f "$maps/metawater/strict17.png" ] && row paper-engine 300 --preset paper-engine --heightmap "$maps/metawater/strict17.png"
 [ -f "$maps/metawater/nile.png" ] && row paper-nile-engine 300 --preset paper-nile-engine --heightmap "$maps/metawater/nile.png"
 for dem in alps pyrenees andes_peru; do
-  for d in "$here/assets/heightmaps/real" "$maps/real"; do
-    if [ -f "$d/$dem.png" ]; then row "default-$dem" 300 --heightmap "$d/$dem.png"; break; fi
-  done
+  row "default-$dem" 300 --heightmap "$here/assets/heightmaps/real/$dem.png"
 done

@@ -30,8 +30,6 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
-
 }  // namespace
 
 ScenarioResult bench_simulation(const std::string& name, const SceneDef& def, int warmup, int frames,

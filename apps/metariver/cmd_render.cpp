@@ -58,10 +58,6 @@ struct RenderOptions {
 constexpr long long kMaxFrames = 1'000'000;
 constexpr int kMinSide = 16, kMaxSide = 8192;
 
-double ms_since(Clock::time_point t0) {
-    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-
 bool ends_with_mp4(const std::string& s) {
     if (s.size() < 4) return false;
     std::string tail = s.substr(s.size() - 4);

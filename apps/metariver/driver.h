@@ -38,6 +38,8 @@ namespace mr::app {
 std::string range_error(std::string_view option, long long v, long long lo, long long hi);
 /// "--dt: must be in (0, 1] seconds (got dt)" unless 0 < dt <= 1, else empty.
 std::string dt_error(double dt);
+/// Milliseconds since `t0` on the steady clock (the commands' stage and wall times).
+double ms_since(std::chrono::steady_clock::time_point t0);
 /// {"median", "p95", "mean", "max"} of `ms` (a stage in the --stats JSON).
 nlohmann::json stage_json(const std::vector<double>& ms);
 /// Writes `sim`'s latest frame (water, particles, the foam's when it makes foam) as
