@@ -44,8 +44,13 @@ struct WaterRayHit {
 /// Queries over one frame of a Simulation's water: the surface mesh (Simulation::surface())
 /// and the particles (Simulation::particles()) or the heightfield water. Build it once per
 /// frame with update() (its cost: a grid of the surface's triangles and one of the active
-/// particles, linear in both); then every query is const and safe to call from several
+/// particles, linear in both, plus a copy of the terrain (its height_mesh gives the depth); buffers
+/// are reused from frame to frame); then every query is const and safe to call from several
 /// threads at once. Results describe the frame update() saw until the next update().
+/// Measured on the default river at frame 600 (27,604 triangles, 1,487 particles; one
+/// thread of a 2-vCPU AMD EPYC guest, docs/benchmarks.md "Water queries"): update() 1.1 ms;
+/// a query: sample 76 ns, velocity_at 16 ns, raycast 0.84 us (the twins: 272 us, 2.4 us,
+/// 361 us). A non-finite input answers "not wet" (surface_y 0), zero velocity, no hit.
 class WaterQuery {
 public:
     WaterQuery();
@@ -66,7 +71,8 @@ public:
     /// mesh (either side of a triangle). `direction` need not be unit; zero: no hit.
     WaterRayHit raycast(const Vec3& origin, const Vec3& direction, float max_t) const;
 
-    /// Batches of the three (parallel over the points; out.size() must equal the input's).
+    /// Batches of the three (parallel over the points; out.size() must equal the input's:
+    /// otherwise the shorter is answered and the rest of `out` set to not wet / zero / no hit).
     void sample(std::span<const float> xz, std::span<WaterSample> out) const;
     void velocity_at(std::span<const Vec3> points, std::span<Vec3> out) const;
     void raycast(std::span<const Vec3> origins, std::span<const Vec3> directions, float max_t,

@@ -1,0 +1,133 @@
+// The water queries (include/metariver/water_query.h, issue 43) on the default river
+// after 600 frames (10 s of flow): batches of 10,000 random points or rays (fixed seed,
+// over the terrain's rectangle; half the rays aimed at surface vertices), the fast
+// queries one call at a time on one thread (serial), their batch calls (oneTBB's
+// threads), and the brute-force twins (every triangle, every active particle; serial);
+// and WaterQuery::update().
+//
+//   bench_query --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+//
+// Time per batch (wall clock); per_query divides it by the batch's size (seconds, with
+// an SI prefix: 163n is 163 ns).
+#include <metariver/scene.h>
+#include <metariver/water_query.h>
+
+#include <benchmark/benchmark.h>
+
+#include <glm/geometric.hpp>
+
+#include <memory>
+#include <stdexcept>
+#include <vector>
+
+namespace {
+
+constexpr int kBatch = 10'000;
+
+/// The default river after 600 frames, with its queries updated and the batch's inputs.
+struct River {
+    std::unique_ptr<mr::Simulation> sim;
+    mr::WaterQuery query;
+    std::vector<float> xz;
+    std::vector<mr::Vec3> points, origins, directions;
+    float reach = 0.0f;
+};
+
+const River& river() {
+    static River r = [] {
+        River v;
+        auto sim = mr::Simulation::create(mr::default_scene());
+        if (!sim) throw std::runtime_error(sim.error().message);
+        for (int f = 0; f < 600; ++f) sim.value()->step(1.0f / 60.0f);
+        v.sim = std::move(sim.value());
+        v.query.update(*v.sim);
+        const mr::Aabb box = v.sim->terrain().mesh_bounds();
+        const auto& vertices = v.sim->surface().positions;
+        v.reach = 2.0f * glm::length(box.extent());
+        mr::Lcg rng(600);
+        for (int i = 0; i < kBatch; ++i) {
+            const float x = rng.uniform(box.min.x, box.max.x), z = rng.uniform(box.min.z, box.max.z);
+            v.xz.insert(v.xz.end(), {x, z});
+            v.points.emplace_back(x, v.sim->terrain().height_mesh(x, z) + rng.uniform(0.0f, 2.0f), z);
+            const mr::Vec3 o(rng.uniform(box.min.x, box.max.x), rng.uniform(box.min.y, box.max.y + 20.0f),
+                             rng.uniform(box.min.z, box.max.z));
+            v.origins.push_back(o);
+            const mr::Vec3 random_dir(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
+            v.directions.push_back(i % 2 == 0 ? vertices[rng.next_u32() % vertices.size()] - o : random_dir);
+        }
+        return v;
+    }();
+    return r;
+}
+
+void finish(benchmark::State& state, size_t per_iteration) {
+    state.counters["per_query"] = benchmark::Counter(double(per_iteration),
+                                                        benchmark::Counter::kIsIterationInvariantRate |
+                                                            benchmark::Counter::kInvert);
+    const River& r = river();
+    state.counters["triangles"] = double(r.sim->surface().triangle_count());
+    state.counters["particles"] = double(r.sim->particles().active_count());
+}
+
+/// Mode 0: fast, one call at a time; 1: fast, the batch call; 2: the brute-force twin.
+void BM_Sample(benchmark::State& state) {
+    const River& r = river();
+    std::vector<mr::WaterSample> out(kBatch);
+    for (auto _ : state) {
+        if (state.range(0) == 1) r.query.sample(r.xz, out);
+        for (int i = 0; i < kBatch && state.range(0) != 1; ++i)
+            out[size_t(i)] = state.range(0) == 0 ? r.query.sample(r.xz[2 * i], r.xz[2 * i + 1])
+                                                 : mr::sample_water_brute(*r.sim, r.xz[2 * i], r.xz[2 * i + 1]);
+        benchmark::DoNotOptimize(out.data());
+    }
+    finish(state, kBatch);
+}
+
+void BM_VelocityAt(benchmark::State& state) {
+    const River& r = river();
+    std::vector<mr::Vec3> out(kBatch);
+    for (auto _ : state) {
+        if (state.range(0) == 1) r.query.velocity_at(r.points, out);
+        for (int i = 0; i < kBatch && state.range(0) != 1; ++i)
+            out[size_t(i)] = state.range(0) == 0 ? r.query.velocity_at(r.points[size_t(i)])
+                                                 : mr::water_velocity_brute(*r.sim, r.points[size_t(i)]);
+        benchmark::DoNotOptimize(out.data());
+    }
+    finish(state, kBatch);
+}
+
+void BM_Raycast(benchmark::State& state) {
+    const River& r = river();
+    std::vector<mr::WaterRayHit> out(kBatch);
+    for (auto _ : state) {
+        if (state.range(0) == 1) r.query.raycast(r.origins, r.directions, r.reach, out);
+        for (size_t i = 0; i < size_t(kBatch) && state.range(0) != 1; ++i)
+            out[i] = state.range(0) == 0 ? r.query.raycast(r.origins[i], r.directions[i], r.reach)
+                                         : mr::raycast_water_brute(*r.sim, r.origins[i], r.directions[i], r.reach);
+        benchmark::DoNotOptimize(out.data());
+    }
+    finish(state, kBatch);
+}
+
+void BM_Update(benchmark::State& state) {
+    const River& r = river();
+    mr::WaterQuery q;
+    for (auto _ : state) {
+        q.update(*r.sim);
+        benchmark::ClobberMemory();
+    }
+    finish(state, 1);
+}
+
+void modes(benchmark::internal::Benchmark* b) {
+    b->ArgName("mode")->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+}
+
+BENCHMARK(BM_Sample)->Apply(modes);
+BENCHMARK(BM_VelocityAt)->Apply(modes);
+BENCHMARK(BM_Raycast)->Apply(modes);
+BENCHMARK(BM_Update)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
+
+BENCHMARK_MAIN();
