@@ -17,6 +17,7 @@
 #include <glm/geometric.hpp>
 
 #include <memory>
+#include <span>
 #include <stdexcept>
 #include <vector>
 
@@ -69,44 +70,42 @@ void finish(benchmark::State& state, size_t per_iteration) {
     state.counters["particles"] = double(r.sim->particles().active_count());
 }
 
-/// Mode 0: fast, one call at a time; 1: fast, the batch call; 2: the brute-force twin.
-void BM_Sample(benchmark::State& state) {
-    const River& r = river();
-    std::vector<mr::WaterSample> out(kBatch);
+/// Mode 0: the fast query, one call at a time (fast(i)); 1: its batch call (batch(out));
+/// 2: the brute-force twin (brute(i)).
+template <class Out, class Batch, class Fast, class Brute>
+void run_modes(benchmark::State& state, Batch&& batch, Fast&& fast, Brute&& brute) {
+    std::vector<Out> out(kBatch);
+    const int64_t mode = state.range(0);
     for (auto _ : state) {
-        if (state.range(0) == 1) r.query.sample(r.xz, out);
-        for (int i = 0; i < kBatch && state.range(0) != 1; ++i)
-            out[size_t(i)] = state.range(0) == 0 ? r.query.sample(r.xz[2 * i], r.xz[2 * i + 1])
-                                                 : mr::sample_water_brute(*r.sim, r.xz[2 * i], r.xz[2 * i + 1]);
+        if (mode == 1) batch(std::span<Out>(out));
+        for (size_t i = 0; i < size_t(kBatch) && mode != 1; ++i) out[i] = mode == 0 ? fast(i) : brute(i);
         benchmark::DoNotOptimize(out.data());
     }
     finish(state, kBatch);
+}
+
+void BM_Sample(benchmark::State& state) {
+    const River& r = river();
+    run_modes<mr::WaterSample>(
+        state, [&](std::span<mr::WaterSample> out) { r.query.sample(r.xz, out); },
+        [&](size_t i) { return r.query.sample(r.xz[2 * i], r.xz[2 * i + 1]); },
+        [&](size_t i) { return mr::sample_water_brute(*r.sim, r.xz[2 * i], r.xz[2 * i + 1]); });
 }
 
 void BM_VelocityAt(benchmark::State& state) {
     const River& r = river();
-    std::vector<mr::Vec3> out(kBatch);
-    for (auto _ : state) {
-        if (state.range(0) == 1) r.query.velocity_at(r.points, out);
-        for (int i = 0; i < kBatch && state.range(0) != 1; ++i)
-            out[size_t(i)] = state.range(0) == 0 ? r.query.velocity_at(r.points[size_t(i)])
-                                                 : mr::water_velocity_brute(*r.sim, r.points[size_t(i)]);
-        benchmark::DoNotOptimize(out.data());
-    }
-    finish(state, kBatch);
+    run_modes<mr::Vec3>(
+        state, [&](std::span<mr::Vec3> out) { r.query.velocity_at(r.points, out); },
+        [&](size_t i) { return r.query.velocity_at(r.points[i]); },
+        [&](size_t i) { return mr::water_velocity_brute(*r.sim, r.points[i]); });
 }
 
 void BM_Raycast(benchmark::State& state) {
     const River& r = river();
-    std::vector<mr::WaterRayHit> out(kBatch);
-    for (auto _ : state) {
-        if (state.range(0) == 1) r.query.raycast(r.origins, r.directions, r.reach, out);
-        for (size_t i = 0; i < size_t(kBatch) && state.range(0) != 1; ++i)
-            out[i] = state.range(0) == 0 ? r.query.raycast(r.origins[i], r.directions[i], r.reach)
-                                         : mr::raycast_water_brute(*r.sim, r.origins[i], r.directions[i], r.reach);
-        benchmark::DoNotOptimize(out.data());
-    }
-    finish(state, kBatch);
+    run_modes<mr::WaterRayHit>(
+        state, [&](std::span<mr::WaterRayHit> out) { r.query.raycast(r.origins, r.directions, r.reach, out); },
+        [&](size_t i) { return r.query.raycast(r.origins[i], r.directions[i], r.reach); },
+        [&](size_t i) { return mr::raycast_water_brute(*r.sim, r.origins[i], r.directions[i], r.reach); });
 }
 
 void BM_Update(benchmark::State& state) {
