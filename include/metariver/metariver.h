@@ -81,7 +81,8 @@ MR_API const char* mr_version_string(void);
 /* "MR_OK", "MR_ERROR_NULL_ARGUMENT", ...; static storage. */
 MR_API const char* mr_status_name(mr_status status);
 
-/* Creates a world (loads or generates the terrain, builds the solver). error may be NULL. */
+/* Creates a world (loads or generates the terrain, builds the solver). error may be NULL;
+ * on failure *out_world is NULL. */
 MR_API mr_status mr_world_create(const mr_world_desc* desc, mr_world** out_world, mr_error* error);
 /* Destroys a world; NULL is ignored. */
 MR_API void mr_world_destroy(mr_world* world);
@@ -150,7 +151,8 @@ MR_API mr_status mr_world_copy_terrain_heights(const mr_world* world, float* hei
 MR_API mr_status mr_world_scene_toml(const mr_world* world, char* buffer, size_t capacity, size_t* length);
 /* Live edit: TOML keys over the world's scene, applied in place when the solver can take
  * them (*applied = 1); keys that need a new world (terrain, solver, budget, ...) change
- * nothing (*applied = 0, the message names the first such key). applied may be NULL. */
+ * nothing (MR_OK with *applied = 0; mr_world_last_error names the first such key). A bad
+ * key or value is MR_ERROR_SCENE. applied may be NULL. */
 MR_API mr_status mr_world_apply_toml(mr_world* world, const char* toml, int32_t* applied);
 
 /* Interaction. */

@@ -1,0 +1,84 @@
+/* The C API from C99 (compiled with -std=c99 -Wall -Wextra -pedantic -Werror): create the
+ * default world, step it, read the particles and the surface, check the errors, destroy.
+ * Exit status 0 when every check holds; each failed check prints its line. */
+#include <metariver/metariver.h>
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static int failures = 0;
+
+#define CHECK(cond)                                                      \
+    do {                                                                 \
+        if (!(cond)) {                                                   \
+            fprintf(stderr, "c99_test.c:%d: failed: %s\n", __LINE__, #cond); \
+            ++failures;                                                  \
+        }                                                                \
+    } while (0)
+
+static void check_errors(mr_world* world) {
+    mr_world_desc desc = mr_world_desc_default();
+    mr_world* other = NULL;
+    mr_error error;
+    size_t count = 0;
+    float small[3];
+
+    desc.preset = "no-such-preset";
+    CHECK(mr_world_create(&desc, &other, &error) == MR_ERROR_INVALID_ARGUMENT);
+    CHECK(other == NULL);
+    CHECK(error.code == MR_ERROR_INVALID_ARGUMENT);
+    CHECK(strstr(error.message, "no-such-preset") != NULL);
+    CHECK(mr_world_step(NULL, 1.0f / 60.0f) == MR_ERROR_NULL_ARGUMENT);
+    CHECK(mr_world_step(world, 2.0f) == MR_ERROR_INVALID_ARGUMENT);
+    CHECK(strstr(mr_world_last_error(world), "frame_dt") != NULL);
+    CHECK(mr_world_copy_particles(world, small, NULL, 1, &count) == MR_ERROR_BUFFER_TOO_SMALL);
+    CHECK(count > 1);
+    CHECK(strcmp(mr_status_name(MR_ERROR_BUFFER_TOO_SMALL), "MR_ERROR_BUFFER_TOO_SMALL") == 0);
+}
+
+int main(void) {
+    mr_world_desc desc = mr_world_desc_default();
+    mr_world* world = NULL;
+    mr_error error;
+    mr_stats stats;
+    mr_particles_view particles;
+    mr_surface_view surface;
+    float* positions;
+    uint32_t* indices;
+    size_t count = 0, vertices = 0, index_count = 0, i, active = 0;
+    int frame;
+
+    CHECK((mr_api_version() >> 16) == MR_API_VERSION_MAJOR);
+    desc.threads = 2;
+    if (mr_world_create(&desc, &world, &error) != MR_OK) {
+        fprintf(stderr, "mr_world_create: %s: %s\n", mr_status_name(error.code), error.message);
+        return 1;
+    }
+    for (frame = 0; frame < 30; ++frame) CHECK(mr_world_step(world, 1.0f / 60.0f) == MR_OK);
+    CHECK(mr_world_stats(world, &stats) == MR_OK);
+    CHECK(stats.frame == 30);
+    CHECK(stats.active_particles > 0);
+
+    CHECK(mr_world_particles(world, &particles) == MR_OK);
+    for (i = 0; i < particles.count; ++i) active += particles.active[i];
+    CHECK(active == stats.active_particles);
+    positions = (float*)malloc(3 * active * sizeof(float));
+    CHECK(mr_world_copy_particles(world, positions, NULL, active, &count) == MR_OK);
+    CHECK(count == active);
+    free(positions);
+
+    CHECK(mr_world_surface(world, &surface) == MR_OK);
+    CHECK(surface.vertex_count == stats.surface_vertices);
+    CHECK(surface.index_count == 3 * stats.surface_triangles);
+    indices = (uint32_t*)malloc((surface.index_count + 1) * sizeof(uint32_t));
+    CHECK(mr_world_copy_surface(world, NULL, NULL, 0, indices, surface.index_count, &vertices, &index_count) == MR_OK);
+    CHECK(index_count == surface.index_count);
+    CHECK(index_count == 0 || memcmp(indices, surface.indices, index_count * sizeof(uint32_t)) == 0);
+    free(indices);
+
+    check_errors(world);
+    mr_world_destroy(world);
+    if (failures == 0) printf("c99_test: all checks passed (%lu active particles)\n", (unsigned long)active);
+    return failures == 0 ? 0 : 1;
+}
