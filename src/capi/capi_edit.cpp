@@ -5,8 +5,10 @@
 
 #include <metariver/emitters.h>
 #include <metariver/particles.h>
+#include <metariver/scene_keys.h>
 
 #include <cmath>
+#include <stdexcept>
 #include <string_view>
 
 using mr::capi::fail;
@@ -23,6 +25,13 @@ mr::Vec3 vec3(const float* p) { return {p[0], p[1], p[2]}; }
 mr_status unsupported(const mr_world* w, const char* function, std::string_view why) {
     return fail(w, MR_ERROR_UNSUPPORTED,
                 fmt::format("{}: solver = \"{}\" {}", function, w->sim->solver_entry().kind.name, why));
+}
+
+/// The scene's list of more box sinks ([[sink.box]]).
+const mr::SceneList& sink_box_list() {
+    for (const mr::SceneList& l : mr::scene_lists())
+        if (l.name == "sink.box") return l;
+    throw std::logic_error("the scene has no sink.box list");
 }
 
 }  // namespace
@@ -115,6 +124,10 @@ mr_status mr_world_set_sink_boxes(mr_world* world, const float* boxes, size_t co
                                         "with min <= max", i, show3(b), show3(b + 3)));
             next.sink.boxes.push_back({vec3(b), vec3(b + 3)});
         }
+        // apply() would take boxes a solver that does not read them ignores.
+        if (count > 0 && !sink_box_list().readers(next))
+            return unsupported(world, "mr_world_set_sink_boxes",
+                               fmt::format("reads no sink.box (read by {})", sink_box_list().readers.text));
         auto r = world->sim->apply(next);
         if (!r) return fail(world, MR_ERROR_SCENE, "mr_world_set_sink_boxes: " + r.error().message);
         if (!r->applied)

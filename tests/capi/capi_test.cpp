@@ -437,6 +437,34 @@ TEST(CApi, RefusedCallsChangeNothing) {
     EXPECT_EQ(after.surface_vertices, before.surface_vertices);
 }
 
+// The paper's engine physics (Bullet): its presets leave the heightmap file to the caller,
+// and its solver refuses the edits its registry entry refuses (MR_ERROR_UNSUPPORTED).
+TEST(CApi, ABulletWorldRefusesPushAndSculpt) {
+    mr_world_desc d = mr_world_desc_default();
+    d.preset = "paper-engine";
+    const std::string m = create_error(d, MR_ERROR_SCENE);
+    EXPECT_TRUE(contains(m, "heightmap_file")) << m;
+    const std::vector<float> h = ramp(17, 17);
+    d.heights = h.data();
+    d.columns = 17;
+    d.rows = 17;
+    World world(d);
+    ASSERT_EQ(world.status, MR_OK) << world.error.message;
+    world.step(10);
+    const float at[3] = {8, 7, 8}, velocity[3] = {1, 0, 0};
+    size_t pushed = 7;
+    EXPECT_EQ(mr_world_push(world.w, at, 2.0f, velocity, &pushed), MR_ERROR_UNSUPPORTED);
+    EXPECT_TRUE(contains(world.last_error(), "bullet")) << world.last_error();
+    EXPECT_EQ(pushed, 7u) << "nothing written";
+    const mr_brush brush{.x = 8, .z = 8, .radius = 3, .strength = 1, .mode = MR_BRUSH_RAISE, .target = 0};
+    EXPECT_EQ(mr_world_sculpt(world.w, &brush), MR_ERROR_UNSUPPORTED);
+    EXPECT_TRUE(contains(world.last_error(), "bullet")) << world.last_error();
+    const float box[6] = {0, -5, 0, 2, 20, 2};
+    const mr_status sinks = mr_world_set_sink_boxes(world.w, box, 1);
+    EXPECT_EQ(sinks, MR_ERROR_UNSUPPORTED) << "Bullet reads no [[sink.box]]";
+    EXPECT_TRUE(contains(world.last_error(), "sink.box")) << world.last_error();
+}
+
 std::vector<float> copy_positions(const World& world) {
     size_t count = 0;
     EXPECT_EQ(mr_world_copy_particles(world.w, nullptr, nullptr, 0, &count), MR_OK);
