@@ -265,6 +265,17 @@ TEST(CApi, CreationRefusalsNameTheCulprit) {
     d.heightmap_file = "/nonexistent/map.png";
     const std::string png = create_error(d, MR_ERROR_IO);
     EXPECT_TRUE(contains(png, "heightmap_file") && contains(png, "/nonexistent/map.png")) << png;
+    const std::string not_png = temp_file("not.png", "not a PNG");
+    d.heightmap_file = not_png.c_str();
+    const std::string corrupt = create_error(d, MR_ERROR_IO);
+    EXPECT_TRUE(contains(corrupt, "heightmap_file") && contains(corrupt, "not.png")) << corrupt;
+    const std::string bad_scene = temp_file("bad.toml", "[pbf]\nxsph = \"much\"\n");
+    d = def;
+    d.scene_file = bad_scene.c_str();
+    const std::string scene = create_error(d, MR_ERROR_SCENE);
+    EXPECT_TRUE(contains(scene, "bad.toml") && contains(scene, "pbf.xsph")) << scene;
+    std::filesystem::remove(not_png);
+    std::filesystem::remove(bad_scene);
     d = def;
     d.threads = -1;
     EXPECT_TRUE(contains(create_error(d, MR_ERROR_INVALID_ARGUMENT), "threads"));
