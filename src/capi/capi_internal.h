@@ -5,9 +5,7 @@
 
 #include <metariver/metariver.h>
 #include <metariver/scene.h>
-#if MR_CAPI_HAVE_WATER_QUERY
 #include <metariver/water_query.h>
-#endif
 
 #include <tbb/task_arena.h>
 
@@ -34,9 +32,7 @@ struct mr_world {
     mutable std::string error;
     /// The water queries of the latest frame: updated on the first query after a step or
     /// an edit (query_fresh false).
-#if MR_CAPI_HAVE_WATER_QUERY
     mr::WaterQuery query;
-#endif
     bool query_fresh = false;
 
     explicit mr_world(int threads) : arena(threads > 0 ? threads : tbb::task_arena::automatic) {}

@@ -29,7 +29,6 @@ mr_status check_finite(const mr_world* w, const char* function, const char* name
                 fmt::format("{}: {}[{}] (point {}): must be finite (got {})", function, name, bad, bad / per, p[bad]));
 }
 
-#if MR_CAPI_HAVE_WATER_QUERY
 std::vector<mr::Vec3> vec3s(const float* p, size_t count) {
     std::vector<mr::Vec3> v(count);
     for (size_t i = 0; i < count; ++i) v[i] = {p[3 * i], p[3 * i + 1], p[3 * i + 2]};
@@ -44,11 +43,6 @@ const mr::WaterQuery& fresh_query(mr_world* w) {
     }
     return w->query;
 }
-#else
-mr_status no_query(const mr_world* w, const char* function) {
-    return fail(w, MR_ERROR_UNSUPPORTED, fmt::format("{}: this build has no water queries (water_query.cpp)", function));
-}
-#endif
 
 }  // namespace
 
@@ -61,7 +55,6 @@ mr_status mr_world_sample_water(mr_world* world, const float* xz, size_t count, 
         if (!out && count > 0) return null_argument(world, kName, "out");
         if (count == 0) return MR_OK;
         if (mr_status s = check_finite(world, kName, "xz", xz, count, 2); s != MR_OK) return s;
-#if MR_CAPI_HAVE_WATER_QUERY
         std::vector<mr::WaterSample> samples(count);
         fresh_query(world).sample(std::span<const float>(xz, 2 * count), samples);
         for (size_t i = 0; i < count; ++i) {
@@ -69,9 +62,6 @@ mr_status mr_world_sample_water(mr_world* world, const float* xz, size_t count, 
             out[i] = {s.surface_y, s.depth, {s.velocity.x, s.velocity.y, s.velocity.z}, s.wet ? 1 : 0};
         }
         return MR_OK;
-#else
-        return no_query(world, kName);
-#endif
     });
 }
 
@@ -82,7 +72,6 @@ mr_status mr_world_water_velocity(mr_world* world, const float* points, size_t c
         if (!velocities && count > 0) return null_argument(world, kName, "velocities");
         if (count == 0) return MR_OK;
         if (mr_status s = check_finite(world, kName, "points", points, count, 3); s != MR_OK) return s;
-#if MR_CAPI_HAVE_WATER_QUERY
         const std::vector<mr::Vec3> p = vec3s(points, count);
         std::vector<mr::Vec3> v(count);
         fresh_query(world).velocity_at(p, v);
@@ -92,9 +81,6 @@ mr_status mr_world_water_velocity(mr_world* world, const float* points, size_t c
             velocities[3 * i + 2] = v[i].z;
         }
         return MR_OK;
-#else
-        return no_query(world, kName);
-#endif
     });
 }
 
@@ -111,7 +97,6 @@ mr_status mr_world_raycast_water(mr_world* world, const float* origins, const fl
         if (count == 0) return MR_OK;
         if (mr_status s = check_finite(world, kName, "origins", origins, count, 3); s != MR_OK) return s;
         if (mr_status s = check_finite(world, kName, "directions", directions, count, 3); s != MR_OK) return s;
-#if MR_CAPI_HAVE_WATER_QUERY
         std::vector<mr::WaterRayHit> hits(count);
         fresh_query(world).raycast(vec3s(origins, count), vec3s(directions, count), max_distance, hits);
         for (size_t i = 0; i < count; ++i) {
@@ -119,9 +104,6 @@ mr_status mr_world_raycast_water(mr_world* world, const float* origins, const fl
             out[i] = {h.t, {h.point.x, h.point.y, h.point.z}, {h.normal.x, h.normal.y, h.normal.z}, h.hit ? 1 : 0};
         }
         return MR_OK;
-#else
-        return no_query(world, kName);
-#endif
     });
 }
 

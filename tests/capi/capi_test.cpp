@@ -4,9 +4,7 @@
 // and determinism across thread counts.
 #include <metariver/metariver.h>
 #include <metariver/scene.h>
-#if MR_CAPI_HAVE_WATER_QUERY
 #include <metariver/water_query.h>
-#endif
 
 #include <gtest/gtest.h>
 
@@ -653,7 +651,6 @@ TEST(CApi, ThreadCountsGiveTheSameState) {
 
 }  // namespace
 
-#if MR_CAPI_HAVE_WATER_QUERY
 // The three queries through the C API answer what the C++ queries' brute-force twins
 // answer on a Simulation stepped alike (the same scene, deterministic).
 TEST(CApi, WaterQueriesAnswerLikeTheTwins) {
@@ -705,4 +702,3 @@ TEST(CApi, WaterQueriesAnswerLikeTheTwins) {
               MR_ERROR_INVALID_ARGUMENT);
     EXPECT_TRUE(contains(world.last_error(), "max_distance")) << world.last_error();
 }
-#endif
