@@ -18,9 +18,8 @@
 #include <utility>
 
 /// The opaque handle: one Simulation, the threads its work runs on, the queries of its
-/// latest frame and the message of the latest failed call. Everything a call changes is
-/// mutable behind the const functions the header declares (stats, views) only for the
-/// message and the lazily rebuilt queries.
+/// latest frame and the message of the latest failed call (mutable: the header's const
+/// reads, stats and views, record their refusals too).
 struct mr_world {
     /// At most mr_world_desc.threads threads; every call that does work runs inside it.
     mutable tbb::task_arena arena;
