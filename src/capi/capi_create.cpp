@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <type_traits>
 #include <vector>
 
 #ifndef METARIVER_VERSION
@@ -206,7 +207,9 @@ uint32_t mr_api_version(void) { return MR_API_VERSION; }
 const char* mr_version_string(void) { return "metariver " METARIVER_VERSION " (commit " METARIVER_GIT_COMMIT ")"; }
 
 const char* mr_status_name(mr_status status) {
-    switch (status) {
+    std::underlying_type_t<mr_status> code = 0;  // a C caller may pass any int (see mr_world_sculpt)
+    std::memcpy(&code, &status, sizeof code);
+    switch (code) {
         case MR_OK: return "MR_OK";
         case MR_ERROR_NULL_ARGUMENT: return "MR_ERROR_NULL_ARGUMENT";
         case MR_ERROR_INVALID_ARGUMENT: return "MR_ERROR_INVALID_ARGUMENT";

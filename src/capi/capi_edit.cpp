@@ -8,8 +8,10 @@
 #include <metariver/scene_keys.h>
 
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 #include <string_view>
+#include <type_traits>
 
 using mr::capi::fail;
 using mr::capi::finite3;
@@ -41,14 +43,19 @@ extern "C" {
 mr_status mr_world_sculpt(mr_world* world, const mr_brush* brush) {
     return guarded(world, "mr_world_sculpt", true, [&] {
         if (!brush) return null_argument(world, "mr_world_sculpt", "brush");
-        if (brush->mode < MR_BRUSH_RAISE || brush->mode > MR_BRUSH_FLATTEN)
+        // A C caller may store any int in the enum; C++ may not read one outside 0..3 as
+        // mr_brush_mode, so the mode is read as its underlying integer.
+        std::underlying_type_t<mr_brush_mode> mode = 0;
+        static_assert(sizeof mode == sizeof brush->mode);
+        std::memcpy(&mode, &brush->mode, sizeof mode);
+        if (mode < MR_BRUSH_RAISE || mode > MR_BRUSH_FLATTEN)
             return fail(world, MR_ERROR_INVALID_ARGUMENT,
                         fmt::format("mr_world_sculpt: brush.mode: must be MR_BRUSH_RAISE (0) .. MR_BRUSH_FLATTEN (3) "
-                                    "(got {})", static_cast<int>(brush->mode)));
+                                    "(got {})", static_cast<long long>(mode)));
         const std::string_view why = world->sim->solver_entry().no_sculpt;
         if (!why.empty()) return unsupported(world, "mr_world_sculpt", why);
         const mr::Brush b{.x = brush->x, .z = brush->z, .radius = brush->radius, .strength = brush->strength,
-                          .mode = static_cast<mr::BrushMode>(brush->mode), .target = brush->target};
+                          .mode = static_cast<mr::BrushMode>(mode), .target = brush->target};
         auto edit = world->sim->sculpt(b);
         if (!edit) return fail(world, MR_ERROR_INVALID_ARGUMENT, "mr_world_sculpt: " + edit.error().message);
         world->query_fresh = false;

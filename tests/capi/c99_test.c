@@ -35,6 +35,7 @@ static void check_errors(mr_world* world) {
     CHECK(mr_world_copy_particles(world, small, NULL, 1, &count) == MR_ERROR_BUFFER_TOO_SMALL);
     CHECK(count > 1);
     CHECK(strcmp(mr_status_name(MR_ERROR_BUFFER_TOO_SMALL), "MR_ERROR_BUFFER_TOO_SMALL") == 0);
+    CHECK(strcmp(mr_status_name((mr_status)99), "MR_STATUS_UNKNOWN") == 0);
 }
 
 int main(void) {
