@@ -8,12 +8,20 @@
 #include <metariver/scene.h>
 #include <metariver/water_query.h>
 
+#include "capi_internal.h"  // the world's arena (ThreadsBoundTheWorldsArena)
+
+#include <tbb/info.h>
+#include <tbb/task_scheduler_observer.h>
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <mutex>
+#include <set>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace {
@@ -289,6 +297,42 @@ TEST(CApi, ApplyTomlAndSinkBoxes) {
     ASSERT_EQ(mr_world_set_sink_boxes(world.w, nullptr, 0), MR_OK) << world.last_error();
     ASSERT_EQ(mr_world_scene_toml(world.w, text.data(), text.size(), &length), MR_OK);
     EXPECT_FALSE(contains(text.data(), "\n[[sink.box]]")) << "count 0 removes them";
+}
+
+/// Counts the threads that work in one arena.
+class ArenaThreads : public tbb::task_scheduler_observer {
+public:
+    explicit ArenaThreads(tbb::task_arena& a) : tbb::task_scheduler_observer(a) { observe(true); }
+    ~ArenaThreads() override { observe(false); }
+    void on_scheduler_entry(bool) override {
+        std::lock_guard<std::mutex> lock(mutex_);
+        ids_.insert(std::this_thread::get_id());
+    }
+    size_t count() {
+        std::lock_guard<std::mutex> lock(mutex_);
+        return ids_.size();
+    }
+
+private:
+    std::mutex mutex_;
+    std::set<std::thread::id> ids_;
+};
+
+// desc.threads bounds the threads a world's work runs on (its arena, seen from inside the
+// library: src/capi/capi_internal.h); 0 takes every core.
+TEST(CApi, ThreadsBoundTheWorldsArena) {
+    for (int threads : {1, 2, 0}) {
+        mr_world_desc d = mr_world_desc_default();
+        d.threads = threads;
+        World world(d);
+        ASSERT_EQ(world.status, MR_OK) << world.error.message;
+        const int expected = threads > 0 ? threads : tbb::info::default_concurrency();
+        EXPECT_EQ(world.w->arena.max_concurrency(), expected) << "threads " << threads;
+        ArenaThreads seen(world.w->arena);
+        world.step(20);
+        EXPECT_LE(seen.count(), static_cast<size_t>(expected)) << "threads " << threads;
+        EXPECT_GE(seen.count(), 1u) << "the caller works in the arena";
+    }
 }
 
 // The world's own arena: 1 thread and 2 threads step the same particles, bit for bit.
