@@ -33,6 +33,9 @@ namespace {
 /// Largest scales the desc takes, metres (the CLI's --area-scale and --height-scale).
 constexpr double kMaxAreaScale = 1e4;
 constexpr double kMaxHeightScale = 1e5;
+/// Most threads a world's arena takes: TBB sizes an arena's slots by it (a million threads
+/// asked held 540 MB before any work).
+constexpr int kMaxThreads = 4096;
 
 /// A refusal during creation: the code and the message for mr_error.
 struct Refusal {
@@ -76,9 +79,9 @@ Refusal check_desc(const mr_world_desc& d) {
                       fmt::format("{}: set at most one of scene_file, scene_toml and preset", fmt::join(sources, ", ")));
     if (d.heights && d.heightmap_file)
         return refuse(MR_ERROR_INVALID_ARGUMENT, "heightmap_file, heights: set at most one terrain");
-    if (d.threads < 0)
+    if (d.threads < 0 || d.threads > kMaxThreads)
         return refuse(MR_ERROR_INVALID_ARGUMENT,
-                      fmt::format("threads: must be >= 0 (0: every core) (got {})", d.threads));
+                      fmt::format("threads: must be in [0, {}] (0: every core) (got {})", kMaxThreads, d.threads));
     if (Refusal r = check_scale("area_scale", d.area_scale, kMaxAreaScale); r.code) return r;
     if (Refusal r = check_scale("height_scale", d.height_scale, kMaxHeightScale); r.code) return r;
     return {};

@@ -215,6 +215,9 @@ TEST(CApi, CreationRefusalsNameTheCulprit) {
     d = def;
     d.threads = -1;
     EXPECT_TRUE(contains(create_error(d, MR_ERROR_INVALID_ARGUMENT), "threads"));
+    d.threads = 1000000;
+    const std::string threads = create_error(d, MR_ERROR_INVALID_ARGUMENT);
+    EXPECT_TRUE(contains(threads, "threads") && contains(threads, "[0, 4096]")) << threads;
     d = def;
     d.area_scale = -1.0f;
     EXPECT_TRUE(contains(create_error(d, MR_ERROR_INVALID_ARGUMENT), "area_scale"));
