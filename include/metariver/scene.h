@@ -356,6 +356,18 @@ public:
     /// would leave them pointing at the old one.
     Simulation(const Simulation&) = delete;
     Simulation& operator=(const Simulation&) = delete;
+    ~Simulation();
+
+    /// Bounds the threads this Simulation's work uses (step, apply, sculpt, restore,
+    /// push, pour, move_source and the channel measures): it all runs in a thread arena
+    /// of `n` threads that the Simulation owns (the calling thread is one of them; at
+    /// most the machine's cores); 0 (the default) = every core. The state after a frame does not depend on it
+    /// (state_hash() is the same at every count). Error naming `threads` outside
+    /// [0, kMaxThreads]; nothing changed then. Not to be called from inside step().
+    Status set_threads(int n);
+    /// The count set_threads() set (0: every core).
+    int threads() const;
+    static constexpr int kMaxThreads = 1024;
 
     /// One frame: spawning and `substeps` solver steps, then field and surface.
     void step(float frame_dt);
@@ -380,11 +392,11 @@ public:
     /// Undoes a stroke of sculpt() (newest first), with the same updates.
     void restore(const TerrainEdit& edit);
     /// Particles sculpt() or restore() lifted because the ground rose over them.
-    uint64_t terrain_lifts() const { return terrain_lifts_; }
+    uint64_t terrain_lifts() const;
     /// The scene as given to create(), "auto" values unresolved (def() has them resolved).
-    const SceneDef& requested() const { return requested_; }
+    const SceneDef& requested() const;
     /// Interaction: pour `count` particles at `center` (the source moves there).
-    void pour(const Vec3& center, int count) { solver_->pour(center, count); }
+    void pour(const Vec3& center, int count);
     /// Interaction: moves the source to `center` (its volume's centre; the automatic
     /// placement is off from then on: requested() says the centre too), the main channel
     /// and its coverage measured from there. Error (nothing moved) when the source's
@@ -397,43 +409,40 @@ public:
     /// or a velocity that is not finite. Returns how many particles it pushed.
     Result<size_t> push(const Vec3& center, float radius, const Vec3& velocity);
 
-    const SceneDef& def() const { return def_; }
-    const Terrain& terrain() const { return terrain_; }
-    const Bvh& bvh() const { return bvh_; }
+    const SceneDef& def() const;
+    const Terrain& terrain() const;
+    const Bvh& bvh() const;
     /// The solver's particles; empty for a solver whose water is a heightfield only.
-    const Particles& particles() const {
-        const Particles* p = solver_->water_particles();
-        return p ? *p : no_particles_;
-    }
+    const Particles& particles() const;
     /// The solver's heightfield water; null for a solver whose water is particles only.
-    const HeightfieldWater* heightfield() const { return solver_->water_heightfield(); }
+    const HeightfieldWater* heightfield() const;
     /// The registry entry of this scene's solver (a copy, taken at create()).
-    const SolverEntry& solver_entry() const { return solver_entry_; }
-    const SolverCounters& counters() const { return solver_->counters(); }
+    const SolverEntry& solver_entry() const;
+    const SolverCounters& counters() const;
     /// Non-fatal advice: scene_warnings(def) plus the solver's on this terrain (e.g. a
     /// flow rate its source cannot deliver, and what it was capped to).
     std::vector<std::string> warnings() const;
     /// The dense field (paper kernels); empty when the scene uses a compact kernel.
-    const ScalarGrid& field() const { return field_; }
+    const ScalarGrid& field() const;
     /// The sparse field (compact kernels); empty for the paper's kernels.
-    const SparseField& sparse_field() const { return sparse_; }
+    const SparseField& sparse_field() const;
     /// Samples per axis of the latest field, whichever kind.
     std::array<int, 3> field_dims() const;
-    const SurfaceMesh& surface() const { return surface_; }
+    const SurfaceMesh& surface() const;
     /// Numbers of the latest frame's smoothing (all 0 with surface.method = "none").
-    const SmoothingStats& smoothing_stats() const { return smooth_ws_.stats; }
-    const FrameTimings& last_timings() const { return timings_; }
+    const SmoothingStats& smoothing_stats() const;
+    const FrameTimings& last_timings() const;
     /// The diffuse particles ([foam]); null when foam is off or the solver is not PBF.
-    const FoamSystem* foam() const { return foam_ ? &*foam_ : nullptr; }
-    uint64_t frame() const { return solver_->frame(); }
+    const FoamSystem* foam() const;
+    uint64_t frame() const;
     /// The latest frame as plain views (what the renderer reads): valid until the next
     /// step, edit or destruction of this Simulation.
     SceneView view() const;
     /// Frames whose field could not be built (its grid over kMaxFieldSamples, or the
     /// sparse field's kMaxSparseFieldSamples): no surface that frame.
-    uint64_t field_overflows() const { return field_overflows_; }
+    uint64_t field_overflows() const;
     /// Why the last such frame's field was refused; empty when none was.
-    const std::string& field_overflow_message() const { return field_overflow_message_; }
+    const std::string& field_overflow_message() const;
     /// FNV-1a hash of the particles' positions, velocities and activity, then of the
     /// heightfield's depths and velocities when the solver has one (determinism checks).
     uint64_t state_hash() const;
@@ -442,10 +451,7 @@ public:
     /// wet_fraction() or channel_coverage()), over the rectangle of samples the edits since
     /// changed (ChannelMap::update: only the cells the change reaches), so a drag of many
     /// strokes updates it once.
-    const ChannelMap& channel() const {
-        refresh_channel();
-        return channel_;
-    }
+    const ChannelMap& channel() const;
     /// Fraction of the active particles inside the wet channel (WetChannelDef defaults
     /// scaled to the terrain: width max(3 m, 3 samples), depth 3 m).
     float wet_fraction() const;
@@ -457,77 +463,28 @@ public:
     /// |velocity| of every active particle, m/s, in index order.
     std::vector<double> active_speeds() const;
     /// Where the outlet-edge sink took particles during the latest frame (Solver::last_exits).
-    std::span<const Vec3> last_exits() const { return solver_->last_exits(); }
+    std::span<const Vec3> last_exits() const;
     /// The main channel: ChannelMap::path_from the source's channel cell (the main head
     /// for the automatic channel source on terrain that is not carved, else the channel
     /// cell nearest the source's centre: on a carved terrain the automatic source stays
     /// at the head the carve was cut from) to the border cell where it leaves the
     /// terrain (back()). Valid until the next sculpt(), restore() or move_source(), after
     /// which the channel is measured again (copy it to keep it across them).
-    std::span<const std::pair<int, int>> main_channel() const {
-        refresh_channel();
-        return main_path_;
-    }
+    std::span<const std::pair<int, int>> main_channel() const;
     /// ChannelCoverage of the main channel by the current particles (1.5 samples, 3 m).
     float channel_coverage() const;
     /// How the river sized itself (particles.count / flow_rate = "auto"); empty when
     /// neither was automatic.
-    const std::optional<RiverSize>& sizing() const { return sizing_; }
+    const std::optional<RiverSize>& sizing() const;
     /// Particles particles.prefill placed in the carved channel at the start (0: none).
-    size_t prefilled() const { return prefilled_; }
+    size_t prefilled() const;
 
 private:
-    Simulation(const SceneDef& def, Terrain terrain, Bvh bvh, std::optional<RiverSize> sizing, SolverEntry solver);
-
-    SceneDef def_;
-    SceneDef requested_;
-    Terrain terrain_;
-    Bvh bvh_;
-    SolverEntry solver_entry_;
-    std::unique_ptr<Solver> solver_;
-    Particles no_particles_;  ///< particles() of a solver without particles
-    std::vector<Vec3> balls_;
-    ScalarGrid field_;
-    SparseField sparse_;
-    SparseFieldDef sparse_def_;
-    SurfaceWorkspace surface_ws_;
-    SmoothingWorkspace smooth_ws_;
-    SurfaceMesh surface_;
-    std::vector<uint32_t> heightfield_scratch_;  ///< append_heightfield_surface's
-    FrameTimings timings_;
-    uint64_t field_overflows_ = 0;
-    uint64_t terrain_lifts_ = 0;
-    std::string field_overflow_message_;
-    // The drainage network and what is measured on it; updated when read after a
-    // terrain edit (refresh_channel()) over the samples changed since (empty: current).
-    struct SampleRect {
-        int i0 = std::numeric_limits<int>::max(), i1 = -1, j0 = std::numeric_limits<int>::max(), j1 = -1;
-        bool empty() const { return i1 < i0 || j1 < j0; }
-    };
-    mutable ChannelMap channel_;
-    mutable std::vector<std::pair<int, int>> main_path_;
-    mutable ChannelCoverage coverage_;
-    mutable SampleRect channel_stale_;
-    std::optional<RiverSize> sizing_;
-    std::optional<FoamSystem> foam_;
-    size_t prefilled_ = 0;
-
-    void prefill_channel();
-    float prefill_share() const;
-    void configure_field();
-    /// The foam's step on the latest frame's particles ([foam]).
-    void step_foam(float frame_dt);
-    /// field -> marching cubes -> smoothing over `p` into surface_ (cleared first).
-    void build_particle_surface(const Particles& p);
-    /// The heightfield's triangle grid appended to surface_.
-    void append_heightfield(const HeightfieldWater& w);
-    void after_terrain_edit(const TerrainEdit& edit);
-    /// main_path_ and coverage_ from the source at def_.spawn.center (`asked`: the source as
-    /// the scene gave it, which says whether it follows the main head).
-    void measure_main_channel(const SpawnDef& asked) const;
-    /// Builds the drainage network and measures the main channel again when a terrain
-    /// edit left them stale.
-    void refresh_channel() const;
+    /// Everything the Simulation owns (scene, terrain, solver, the per-frame scratch and
+    /// caches, the thread arena): src/scene/simulation_impl.h.
+    struct Impl;
+    explicit Simulation(std::unique_ptr<Impl> impl);
+    std::unique_ptr<Impl> impl_;
 };
 
 }  // namespace mr

@@ -1,6 +1,7 @@
 // The orchestrator of one frame: solver step -> field -> marching cubes.
 #include <metariver/scene.h>
 
+#include "simulation_impl.h"
 #include "simulation_internal.h"
 
 #include <fmt/format.h>
@@ -137,7 +138,7 @@ std::vector<std::pair<int, int>> main_channel_path(const Terrain& t, const Chann
 
 }  // namespace detail
 
-Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh, std::optional<RiverSize> sizing,
+Simulation::Impl::Impl(const SceneDef& def, Terrain terrain, Bvh bvh, std::optional<RiverSize> sizing,
                        SolverEntry solver)
     : def_(def),
       terrain_(std::move(terrain)),
@@ -158,7 +159,7 @@ Simulation::Simulation(const SceneDef& def, Terrain terrain, Bvh bvh, std::optio
         prefill_channel();
 }
 
-void Simulation::configure_field() {
+void Simulation::Impl::configure_field() {
     // Compact kernel: the sparse field over the particles' box or the terrain's.
     sparse_def_.kernel = poly6_kernel(def_.field.radius, 1.0f);
     sparse_def_.resolution = def_.field.resolution;
@@ -179,7 +180,7 @@ void Simulation::configure_field() {
     }
 }
 
-float Simulation::prefill_share() const {
+float Simulation::Impl::prefill_share() const {
     // The section's rate (size_river before a ceiling lowered it) against the source's:
     // a thinner river than the section starts as thin.
     const float section = detail::section_rate(def_, terrain_.area_scale(), sizing_ ? sizing_->speed : kRiverSpeed);
@@ -187,7 +188,7 @@ float Simulation::prefill_share() const {
     return section > 0.0f && rate > 0.0f ? std::min(1.0f, rate / section) : 1.0f;
 }
 
-void Simulation::prefill_channel() {
+void Simulation::Impl::prefill_channel() {
     // kRiverFill of the carved section, moving down the channel at kRiverTransitSpeed,
     // clear of the source's basin (the source fills that), at most half the budget
     // (the rest is the source's until the sink recycles).
@@ -207,7 +208,7 @@ void Simulation::prefill_channel() {
     prefilled_ = fill.position.size();
 }
 
-std::vector<std::string> Simulation::warnings() const {
+std::vector<std::string> Simulation::Impl::warnings() const {
     std::vector<std::string> w = scene_warnings(def_);
     if (sizing_ && sizing_->capped)
         w.push_back(fmt::format("particles.count: the main channel is {:.0f} m long; at {} particles (the most the "
@@ -236,19 +237,6 @@ float flow_radius(const SceneDef& def) {
     // vertices by a fraction of a cell). The paper's kernels reach everywhere; their
     // surface lies within about one metaball radius of the balls, so twice that is used.
     return def.field.kernel == FieldKernel::Poly6 ? def.field.radius : 2.0f * def.field.radius;
-}
-
-SceneView Simulation::view() const {
-    const FoamSystem* f = foam();
-    return SceneView{.terrain = &terrain_,
-                     .bvh = &bvh_,
-                     .paper_rows = def_.terrain.paper_row_orientation,
-                     .particles = &particles(),
-                     .surface = &surface_,
-                     .foam = f ? &f->particles() : nullptr,
-                     .flow_radius = flow_radius(def_),
-                     .owner = this,
-                     .frame = frame()};
 }
 
 SmoothingGround smoothing_ground(const Terrain& t) {
@@ -351,15 +339,15 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, cons
     if (auto f = detail::field_box_fits(resolved.field, terrain.value()); !f) return f.error();
     auto bvh = Bvh::build(terrain.value(), BvhDef{.leaf_triangles = def.collision.leaf_triangles});
     if (!bvh) return bvh.error();
-    std::unique_ptr<Simulation> sim(
-        new Simulation(resolved, std::move(terrain.value()), std::move(bvh.value()), sizing, *entry.value()));
-    if (!sim->solver_) return Error{fmt::format("solver: \"{}\"'s factory built no solver", def.solver.name)};
+    std::unique_ptr<Simulation> sim(new Simulation(
+        std::make_unique<Impl>(resolved, std::move(terrain.value()), std::move(bvh.value()), sizing, *entry.value())));
+    if (!sim->impl_->solver_) return Error{fmt::format("solver: \"{}\"'s factory built no solver", def.solver.name)};
     if (auto v = validate_on_terrain(sim->def(), sim->terrain()); !v) return v.error();  // resolved source
-    sim->requested_ = def;
+    sim->impl_->requested_ = def;
     return sim;
 }
 
-void Simulation::step(float frame_dt) {
+void Simulation::Impl::step(float frame_dt) {
     const auto t0 = Clock::now();
     solver_->step_frame(frame_dt);
     timings_.simulate_ms = ms_since(t0);
@@ -380,7 +368,7 @@ void Simulation::step(float frame_dt) {
     if (const HeightfieldWater* w = solver_->water_heightfield()) append_heightfield(*w);
 }
 
-void Simulation::step_foam(float frame_dt) {
+void Simulation::Impl::step_foam(float frame_dt) {
     const Particles* p = solver_->water_particles();
     if (!foam_ || !p) return;
     const auto t0 = Clock::now();
@@ -389,7 +377,7 @@ void Simulation::step_foam(float frame_dt) {
     timings_.foam_ms = ms_since(t0);
 }
 
-void Simulation::build_particle_surface(const Particles& p) {
+void Simulation::Impl::build_particle_surface(const Particles& p) {
     auto t0 = Clock::now();
     p.gather_active_positions(balls_);
     if (def_.field.kernel == FieldKernel::Poly6) {
@@ -424,14 +412,14 @@ void Simulation::build_particle_surface(const Particles& p) {
     timings_.surface_ms = ms_since(t0);
 }
 
-void Simulation::append_heightfield(const HeightfieldWater& w) {
+void Simulation::Impl::append_heightfield(const HeightfieldWater& w) {
     // On the terrain's grid: each vertex is its bed sample raised by the depth.
     const auto t0 = Clock::now();
     append_heightfield_surface(terrain_.vertices(), w.depth, w.rows, w.columns, surface_, &heightfield_scratch_);
     timings_.surface_ms += ms_since(t0);
 }
 
-std::array<int, 3> Simulation::field_dims() const {
+std::array<int, 3> Simulation::Impl::field_dims() const {
     if (def_.field.kernel == FieldKernel::Poly6) {
         const SampleGrid& g = sparse_.grid();
         return {g.nx, g.ny, g.nz};
@@ -439,19 +427,19 @@ std::array<int, 3> Simulation::field_dims() const {
     return {field_.nx, field_.ny, field_.nz};
 }
 
-float Simulation::wet_fraction() const {
+float Simulation::Impl::wet_fraction() const {
     const Particles& p = particles();
     const WetChannelDef wet{.width = std::max(3.0f, 3.0f * terrain_.area_scale()), .depth = 3.0f};
     return wet_channel_fraction(terrain_, channel(), p.position, p.active, wet);
 }
 
-float Simulation::channel_coverage() const {
+float Simulation::Impl::channel_coverage() const {
     refresh_channel();
     const Particles& p = particles();
     return coverage_.measure(p.position, p.active);
 }
 
-float Simulation::spray_fraction() const {
+float Simulation::Impl::spray_fraction() const {
     const SprayScale scale = solver_entry_.spray_scale ? solver_entry_.spray_scale(def_) : SprayScale{};
     const Particles& p = particles();
     return mr::spray_fraction(terrain_, p.position, p.active, scale.kernel_radius, scale.spacing);
@@ -466,7 +454,7 @@ std::vector<double> Simulation::active_speeds() const {
     return speeds;
 }
 
-uint64_t Simulation::state_hash() const {
+uint64_t Simulation::Impl::state_hash() const {
     uint64_t h = 1469598103934665603ull;
     auto mix = [&h](const void* data, size_t n) {
         const auto* b = static_cast<const unsigned char*>(data);

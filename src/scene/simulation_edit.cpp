@@ -3,6 +3,7 @@
 #include <metariver/scene.h>
 #include <metariver/scene_keys.h>
 
+#include "simulation_impl.h"
 #include "simulation_internal.h"
 
 #include <fmt/format.h>
@@ -34,7 +35,7 @@ void copy_list(const SceneList& l, const SceneDef& from, SceneDef& to) {
 }
 }  // namespace
 
-Result<ApplyResult> Simulation::apply(const SceneDef& next) {
+Result<ApplyResult> Simulation::Impl::apply(const SceneDef& next) {
     if (auto v = validate(next); !v) return v.error();
     ApplyResult r;
     SceneDef edited = def_;
@@ -75,12 +76,12 @@ Result<ApplyResult> Simulation::apply(const SceneDef& next) {
     return r;
 }
 
-void Simulation::measure_main_channel(const SpawnDef& asked) const {
+void Simulation::Impl::measure_main_channel(const SpawnDef& asked) const {
     main_path_ = detail::main_channel_path(terrain_, channel_, asked, def_.spawn.center);
     coverage_ = ChannelCoverage(terrain_, main_path_);
 }
 
-void Simulation::refresh_channel() const {
+void Simulation::Impl::refresh_channel() const {
     if (channel_stale_.empty()) return;
     const SampleRect r = channel_stale_;
     channel_stale_ = {};
@@ -88,7 +89,7 @@ void Simulation::refresh_channel() const {
     measure_main_channel(def_.spawn);
 }
 
-Status Simulation::move_source(const Vec3& center) {
+Status Simulation::Impl::move_source(const Vec3& center) {
     SceneDef moved = def_;
     moved.spawn.center = center;
     moved.spawn.auto_center = moved.spawn.auto_channel = false;
@@ -103,7 +104,7 @@ Status Simulation::move_source(const Vec3& center) {
     return Ok{};
 }
 
-Result<size_t> Simulation::push(const Vec3& center, float radius, const Vec3& velocity) {
+Result<size_t> Simulation::Impl::push(const Vec3& center, float radius, const Vec3& velocity) {
     if (!solver_entry_.no_push.empty())
         return Error{fmt::format("push: solver = \"{}\" {}", solver_entry_.kind.name, solver_entry_.no_push)};
     if (!std::isfinite(radius) || !(radius > 0.0f))
@@ -113,7 +114,7 @@ Result<size_t> Simulation::push(const Vec3& center, float radius, const Vec3& ve
     return solver_->push(center, radius, velocity);
 }
 
-Result<TerrainEdit> Simulation::sculpt(const Brush& brush) {
+Result<TerrainEdit> Simulation::Impl::sculpt(const Brush& brush) {
     if (!solver_entry_.no_sculpt.empty())
         return Error{fmt::format("sculpt: solver = \"{}\" {}", solver_entry_.kind.name, solver_entry_.no_sculpt)};
     auto e = terrain_.sculpt(brush);
@@ -122,13 +123,13 @@ Result<TerrainEdit> Simulation::sculpt(const Brush& brush) {
     return e;
 }
 
-void Simulation::restore(const TerrainEdit& edit) {
+void Simulation::Impl::restore(const TerrainEdit& edit) {
     if (!solver_entry_.no_sculpt.empty()) return;
     terrain_.restore(edit);
     after_terrain_edit(edit);
 }
 
-void Simulation::after_terrain_edit(const TerrainEdit& e) {
+void Simulation::Impl::after_terrain_edit(const TerrainEdit& e) {
     if (e.empty()) return;
     bvh_.refit_heights(terrain_);
     // The network is updated over the changed samples when next read (refresh_channel).

@@ -1,0 +1,108 @@
+// Simulation's state (the Pimpl behind include/metariver/scene.h): the scene, the terrain,
+// the solver, and the scratch and caches one frame reuses (balls, field, surface
+// workspaces, the drainage network). Not part of the library's API: simulation.cpp,
+// simulation_edit.cpp and simulation_api.cpp share it.
+#pragma once
+
+#include <metariver/scene.h>
+
+#include <tbb/task_arena.h>
+
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace mr {
+
+struct Simulation::Impl {
+    /// Builds the source, the field's settings, the solver, the foam and the prefill
+    /// (the solver is null when the entry's factory built none: create() reports it).
+    Impl(const SceneDef& def, Terrain terrain, Bvh bvh, std::optional<RiverSize> sizing, SolverEntry solver);
+
+    SceneDef def_;
+    SceneDef requested_;
+    Terrain terrain_;
+    Bvh bvh_;
+    SolverEntry solver_entry_;
+    std::unique_ptr<Solver> solver_;
+    Particles no_particles_;  ///< particles() of a solver without particles
+    std::vector<Vec3> balls_;
+    ScalarGrid field_;
+    SparseField sparse_;
+    SparseFieldDef sparse_def_;
+    SurfaceWorkspace surface_ws_;
+    SmoothingWorkspace smooth_ws_;
+    SurfaceMesh surface_;
+    std::vector<uint32_t> heightfield_scratch_;  ///< append_heightfield_surface's
+    FrameTimings timings_;
+    uint64_t field_overflows_ = 0;
+    uint64_t terrain_lifts_ = 0;
+    std::string field_overflow_message_;
+    // The drainage network and what is measured on it; updated when read after a
+    // terrain edit (refresh_channel()) over the samples changed since (empty: current).
+    struct SampleRect {
+        int i0 = std::numeric_limits<int>::max(), i1 = -1, j0 = std::numeric_limits<int>::max(), j1 = -1;
+        bool empty() const { return i1 < i0 || j1 < j0; }
+    };
+    mutable ChannelMap channel_;
+    mutable std::vector<std::pair<int, int>> main_path_;
+    mutable ChannelCoverage coverage_;
+    mutable SampleRect channel_stale_;
+    std::optional<RiverSize> sizing_;
+    std::optional<FoamSystem> foam_;
+    size_t prefilled_ = 0;
+    /// Every piece of work runs inside it (Simulation::set_threads): its concurrency
+    /// bounds the threads the solver, the field and the surface use.
+    mutable tbb::task_arena arena_;
+    int threads_ = 0;  ///< Simulation::threads()
+
+    /// Runs `f` inside the arena (its parallel loops use at most threads() threads).
+    template <class F>
+    decltype(auto) run(F&& f) const {
+        return arena_.execute(std::forward<F>(f));
+    }
+
+    const Particles& particles() const {
+        const Particles* p = solver_->water_particles();
+        return p ? *p : no_particles_;
+    }
+    const ChannelMap& channel() const {
+        refresh_channel();
+        return channel_;
+    }
+
+    void step(float frame_dt);
+    Result<ApplyResult> apply(const SceneDef& next);
+    Status move_source(const Vec3& center);
+    Result<size_t> push(const Vec3& center, float radius, const Vec3& velocity);
+    Result<TerrainEdit> sculpt(const Brush& brush);
+    void restore(const TerrainEdit& edit);
+    std::vector<std::string> warnings() const;
+    std::array<int, 3> field_dims() const;
+    float wet_fraction() const;
+    float spray_fraction() const;
+    float channel_coverage() const;
+    uint64_t state_hash() const;
+
+    void prefill_channel();
+    float prefill_share() const;
+    void configure_field();
+    /// The foam's step on the latest frame's particles ([foam]).
+    void step_foam(float frame_dt);
+    /// field -> marching cubes -> smoothing over `p` into surface_ (cleared first).
+    void build_particle_surface(const Particles& p);
+    /// The heightfield's triangle grid appended to surface_.
+    void append_heightfield(const HeightfieldWater& w);
+    void after_terrain_edit(const TerrainEdit& edit);
+    /// main_path_ and coverage_ from the source at def_.spawn.center (`asked`: the source as
+    /// the scene gave it, which says whether it follows the main head).
+    void measure_main_channel(const SpawnDef& asked) const;
+    /// Builds the drainage network and measures the main channel again when a terrain
+    /// edit left them stale.
+    void refresh_channel() const;
+};
+
+}  // namespace mr
