@@ -58,6 +58,7 @@
 // the sinks and the respawns.
 #include <metariver/pbf_solver.h>
 
+#include "pbf_state.h"
 #include "pbf_stages.h"
 
 #include <algorithm>
@@ -111,10 +112,12 @@ PbfSleepStep pbf_sleep_step(const PbfDef& d, float gravity, float dt) {
 
 PbfSolver::PbfSolver(const Terrain& terrain, const Bvh& bvh, SpawnDef spawn, PbfDef pbf, CollisionDef collision,
                      IntegratorDef integrator, uint32_t seed, SinkDef sink)
-    : water_(terrain, bvh, spawn, collision, integrator, seed, sink, pbf.spacing, true), pbf_(pbf) {
-    sleep_.slow_steps.assign(water_.pool.size(), 0);
-    sleep_.mean_velocity.assign(water_.pool.size(), Vec3(0.0f));
-    water_.pool.slots = &sleep_;
+    : water_(terrain, bvh, spawn, collision, integrator, seed, sink, pbf.spacing, true),
+      pbf_(pbf),
+      st_(std::make_unique<State>()) {
+    st_->sleep_.slow_steps.assign(water_.pool.size(), 0);
+    st_->sleep_.mean_velocity.assign(water_.pool.size(), Vec3(0.0f));
+    water_.pool.slots = &st_->sleep_;
     init_pbf();
 }
 
@@ -127,18 +130,19 @@ bool PbfSolver::set_params(const SpawnDef& spawn, const PbfDef& pbf, const Colli
 }
 
 void PbfSolver::init_pbf() {
+    State& st = *st_;
     const PbfLattice l = pbf_lattice(pbf_);
     rest_density_ = l.rest_density;
     water_.emitters.build_lattices();
-    lattice_grad_sum_ = l.grad_sum;
+    st.lattice_grad_sum_ = l.grad_sum;
 }
 
-void PbfSolver::Sleep::swap(size_t i, size_t j) {
+void PbfSolver::State::Sleep::swap(size_t i, size_t j) {
     std::swap(slow_steps[i], slow_steps[j]);
     std::swap(mean_velocity[i], mean_velocity[j]);
 }
 
-void PbfSolver::Sleep::permute(std::span<const uint32_t> perm) {
+void PbfSolver::State::Sleep::permute(std::span<const uint32_t> perm) {
     scratch_slow.resize(perm.size());
     for (size_t k = 0; k < perm.size(); ++k) scratch_slow[k] = slow_steps[perm[k]];
     slow_steps.swap(scratch_slow);
@@ -147,12 +151,16 @@ void PbfSolver::Sleep::permute(std::span<const uint32_t> perm) {
     mean_velocity.swap(scratch_mean);
 }
 
-void PbfSolver::pbf_densities(std::vector<float>& out) {
-    const PbfKernels k(pbf_.kernel_radius);
-    water_.grid.sort(water_.pool, pbf_.kernel_radius);
-    const Particles& p = water_.pool.particles;
+PbfSolver::~PbfSolver() = default;
+
+float PbfSolver::list_skin() const { return st_->pbf_list_skin_ * pbf_.kernel_radius; }
+
+void pbf_densities(ParticleWater& water, float kernel_radius, std::vector<float>& out) {
+    const PbfKernels k(kernel_radius);
+    water.grid.sort(water.pool, kernel_radius);
+    const Particles& p = water.pool.particles;
     out.assign(p.size(), 0.0f);
-    for_each_run(water_.grid.grid(), [&](uint32_t i, const Ranges& rg) {
+    for_each_run(water.grid.grid(), [&](uint32_t i, const Ranges& rg) {
         const Vec3 xi = p.position[i];
         float rho = 0.0f;
         for (int q = 0; q < rg.n; ++q)
@@ -164,9 +172,9 @@ void PbfSolver::pbf_densities(std::vector<float>& out) {
     });
 }
 
-void PbfSolver::pbf_densities_brute_force(std::vector<float>& out) const {
-    const PbfKernels k(pbf_.kernel_radius);
-    const Particles& p = water_.pool.particles;
+void pbf_densities_brute_force(const ParticleWater& water, float kernel_radius, std::vector<float>& out) {
+    const PbfKernels k(kernel_radius);
+    const Particles& p = water.pool.particles;
     out.assign(p.size(), 0.0f);
     for (size_t i = 0; i < p.size(); ++i) {
         if (!p.active[i]) continue;
@@ -181,15 +189,16 @@ void PbfSolver::pbf_densities_brute_force(std::vector<float>& out) const {
 }
 
 void PbfSolver::step(float dt) {
+    State& st = *st_;
     const PbfKernels k(pbf_.kernel_radius);
     const bool terrain = water_.collider.response() != ContactResponse::None;
     const Stage s{.dt = dt,
                   .k = k,
-                  .c = pbf_step_constants(pbf_, PbfLattice{rest_density_, lattice_grad_sum_}),
+                  .c = pbf_step_constants(pbf_, PbfLattice{rest_density_, st.lattice_grad_sum_}),
                   .kc = pbf_simd::KernelConsts{k.h, k.h2, k.poly6, k.spiky},
                   .terrain = terrain,
                   .wall = terrain && pbf_.wall_density > 0.0f,
-                  .simd = pbf_simd_on_ && pbf_simd::available()};
+                  .simd = st.pbf_simd_on_ && pbf_simd::available()};
     predict(s);
     bin();
     if (s.wall) measure_walls();
@@ -219,39 +228,43 @@ void PbfSolver::predict(const Stage& s) {
 // 2. Bin the predicted positions (reorders every array by cell), and the neighbour
 // lists of the binned positions.
 void PbfSolver::bin() {
+    State& st = *st_;
     water_.grid.sort(water_.pool, pbf_.kernel_radius);
     const size_t n = water_.pool.size();
-    lambda_.assign(n, 0.0f);
-    contact_.assign(n, 0);
-    density_.assign(n, 0.0f);
-    delta_.assign(n, Vec3(0.0f));
-    if (pbf_lists_on_) pbf_lists_.build(water_.grid.grid(), water_.pool.particles.position, pbf_.kernel_radius + list_skin());
+    st.lambda_.assign(n, 0.0f);
+    st.contact_.assign(n, 0);
+    st.density_.assign(n, 0.0f);
+    st.delta_.assign(n, Vec3(0.0f));
+    if (st.pbf_lists_on_) st.pbf_lists_.build(water_.grid.grid(), water_.pool.particles.position, pbf_.kernel_radius + list_skin());
 }
 
 // A stale list is rebuilt before a pass when the new one serves `passes` >= 2 passes at
 // these positions (a rebuild scans the candidates twice); a single pass walks the 27
 // cells instead (the same pairs).
 const NeighborLists* PbfSolver::lists(int passes) {
-    if (!pbf_lists_on_) return nullptr;
+    State& st = *st_;
+    if (!st.pbf_lists_on_) return nullptr;
     const std::vector<Vec3>& x = water_.pool.particles.position;
-    if (pbf_lists_.stale(x, list_skin())) {
+    if (st.pbf_lists_.stale(x, list_skin())) {
         if (passes < 2) return nullptr;
-        pbf_lists_.build(water_.grid.grid(), x, pbf_.kernel_radius + list_skin());
+        st.pbf_lists_.build(water_.grid.grid(), x, pbf_.kernel_radius + list_skin());
     }
-    return &pbf_lists_;
+    return &st.pbf_lists_;
 }
 
 // The terrain's share of each kernel at the predicted position (wall density).
 void PbfSolver::measure_walls() {
+    State& st = *st_;
     const Particles& p = water_.pool.particles;
+    const Terrain& terrain = water_.collider.terrain();
     const size_t n = p.size();
-    wall_share_.resize(n);
-    wall_grad_.resize(n);
-    wall_at_.resize(n);
+    st.wall_share_.resize(n);
+    st.wall_grad_.resize(n);
+    st.wall_at_.resize(n);
     for_each_slot(n, 256, [&](size_t i) {
-        wall_at_[i] = p.position[i];
-        wall_share_[i] = p.active[i] ? pbf_.wall_density * wall_share(p.position[i], wall_grad_[i]) : 0.0f;
-        wall_grad_[i] = p.active[i] ? pbf_.wall_density * wall_grad_[i] : Vec3(0.0f);
+        st.wall_at_[i] = p.position[i];
+        st.wall_share_[i] = p.active[i] ? pbf_.wall_density * pbf_terrain_share(terrain, pbf_.kernel_radius, p.position[i], st.wall_grad_[i]) : 0.0f;
+        st.wall_grad_[i] = p.active[i] ? pbf_.wall_density * st.wall_grad_[i] : Vec3(0.0f);
     });
 }
 
@@ -263,6 +276,7 @@ void PbfSolver::measure_walls() {
 // under it counts as held too: with the wall density the bed layer is held off the
 // ground by pressure and is rarely pushed out.
 void PbfSolver::bed_friction(const Stage& s) {
+    State& st = *st_;
     Particles& p = water_.pool.particles;
     const Terrain& terrain = water_.collider.terrain();
     const CollisionDef& col = water_.collider.def();
@@ -270,8 +284,8 @@ void PbfSolver::bed_friction(const Stage& s) {
         const float band = pbf_.contact_band * pbf_.spacing;
         for_each_slot(p.size(), 1024, [&](size_t i) {
             const Vec3 x = p.position[i];
-            if (p.active[i] && !contact_[i] && terrain.contains_xz(x.x, x.z) && x.y - terrain.height_mesh(x.x, x.z) < band)
-                contact_[i] = 1;
+            if (p.active[i] && !st.contact_[i] && terrain.contains_xz(x.x, x.z) && x.y - terrain.height_mesh(x.x, x.z) < band)
+                st.contact_[i] = 1;
         });
     }
     // The law (CollisionDef::friction_speed): the share is damping, or damping x
@@ -279,7 +293,7 @@ void PbfSolver::bed_friction(const Stage& s) {
     const bool quadratic = col.friction_speed > 0.0f;
     const float per_speed = quadratic ? 1.0f / (s.dt * col.friction_speed) : 0.0f;
     for_each_slot(p.size(), 1024, [&](size_t i) {
-        if (!contact_[i]) return;
+        if (!st.contact_[i]) return;
         const Vec3 x = p.position[i];
         if (!terrain.contains_xz(x.x, x.z)) return;
         const Vec3 nrm = terrain.normal_mesh(x.x, x.z);
@@ -326,6 +340,7 @@ void PbfSolver::damp(const Stage& s) {
 // column (water still packing under its weight) kept the pools awake past 10 s when
 // it counted (max speed 0.10-0.20 m/s at 10 s).
 void PbfSolver::sleep(const Stage& s) {
+    State& st = *st_;
     const PbfSleepStep rule = pbf_sleep_step(pbf_, water_.integrator.gravity, s.dt);
     if (!(rule.threshold > 0.0f)) return;
     Particles& p = water_.pool.particles;
@@ -333,8 +348,8 @@ void PbfSolver::sleep(const Stage& s) {
     const int after = rule.after;
     const float drift2 = pbf_.sleep_drift * pbf_.sleep_drift;
     const float alpha = rule.drift_alpha;
-    std::vector<uint16_t>& slow = sleep_.slow_steps;
-    std::vector<Vec3>& mean = sleep_.mean_velocity;
+    std::vector<uint16_t>& slow = st.sleep_.slow_steps;
+    std::vector<Vec3>& mean = st.sleep_.mean_velocity;
     for_each_slot(p.size(), 1024, [&](size_t i) {
         if (!p.active[i]) return;
         const bool asleep = slow[i] >= after;
@@ -356,14 +371,15 @@ void PbfSolver::sleep(const Stage& s) {
 
 // Density error of the last iteration (serial sum: deterministic).
 void PbfSolver::record_density_error() {
+    State& st = *st_;
     const Particles& p = water_.pool.particles;
     double sum = 0.0;
     float mx = 0.0f;
     size_t cnt = 0;
     for (size_t i = 0; i < p.size(); ++i) {
         if (!p.active[i]) continue;
-        sum += std::max(density_[i], 0.0f);
-        mx = std::max(mx, density_[i]);
+        sum += std::max(st.density_[i], 0.0f);
+        mx = std::max(mx, st.density_[i]);
         ++cnt;
     }
     SolverCounters& counters = water_.pool.counters;

@@ -2,7 +2,7 @@
 // share of a poly6 kernel that lies under the terrain, by a quadrature over the
 // heightfield's triangles near the particle, and its gradient; the closed form for a
 // plane (pbf_wall_share) the tests check it against.
-#include <metariver/pbf_solver.h>
+#include "pbf_state.h"
 
 #include <algorithm>
 #include <cmath>
@@ -32,12 +32,11 @@ float pbf_wall_share(float distance, float h) {
     return (fh - wall_primitive(d, h * h)) / (2.0f * fh);
 }
 
-float PbfSolver::wall_share(const Vec3& x, Vec3& grad) const {
+float pbf_terrain_share(const Terrain& terrain, float kernel_radius, const Vec3& x, Vec3& grad) {
     grad = Vec3(0.0f);
-    const Terrain& terrain = water_.collider.terrain();
     const int w = terrain.columns(), r = terrain.rows();
     if (w < 2 || r < 2) return 0.0f;
-    const float h = pbf_.kernel_radius, h2 = h * h;
+    const float h = kernel_radius, h2 = h * h;
     const float s = terrain.area_scale();
     // The cells the kernel's footprint touches; nothing of the mesh there is higher than
     // their highest sample: nothing within h, no share.

@@ -1,0 +1,65 @@
+// The PBF solver's working state (include/metariver/pbf_solver.h declares it opaque):
+// the per-particle arrays of one step, the neighbour lists with the SIMD passes' caches,
+// the sleep counters, and the switches the twin tests turn (pbf_probe.h). Not part of
+// the library's API.
+#pragma once
+
+#include <metariver/pbf_solver.h>
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace mr {
+
+struct PbfSolver::State {
+    /// Sleeping, per slot: consecutive slow steps (saturating; asleep at
+    /// kSleepAfterSeconds' worth) and the exponential average of the velocity
+    /// (PbfDef::sleep_drift); reset when a slot is (re)activated or pushed awake.
+    struct Sleep final : SlotState {
+        std::vector<uint16_t> slow_steps, scratch_slow;
+        std::vector<Vec3> mean_velocity, scratch_mean;
+        void reset(size_t i) override {
+            slow_steps[i] = 0;
+            mean_velocity[i] = Vec3(0.0f);
+        }
+        void swap(size_t i, size_t j) override;
+        void permute(std::span<const uint32_t> perm) override;
+    };
+
+    Sleep sleep_;
+    float lattice_grad_sum_ = 1.0f;
+    std::vector<float> lambda_, density_;
+    std::vector<uint8_t> contact_;  ///< held by the terrain this step
+    /// Wall density, per particle of the step: the terrain's share and its gradient at
+    /// the predicted position `wall_at_` (each iteration extrapolates them linearly).
+    std::vector<float> wall_share_;
+    std::vector<Vec3> wall_grad_, wall_at_;
+    std::vector<Vec3> delta_, omega_;
+    NeighborLists pbf_lists_;
+    bool pbf_lists_on_ = true;
+    float pbf_list_skin_ = kPbfListSkin;
+    bool pbf_simd_on_ = true;  ///< the list passes with AVX2 where the CPU has it (pbf_simd.h)
+    /// Per list entry, W and the grad factor of the density pass (SIMD: W and the
+    /// gradient's x, y, z in 16-bit fixed point, pbf_simd.h).
+    std::vector<float> pair_w_, pair_g_;
+    std::array<std::vector<int16_t>, 3> pair_fixed_;
+
+    /// A solver's state (for the test probe, pbf_probe.h: a member type reaches the
+    /// solver's private members).
+    static State& of(PbfSolver& s) { return *s.st_; }
+    static const State& of(const PbfSolver& s) { return *s.st_; }
+};
+
+/// The terrain's share of a kernel of radius `h` centred at `x` (PbfDef::wall_density:
+/// the heightfield quadrature), in [0, 1], and its gradient w.r.t. x (into `grad`); 0
+/// (and grad 0) where no terrain is within h.
+float pbf_terrain_share(const Terrain& terrain, float h, const Vec3& x, Vec3& grad);
+
+/// Number density of every particle through the grid (after the cell sort: it reorders
+/// the particles) and by brute force over all active pairs: the twin tests compare them.
+void pbf_densities(ParticleWater& water, float kernel_radius, std::vector<float>& out);
+void pbf_densities_brute_force(const ParticleWater& water, float kernel_radius, std::vector<float>& out);
+
+}  // namespace mr
