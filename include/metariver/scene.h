@@ -51,23 +51,78 @@ struct RenderLookDef {
     bool flow_detail = true;
 };
 
+/// A scene. The member defaults ARE the built-in default scene (default_scene() returns
+/// SceneDef{}): a PBF river down the procedural valley. A disc source (radius 2.5 m,
+/// 1.5 m above the ground, inflow 3 m/s down: a lattice source that can deliver about
+/// 600 particles per second) at the head of the valley's main channel; the budget and
+/// the rate sized to the channel ("auto", docs/river.md, "Sizing"), the spacing sized to
+/// the terrain (0.5 m at 1 m per sample); the carved channel starts full; bed friction
+/// 0.002 per contact step, quadratic in speed; particles leaving over the terrain's
+/// edges return to the source. Two substeps of 1/120 s with 3 density iterations; the
+/// sparse poly6 field wraps them, the mesh is smoothed, foam is on. Code that means
+/// another solver sets every table it relies on (the presets do: scene_def.cpp).
 struct SceneDef {
     std::string name = "default";
     uint32_t seed = 1;  ///< particle spawn seed
-    SolverKind solver = SolverKind::Springs;  ///< a name in the SolverRegistry the Simulation is created with
-    TerrainSourceDef source;
-    TerrainDef terrain;
-    SpawnDef spawn;
-    SpringDef springs;
-    CollisionDef collision;
-    IntegratorDef integrator;
+    SolverKind solver = SolverKind::Pbf;  ///< a name in the SolverRegistry the Simulation is created with
+    TerrainSourceDef source{.kind = TerrainSource::Valley, .heightmap = {}, .width = 65, .height = 97, .seed = 7};
+    /// 1 m per sample (a small map stretched to 16 m: auto_area_scale), 24 m high; the
+    /// river's channel carved from the source to the outlet (condition "auto": a scene
+    /// without a continuous source and an edge sink keeps its heights; docs/river.md,
+    /// "Depressions").
+    TerrainDef terrain{.area_scale = 1.0f,
+                       .height_scale = 24.0f,
+                       .paper_row_orientation = true,
+                       .condition = TerrainCondition::Auto,
+                       .auto_area_scale = true};
+    /// The carved channel starts full (prefill): the river runs from the first frame
+    /// (docs/river.md, "Quadratic bed friction and a channel that starts full").
+    SpawnDef spawn{.count = kAutoCount,
+                   .center = Vec3(0.0f),
+                   .half_extent = Vec3(2.5f, 0.5f, 2.5f),
+                   .interval = 0,
+                   .initial_velocity = Vec3(0.0f, -3.0f, 0.0f),
+                   .auto_center = true,
+                   .auto_height = 1.5f,
+                   .auto_channel = true,
+                   .shape = SourceShape::Disc,
+                   .flow_rate = kAutoRate,
+                   .litres_per_particle = 0.0f,
+                   .prefill = true,
+                   .follow_ground = true};
+    /// Read by solver = springs only (the springs valley's soft springs).
+    SpringDef springs{.stiffness = 4.0f, .min_distance = 1.0f, .max_distance = 0.5f, .mode = SpringMode::Pairs};
+    /// Bed friction quadratic in speed (docs/river.md, "Quadratic bed friction ..."):
+    /// friction_speed measured best of 0, 1, 2, 3, 4 m/s over the failing maps.
+    CollisionDef collision{.mode = CollisionMode::Robust,
+                           .damping = 0.002f,
+                           .offset = 0.005f,
+                           .leaf_triangles = 8,
+                           .radius = 0.1f,
+                           .query = CollisionQuery::Heightfield,
+                           .friction_speed = 4.0f};
+    IntegratorDef integrator{.gravity = 9.82f, .fixed_dt = 0.0f, .substeps = 2};
     BulletDef bullet;  ///< solver = bullet only
-    PbfDef pbf;        ///< solver = pbf only
-    SinkDef sink;      ///< where water leaves (recycled to the source)
-    FieldDef field;
+    /// solver = pbf only. Sleeping, damping, the contact band and the wall density
+    /// "auto": off for the river, on for still water; a pool levels out before it sleeps
+    /// (a river does not sleep); the spacing sized to the terrain.
+    PbfDef pbf{.sleep_threshold = kAutoSleep,
+               .sleep_drift = kStillSleepDrift,
+               .damping = kAutoDamping,
+               .wall_density = kAutoWallDensity,
+               .contact_band = kAutoContactBand,
+               .auto_spacing = true};
+    SinkDef sink{.kind = SinkKind::Edges};  ///< where water leaves (recycled to the source)
+    FieldDef field{.kernel = FieldKernel::Poly6, .radius = 1.0f, .resolution = 3.0f, .bounds_offset = 1.0f, .threshold = 0.4f};
     bool surface = true;  ///< build the field and the surface every frame
-    SmoothingDef smoothing;  ///< [surface]: how the extracted mesh is smoothed (none in the paper's presets)
-    FoamDef foam;            ///< [foam]: diffuse spray, foam and bubbles (solver = pbf only; on in the default river)
+    /// [surface]: how the extracted mesh is smoothed (none in the paper's presets). The
+    /// default: as splashsurf does (feature-weighted Laplacian steps), in eight Chebyshev
+    /// steps and with its volume given back: still water flat, drops kept
+    /// (docs/rendering.md, "Surface smoothing").
+    SmoothingDef smoothing{.method = SmoothingMethod::Laplacian};
+    /// [foam]: diffuse spray, foam and bubbles (solver = pbf only; on in the default
+    /// river where it is fast or broken: docs/rendering.md, "Foam and spray").
+    FoamDef foam{.enabled = true};
     RenderLookDef render;    ///< [render]: drawing choices the renderer reads
     /// Metres, > 0 or 0: the PBF spacing the carved channel and the source's basin are
     /// sized for (carve_def); 0 = pbf.spacing. Not a scene-file key: pbf_river_scene()
@@ -75,8 +130,8 @@ struct SceneDef {
     float carve_spacing = 0.0f;
 };
 
-/// The built-in default scene: a PBF river on the procedural valley (source at the head
-/// of its main channel, outlet edges recycled to the source).
+/// The built-in default scene: SceneDef{} (a PBF river on the procedural valley, source
+/// at the head of its main channel, outlet edges recycled to the source).
 SceneDef default_scene();
 /// The default scene before the fluid solver: the paper's springs on the valley
 /// (preset "springs-valley"; river_scene(n) builds on it).

@@ -40,69 +40,35 @@ std::string seed_unused(SolverKind solver) {
 }
 
 SceneDef default_scene() {
-    // A PBF river down the procedural valley: a disc source (radius 2.5 m, 1.5 m above
-    // the ground, inflow 3 m/s down: a lattice source that can deliver about 600
-    // particles per second) at the head of the valley's main channel emits 4000
-    // particles (spacing 0.5 m, 125 litres each) at 420 per second (all active within
-    // 10 s); bed friction 0.002 per contact step (0.005 already holds the shallow river
-    // on its bed for a minute: docs/river.md); particles leaving over the terrain's edges return to the source. Two
-    // substeps of 1/120 s with 3 density iterations; the sparse poly6 field wraps them.
-    SceneDef d = springs_valley_scene();
-    d.solver = SolverKind::Pbf;
-    d.spawn = {.count = kAutoCount,
-               .center = Vec3(0.0f),
-               .half_extent = Vec3(2.5f, 0.5f, 2.5f),
-               .interval = 0,
-               .initial_velocity = Vec3(0.0f, -3.0f, 0.0f),
-               .auto_center = true,
-               .auto_height = 1.5f,
-               .auto_channel = true,
-               .shape = SourceShape::Disc,
-               .flow_rate = kAutoRate,
-               .litres_per_particle = 0.0f};
-    // The carved channel starts full: the river runs from the first frame (docs/river.md,
-    // "Quadratic bed friction and a channel that starts full"; a 95 m channel's front needed most of a 120 s run to reach its outlet).
-    d.spawn.prefill = true;
-    d.spawn.follow_ground = true;
+    return SceneDef{};  // the member defaults are the default river (scene.h)
+}
+
+namespace {
+/// The base of the springs presets: every table at its own type's defaults (the paper's
+/// springs solver), which each preset then fills; not the default river's values.
+SceneDef springs_base() {
+    SceneDef d;
+    d.solver = SolverKind::Springs;
+    d.source = TerrainSourceDef{};
+    d.terrain = TerrainDef{};
+    d.spawn = SpawnDef{};
+    d.springs = SpringDef{};
+    d.collision = CollisionDef{};
+    d.integrator = IntegratorDef{};
     d.pbf = PbfDef{};
-    // The river's channel is carved from the source to the outlet (a scene without a
-    // continuous source and an edge sink keeps its heights): docs/river.md, "Depressions".
-    d.terrain.condition = TerrainCondition::Auto;
-    // 1 m per sample, a small map stretched to 16 m (a 2 x 2 map would be 1 m wide).
-    d.terrain.auto_area_scale = true;
-    d.sink = SinkDef{.kind = SinkKind::Edges};
-    d.collision = {.mode = CollisionMode::Robust, .damping = 0.002f, .offset = 0.005f, .leaf_triangles = 8,
-                   .radius = 0.1f, .query = CollisionQuery::Heightfield,
-                   // Bed friction quadratic in speed (docs/river.md, "Quadratic bed friction ..."):
-                   // measured best of 0, 1, 2, 3, 4 m/s over the failing maps.
-                   .friction_speed = 4.0f};
-    d.integrator = {.gravity = 9.82f, .fixed_dt = 0.0f, .substeps = 2};
-    d.field = {.kernel = FieldKernel::Poly6,
-               .radius = 1.0f,
-               .resolution = 3.0f,
-               .bounds_offset = 1.0f,
-               .threshold = 0.4f};
-    // The mesh smoothed as splashsurf does (feature-weighted Laplacian steps), in eight
-    // Chebyshev steps and with its volume given back: still water flat, drops kept
-    // (docs/rendering.md, "Surface smoothing").
-    d.smoothing = SmoothingDef{.method = SmoothingMethod::Laplacian};
-    // Diffuse spray, foam and bubbles where the river is fast or broken (docs/rendering.md,
-    // "Foam and spray": their cost measured there).
-    d.foam.enabled = true;
-    d.pbf.sleep_threshold = kAutoSleep;  // off for the river, on for still water
-    d.pbf.damping = kAutoDamping;          // the same
-    d.pbf.contact_band = kAutoContactBand; // the same
-    d.pbf.wall_density = kAutoWallDensity; // the same
-    d.pbf.sleep_drift = kStillSleepDrift;  // a pool levels out before it sleeps (a river does not sleep)
-    d.pbf.auto_spacing = true;           // 0.5 m at 1 m per sample, sized to the terrain
+    d.sink = SinkDef{};
+    d.field = FieldDef{};
+    d.smoothing = SmoothingDef{};
+    d.foam = FoamDef{};
     return d;
 }
+}  // namespace
 
 SceneDef springs_valley_scene() {
     // A stream down the procedural valley with the paper's own physics: low damping so
     // particles slide along the channel instead of sticking, soft springs so they keep
     // apart, and a field threshold that wraps small groups of balls.
-    SceneDef d;
+    SceneDef d = springs_base();
     d.name = "default";  // the default scene before issue 5: preset "springs-valley"
     d.seed = 1;
     d.source = {.kind = TerrainSource::Valley, .heightmap = {}, .width = 65, .height = 97, .seed = 7};
@@ -129,7 +95,7 @@ namespace {
 
 /// The paper's FullVersion scene (own physics): strict17.png, 20 balls, springs off.
 SceneDef paper_full() {
-    SceneDef d;
+    SceneDef d = springs_base();
     d.name = "paper-full";
     d.seed = 1;
     d.source = {.kind = TerrainSource::File, .heightmap = {}, .width = 17, .height = 17, .seed = 1};
