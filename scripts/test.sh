@@ -1,13 +1,16 @@
 #!/usr/bin/env bash
 # Installs, builds and runs the whole test suite (what CI runs):
 #   1. the suite (preset default);
-#   2. the whole suite under AddressSanitizer + UBSan (preset asan, clang); the long
+#   2. the core alone (preset minimal: METARIVER_WITH_RENDER, _EXPORT and _BULLET off, so
+#      that the library builds and passes its tests without their dependencies), without
+#      the long runs (label long: the default suite has just run them on the same code);
+#   3. the whole suite under AddressSanitizer + UBSan (preset asan, clang); the long
 #      simulation runs (ctest label "long") at the preset's METARIVER_LONG_SCALE, a quarter
 #      of their particles or frames (at full size under ASan they alone would take about
 #      17 minutes; the default suite runs them at full size, preset asan-long-full too);
-#   3. every libFuzzer target, from the same asan build, for METARIVER_FUZZ_SECONDS each
+#   4. every libFuzzer target, from the same asan build, for METARIVER_FUZZ_SECONDS each
 #      (default 60; scripts/fuzz.sh), FUZZ_JOBS (default: the number of cores) at a time;
-#   4. the solver, field and surface tests under ThreadSanitizer (preset tsan).
+#   5. the solver, field and surface tests under ThreadSanitizer (preset tsan).
 # METARIVER_CI_QUICK=1 runs step 1 only. Any failure stops it with a non-zero exit.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -18,6 +21,11 @@ export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 step "the suite (preset default)"
 ctest --preset default
 [ "${METARIVER_CI_QUICK:-0}" = 1 ] && exit 0
+
+step "the core alone (preset minimal, label long excluded)"
+cmake --preset minimal >/dev/null
+cmake --build --preset minimal -j"$(nproc)"
+ctest --preset minimal
 
 step "ASan + UBSan suite (label long at METARIVER_LONG_SCALE, the preset's)"
 cmake --preset asan >/dev/null

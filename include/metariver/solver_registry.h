@@ -94,7 +94,7 @@ struct SolverEntry {
 /// entries, pass it on.
 class SolverRegistry {
 public:
-    /// springs, bullet, pbf (kBuiltinSolverNames' order). Built once, on first use.
+    /// springs, bullet, pbf (kBuiltinSolverNames' order; METARIVER_WITH_BULLET=OFF: no bullet). Built once, on first use.
     static const SolverRegistry& builtin();
 
     /// Adds a solver. Error (naming `solver`, nothing added) when its name is empty or

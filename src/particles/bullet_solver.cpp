@@ -43,14 +43,6 @@
 
 namespace mr {
 
-std::string_view to_string(BulletTerrainShape s) {
-    switch (s) {
-        case BulletTerrainShape::Mesh: return "mesh";
-        case BulletTerrainShape::Heightfield: return "heightfield";
-    }
-    return "?";
-}
-
 namespace {
 
 btVector3 bt(const Vec3& v) { return btVector3(v.x, v.y, v.z); }

@@ -12,6 +12,16 @@
 
 namespace mr {
 
+// [bullet]'s setting, here with the scene's other settings: a build without Bullet
+// (METARIVER_WITH_BULLET=OFF) still reads and writes scenes that hold it.
+std::string_view to_string(BulletTerrainShape s) {
+    switch (s) {
+        case BulletTerrainShape::Mesh: return "mesh";
+        case BulletTerrainShape::Heightfield: return "heightfield";
+    }
+    return "?";
+}
+
 std::string_view to_string(TerrainSource s) {
     switch (s) {
         case TerrainSource::Valley: return "valley";

@@ -1,9 +1,12 @@
 // The solver registry (include/metariver/solver_registry.h) and the three built-in
 // solvers: the only place that names the concrete solver types (their constructors and
-// the live edits' set_params).
+// the live edits' set_params). A build without Bullet (METARIVER_WITH_BULLET=OFF, which
+// defines METARIVER_NO_BULLET here) has springs and pbf only.
 #include <metariver/solver_registry.h>
 
+#ifndef METARIVER_NO_BULLET
 #include <metariver/bullet_solver.h>
+#endif
 #include <metariver/particles.h>
 #include <metariver/pbf_solver.h>
 #include <metariver/scene.h>
@@ -44,6 +47,7 @@ SolverEntry springs_entry() {
     };
 }
 
+#ifndef METARIVER_NO_BULLET
 SolverEntry bullet_entry() {
     return {
         .kind = SolverKind::Bullet,
@@ -60,6 +64,16 @@ SolverEntry bullet_entry() {
         .no_push = "moves its own bodies; push with pbf or springs",
         .no_sculpt = "holds its own copy of the terrain; sculpt with pbf or springs",
     };
+}
+#endif
+
+/// Why `kind` is missing from this build, after the registered names ("": it is not left out).
+std::string_view left_out(SolverKind kind) {
+#ifdef METARIVER_NO_BULLET
+    if (kind == SolverKind::Bullet) return "; this build leaves out the Bullet solver (METARIVER_WITH_BULLET=OFF)";
+#endif
+    (void)kind;
+    return "";
 }
 
 SolverEntry pbf_entry() {
@@ -85,7 +99,11 @@ const SolverRegistry& SolverRegistry::builtin() {
     static const SolverRegistry registry = [] {
         SolverRegistry r;
         // kBuiltinSolverNames' order.
+#ifndef METARIVER_NO_BULLET
         for (SolverEntry e : {springs_entry(), bullet_entry(), pbf_entry()}) (void)r.add(std::move(e));
+#else
+        for (SolverEntry e : {springs_entry(), pbf_entry()}) (void)r.add(std::move(e));
+#endif
         return r;
     }();
     return registry;
@@ -102,7 +120,7 @@ Status SolverRegistry::add(SolverEntry entry) {
 Result<const SolverEntry*> SolverRegistry::find(SolverKind kind) const {
     const auto it = std::find_if(entries_.begin(), entries_.end(), [&](const SolverEntry& e) { return e.kind == kind; });
     if (it == entries_.end())
-        return Error{fmt::format("solver: must be one of {} (got '{}')", names(), kind.name)};
+        return Error{fmt::format("solver: must be one of {} (got '{}'){}", names(), kind.name, left_out(kind))};
     return &*it;
 }
 

@@ -5,6 +5,7 @@
 #include <metariver/scene_keys.h>
 
 #include <gtest/gtest.h>
+#include <build_options.h>
 #include <glm/geometric.hpp>
 
 #include <algorithm>
@@ -175,6 +176,7 @@ TEST(Apply, EveryKeyIsAppliedOrAsksForARebuild) {
 // once from its defs, so what the solver reads needs a new Simulation; the field, the
 // surface and the renderer take an edit in place.
 TEST(Apply, ABulletSceneRebuildsForWhatItsSolverReads) {
+    if (!test::kWithBullet) GTEST_SKIP() << "this build leaves out Bullet (METARIVER_WITH_BULLET=OFF)";
     SceneDef d = preset("paper-engine").value();
     d.source.kind = TerrainSource::Strict;  // its procedural twin: no PNG needed
     auto sim = make(d, 10);

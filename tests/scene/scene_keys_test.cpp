@@ -373,6 +373,7 @@ std::vector<SceneDef> scenes_to_read() {
 TEST(SceneKeys, AKeyTheTableSaysASceneDoesNotReadChangesNothingInIt) {
     int checked = 0;
     for (SceneDef d : scenes_to_read()) {
+        if (!SolverRegistry::builtin().find(d.solver)) continue;  // a build without Bullet: no "bullet" scene runs
         if (d.source.kind == TerrainSource::File) d.source = {.kind = TerrainSource::Strict, .width = d.source.width, .height = d.source.height};
         const int frames = d.spawn.count > 1000 ? 2 : 12;  // the river emits (and prefills) from its first frame
         const uint64_t reference = run_fingerprint(d, frames);

@@ -7,11 +7,14 @@
 #include <metariver/scene_keys.h>
 
 #include <gtest/gtest.h>
+#include <build_options.h>
 
 #include <algorithm>
 #include <cmath>
 #include <memory>
 #include <string>
+#include <string_view>
+#include <vector>
 
 namespace mr {
 namespace {
@@ -160,16 +163,20 @@ TEST(SolverRegistry, ParticlesAndAHeightfieldMakeOneMesh) {
 }
 
 TEST(SolverRegistry, BuiltinHasTheThreeSolversInTheSolverKeysOrder) {
+    // All three; a build without Bullet (METARIVER_WITH_BULLET=OFF) the other two, in order.
     const SolverRegistry& r = SolverRegistry::builtin();
-    ASSERT_EQ(r.entries().size(), std::size(kBuiltinSolverNames));
+    std::vector<std::string_view> built;
+    for (const std::string_view n : kBuiltinSolverNames)
+        if (test::kWithBullet || n != SolverKind::Bullet.name) built.push_back(n);
+    ASSERT_EQ(r.entries().size(), built.size());
     const SceneKey* key = find_scene_key("solver");
     ASSERT_NE(key, nullptr);
-    ASSERT_EQ(key->choices.size(), r.entries().size());
+    ASSERT_EQ(key->choices.size(), std::size(kBuiltinSolverNames));  // scene files name all three
     for (size_t i = 0; i < r.entries().size(); ++i) {
         const SolverEntry& e = r.entries()[i];
-        EXPECT_EQ(e.kind.name, kBuiltinSolverNames[i]);
-        EXPECT_EQ(e.kind.name, key->choices[i]);
-        EXPECT_EQ(builtin_solver_index(e.kind), int(i));
+        EXPECT_EQ(e.kind.name, built[i]);
+        EXPECT_NE(std::find(key->choices.begin(), key->choices.end(), e.kind.name), key->choices.end());
+        EXPECT_EQ(kBuiltinSolverNames[size_t(builtin_solver_index(e.kind))], e.kind.name);
         EXPECT_TRUE(e.create);
         EXPECT_FALSE(e.help.empty());
         ASSERT_TRUE(r.find(e.kind).ok());
@@ -184,7 +191,11 @@ TEST(SolverRegistry, RefusesAnUnknownSolverNamingTheKnownOnes) {
     ASSERT_FALSE(r.ok());
     const std::string& m = r.error().message;
     EXPECT_EQ(m.rfind("solver: ", 0), 0u) << m;
-    for (const std::string_view n : {"lava", "springs", "bullet", "pbf"}) EXPECT_NE(m.find(n), std::string::npos) << m;
+    for (const std::string_view n : {"lava", "springs", "bullet", "pbf"}) {
+        if (test::kWithBullet || n != "bullet") {
+            EXPECT_NE(m.find(n), std::string::npos) << m;
+        }
+    }
     // The Simulation refuses a solver its registry does not hold, with the same message.
     auto sim = Simulation::create(lake_scene(kLake));
     ASSERT_FALSE(sim.ok());
@@ -207,7 +218,23 @@ TEST(SolverRegistry, RefusesANamelessOrRepeatedSolver) {
     const Status no_factory = r.add({.kind = kLake});
     ASSERT_FALSE(no_factory.ok());
     EXPECT_NE(no_factory.error().message.find("no factory"), std::string::npos);
-    EXPECT_EQ(r.entries().size(), std::size(kBuiltinSolverNames));  // nothing added
+    EXPECT_EQ(r.entries().size(), SolverRegistry::builtin().entries().size());  // nothing added
+}
+
+TEST(SolverRegistry, TheBulletScenesRunExactlyWhereTheBuildHasBullet) {
+    SceneDef d = preset("paper-engine").value();
+    d.source.kind = TerrainSource::Strict;  // its procedural twin: no PNG needed
+    auto sim = Simulation::create(d);
+    if (test::kWithBullet) {
+        ASSERT_TRUE(sim.ok()) << sim.error().message;
+        EXPECT_EQ((*sim)->solver_entry().kind, SolverKind::Bullet);
+        return;
+    }
+    // METARIVER_WITH_BULLET=OFF: refused, naming the solver, the ones there are and the option.
+    ASSERT_FALSE(sim.ok());
+    const std::string& m = sim.error().message;
+    for (const std::string_view s : {"solver: ", "'bullet'", "\"springs\", \"pbf\"", "METARIVER_WITH_BULLET=OFF"})
+        EXPECT_NE(m.find(s), std::string::npos) << m;
 }
 
 TEST(SolverRegistry, AnEntrysRefusalsNameItsSolver) {
