@@ -63,6 +63,7 @@ particles=$(echo "$out" | sed -n 's/^active particles: //p')
 triangles=$(echo "$out" | sed -n 's/^surface triangles: //p')
 [ "${particles:-0}" -gt 0 ] || fail "examples/cpp: no active particles"
 [ "${triangles:-0}" -gt 0 ] || fail "examples/cpp: no surface triangles"
+grep -q "^water at (.*): wet, " <<<"$out" || fail "examples/cpp: the water query found no water under the surface"
 
 if [ -f "$src/examples/c/CMakeLists.txt" ]; then
     need cc "the C compiler examples/c is built with"
