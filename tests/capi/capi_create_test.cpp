@@ -2,6 +2,7 @@
 // and of the terrain (a file, TOML text, a preset, a PNG, the caller's heights and their
 // order), the overrides, and each refusal with its code and a message naming the culprit.
 #include "capi_support.h"
+#include "build_options.h"
 
 #include <metariver/metariver.h>
 #include <metariver/scene.h>
@@ -263,6 +264,11 @@ TEST(CApi, ABulletWorldRefusesPushAndSculpt) {
     d.heights = h.data();
     d.columns = 17;
     d.rows = 17;
+    if (!mr::test::kWithBullet) {  // METARIVER_WITH_BULLET=OFF: the solver is refused, naming the option
+        const std::string off = create_error(d, MR_ERROR_SCENE);
+        EXPECT_TRUE(contains(off, "METARIVER_WITH_BULLET")) << off;
+        return;
+    }
     World world(d);
     ASSERT_EQ(world.status, MR_OK) << world.error.message;
     world.step(10);
