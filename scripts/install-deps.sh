@@ -16,7 +16,10 @@ pkgs=(cmake ninja-build g++ pkg-config
       clang libclang-rt-dev
       # export (docs/export.md): tinygltf, OpenVDB (its headers need Boost's), and the
       # outside readers the tests use: assimp, vdb_print
-      libtinygltf-dev libopenvdb-dev libboost-iostreams-dev libassimp-dev libopenvdb-tools)
+      libtinygltf-dev libopenvdb-dev libboost-iostreams-dev libassimp-dev libopenvdb-tools
+      # the Python package (python/: pip install, pytest) and the Blender add-on's
+      # headless test (blender/, docs/blender.md)
+      python3-numpy python3-pytest python3-pip python3-setuptools python3-wheel blender)
 # node + npm for the glTF validator, from Debian unless a node with npm is there already.
 if ! command -v npm >/dev/null 2>&1; then pkgs+=(nodejs npm); fi
 missing=()
