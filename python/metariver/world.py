@@ -181,7 +181,7 @@ class World:
         for name, value in (("area_scale", area_scale), ("height_scale", height_scale)):
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
                 raise ValueError(f"{name}: expected a finite number >= 0 (0: the scene's), got {value!r}")
-        if not isinstance(threads, int) or threads < 0:
+        if not isinstance(threads, (int, np.integer)) or not 0 <= threads <= 2**31 - 1:
             raise ValueError(f"threads: expected an integer >= 0 (0: every core), got {threads!r}")
         desc = lib.mr_world_desc_default()
         desc.scene_file = _path_bytes("scene", scene)
@@ -198,7 +198,7 @@ class World:
             desc.rows, desc.columns = self._heights.shape
         desc.area_scale = float(area_scale)
         desc.height_scale = float(height_scale)
-        desc.threads = threads
+        desc.threads = int(threads)
         handle = ctypes.c_void_p()
         err = _capi.mr_error()
         status = lib.mr_world_create(ctypes.byref(desc), ctypes.byref(handle), ctypes.byref(err))
@@ -362,6 +362,8 @@ class World:
     def pour(self, center: Any, count: int) -> None:
         """Pours `count` (>= 1) particles at center (x, y, z); the source moves there."""
         c = _vec3("center", center)
+        if not isinstance(count, (int, np.integer)) or not 1 <= count <= 2**31 - 1:
+            raise ValueError(f"count: expected an integer in [1, 2147483647], got {count!r}")
         h = self._h()
         self._changed()
         self._check(_capi.lib().mr_world_pour(h, f32p(c), int(count)))

@@ -238,3 +238,28 @@ def test_threads_1_and_2_give_the_same_river(heights):
     np.testing.assert_array_equal(p1.velocities, p2.velocities)
     np.testing.assert_array_equal(s1.vertices, s2.vertices)
     np.testing.assert_array_equal(s1.indices, s2.indices)
+
+
+def test_float32_heights_and_single_point_queries(world):
+    with metariver.World(heights=valley(20, 16).astype(np.float32), toml=SMALL) as w:
+        assert (w.terrain.columns, w.terrain.rows) == (16, 20)
+    one = world.sample([20.0, 30.0])
+    assert one.shape == () and one.dtype == metariver.WATER_SAMPLE_DTYPE
+    assert world.velocity_at([20.0, 5.0, 30.0]).shape == (3,)
+    with pytest.raises(ValueError, match="count"):
+        world.pour([20.0, 12.0, 10.0], 0)
+
+
+def test_without_a_library_the_error_says_what_to_do(tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if k != "METARIVER_LIBRARY"}
+    env["PYTHONPATH"] = str(REPO / "python")
+    code = "import metariver\ntry:\n    metariver.World()\nexcept metariver.Error as e:\n    print(e)\n"
+    out = subprocess.run([sys.executable, "-c", code], env=env, cwd=tmp_path, capture_output=True, text=True)
+    assert "METARIVER_LIBRARY" in out.stdout and "pip install" in out.stdout, out.stdout + out.stderr
+    env["METARIVER_LIBRARY"] = str(tmp_path / "nope.so")
+    out = subprocess.run([sys.executable, "-c", code], env=env, cwd=tmp_path, capture_output=True, text=True)
+    assert "nope.so" in out.stdout and "no such file" in out.stdout, out.stdout + out.stderr
