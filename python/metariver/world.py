@@ -316,11 +316,12 @@ class World:
         """The resolved scene as TOML text (what `metariver scene` prints)."""
         h, lib = self._h(), _capi.lib()
         length = ctypes.c_size_t()
-        status = lib.mr_world_scene_toml(h, None, 0, ctypes.byref(length))
-        if status not in (0, 6):
-            self._check(status)
-        buf = ctypes.create_string_buffer(length.value + 1)
-        self._check(lib.mr_world_scene_toml(h, buf, len(buf), ctypes.byref(length)))
+        buf = ctypes.create_string_buffer(1 << 16)  # one call for a usual scene (~33 KB)
+        status = lib.mr_world_scene_toml(h, buf, len(buf), ctypes.byref(length))
+        if status == 6:  # MR_ERROR_BUFFER_TOO_SMALL: length says how much
+            buf = ctypes.create_string_buffer(length.value + 1)
+            status = lib.mr_world_scene_toml(h, buf, len(buf), ctypes.byref(length))
+        self._check(status)
         return buf.value.decode()
 
     @property
