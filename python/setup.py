@@ -3,7 +3,8 @@
 The library comes from METARIVER_LIBRARY when that names a built libmetariver.so (copied,
 so a test that already built it does not build it twice), else from a CMake build of the
 repository this folder sits in (only the shared library target, without render, export,
-tests and bench), in build/python-wheel of the repository. Offline:
+tests and bench; METARIVER_BUILD_TYPE, default RelWithDebInfo), in build/python-wheel of
+the repository. Offline:
     /usr/bin/python3 -m pip install --no-build-isolation --no-deps .
 """
 from __future__ import annotations
@@ -42,7 +43,9 @@ def built_library() -> Path:
             raise RuntimeError(f"METARIVER_LIBRARY={given}: no such file (unset it to build the library with CMake)")
         return path
     build = ROOT / "build" / "python-wheel"
-    configure = ["cmake", "-S", str(ROOT), "-B", str(build), "-DCMAKE_BUILD_TYPE=Release",
+    # the project's default build type (its compile lines, so a shared ccache serves them)
+    build_type = os.environ.get("METARIVER_BUILD_TYPE", "RelWithDebInfo")
+    configure = ["cmake", "-S", str(ROOT), "-B", str(build), f"-DCMAKE_BUILD_TYPE={build_type}",
                  "-DMETARIVER_WITH_RENDER=OFF", "-DMETARIVER_WITH_EXPORT=OFF",
                  "-DMETARIVER_BUILD_TESTS=OFF", "-DMETARIVER_BUILD_BENCH=OFF"]
     if shutil.which("ninja"):
