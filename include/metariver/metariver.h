@@ -69,7 +69,7 @@ typedef struct mr_world_desc {
     int32_t columns, rows;     /* samples along x and z, [2, 4097], when heights is set */
     float area_scale;          /* metres between samples; 0: the scene's */
     float height_scale;        /* metres for a height of 1; 0: the scene's */
-    int32_t threads;           /* the most threads the world's work uses, [0, 4096]; 0: every core */
+    int32_t threads;           /* the most threads the world's work uses, [0, 1024]; 0: every core */
 } mr_world_desc;
 
 MR_API mr_world_desc mr_world_desc_default(void);

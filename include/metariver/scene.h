@@ -3,6 +3,7 @@
 // Simulation that owns terrain, particles, solver, field and surface.
 #pragma once
 
+#include <metariver/bodies.h>
 #include <metariver/bullet_solver.h>
 #include <metariver/core.h>
 #include <metariver/drainage.h>
@@ -124,6 +125,8 @@ struct SceneDef {
     /// river where it is fast or broken: docs/rendering.md, "Foam and spray").
     FoamDef foam{.enabled = true};
     RenderLookDef render;    ///< [render]: drawing choices the renderer reads
+    /// [[bodies]]: rigid bodies in the water (bodies.h), at most kMaxBodies; solver = pbf only.
+    std::vector<BodyDef> bodies;
     /// Metres, > 0 or 0: the PBF spacing the carved channel and the source's basin are
     /// sized for (carve_def); 0 = pbf.spacing. Not a scene-file key: pbf_river_scene()
     /// sets it to keep the default river's terrain while it refines the spacing.
@@ -463,6 +466,18 @@ public:
     /// or a radius that is not finite and > 0,
     /// or a velocity that is not finite. Returns how many particles it pushed.
     Result<size_t> push(const Vec3& center, float radius, const Vec3& velocity);
+    /// Bodies (bodies.h): adds one body live; its id is stable for this Simulation. Error
+    /// naming the BodyDef field (as its scene key, "bodies.density", ...) for a bad value,
+    /// a mesh file that cannot be read, more than kMaxBodies, or a solver without bodies.
+    Result<uint32_t> add_body(const BodyDef& body);
+    /// Removes a body; error naming `id` when there is none.
+    Status remove_body(uint32_t id);
+    /// Moves a body (a drag, a throw): its centre of mass to `position`, its orientation,
+    /// and its velocity and angular velocity; error naming `id` or the non-finite value.
+    Status set_body_motion(uint32_t id, const Vec3& position, const glm::quat& orientation, const Vec3& velocity,
+                           const Vec3& angular_velocity);
+    /// The bodies after the latest frame, in the order they were added.
+    std::span<const BodyState> bodies() const;
 
     const SceneDef& def() const;
     const Terrain& terrain() const;

@@ -5,12 +5,14 @@
 // Simulation::view() makes one; any producer of these types can.
 #pragma once
 
+#include <metariver/bodies.h>
 #include <metariver/foam.h>
 #include <metariver/particles.h>
 #include <metariver/surface.h>
 #include <metariver/terrain.h>
 
 #include <cstdint>
+#include <span>
 
 namespace mr {
 
@@ -24,6 +26,8 @@ struct SceneView {
     /// Metres: the particles' neighbourhood for the surface's velocities (flow_radius in
     /// scene.h); 0 gives every vertex velocity 0.
     float flow_radius = 0.0f;
+    /// The rigid bodies in the water (their meshes and transforms); empty: none.
+    std::span<const BodyState> bodies;
     /// Who made the view and at which of its frames: a reader that saw the same owner
     /// at the same frame has nothing new to read.
     const void* owner = nullptr;

@@ -26,6 +26,9 @@ struct SolverCounters {
     uint64_t guarded = 0;         ///< robust mode: particle-steps the heightfield guard had to lift (each one also tunneled)
     uint64_t emitted = 0;         ///< particles emitted by a flow-rate source (activations and recycles)
     uint64_t sunk = 0;            ///< particles taken out by a sink (recycled to the source)
+    /// Particle-steps ending inside a rigid body (bodies.h), counted after the coupling's
+    /// response and before any correction pushes them out (as tunneled is for the terrain).
+    uint64_t inside_bodies = 0;
     // Latest step's state (not cumulative):
     float density_error_mean = 0.0f;  ///< PBF: mean over active particles of max(rho/rho0 - 1, 0)
     float density_error_max = 0.0f;   ///< PBF: max of rho/rho0 - 1

@@ -33,9 +33,9 @@ namespace {
 /// Largest scales the desc takes, metres (the CLI's --area-scale and --height-scale).
 constexpr double kMaxAreaScale = 1e4;
 constexpr double kMaxHeightScale = 1e5;
-/// Most threads a world's arena takes: TBB sizes an arena's slots by it (a million threads
-/// asked held 540 MB before any work).
-constexpr int kMaxThreads = 4096;
+/// Most threads a world's arena takes, the Simulation's own bound: TBB sizes an arena's
+/// slots by it (a million threads asked held 540 MB before any work).
+constexpr int kMaxThreads = mr::Simulation::kMaxThreads;
 
 /// A refusal during creation: the code and the message for mr_error.
 struct Refusal {

@@ -218,7 +218,7 @@ TEST(CApi, CreationRefusalsNameTheCulprit) {
     EXPECT_TRUE(contains(create_error(d, MR_ERROR_INVALID_ARGUMENT), "threads"));
     d.threads = 1000000;
     const std::string threads = create_error(d, MR_ERROR_INVALID_ARGUMENT);
-    EXPECT_TRUE(contains(threads, "threads") && contains(threads, "[0, 4096]")) << threads;
+    EXPECT_TRUE(contains(threads, "threads") && contains(threads, "[0, 1024]")) << threads;
     d = def;
     d.area_scale = -1.0f;
     EXPECT_TRUE(contains(create_error(d, MR_ERROR_INVALID_ARGUMENT), "area_scale"));
