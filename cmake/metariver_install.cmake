@@ -19,7 +19,7 @@ include(CMakePackageConfigHelpers)
 # its component cannot see.
 set(METARIVER_CORE_HEADERS
   metariver.h water_query.h bodies.h core.h terrain.h drainage.h particles.h checkpoints.h emitters.h
-  neighbor_grid.h solver.h solver_parts.h solver_registry.h pbf_solver.h spring_solver.h
+  neighbor_grid.h solver.h solver_parts.h solver_registry.h pbf_solver.h spring_solver.h swe_solver.h
   bullet_solver.h foam.h field.h sparse_field.h surface.h scene.h scene_keys.h scene_view.h io.h)
 set(METARIVER_RENDER_HEADERS render.h gl_context.h gpu_pbf.h gpu_field.h)
 set(METARIVER_EXPORT_HEADERS export.h)
@@ -83,7 +83,7 @@ endfunction()
 # The core: every object of its layers (and of mr_capi, the C API, once it exists). The
 # layers are linked too, for their private dependencies (TBB, fmt, toml++, libturbojpeg,
 # Bullet): their objects are all in the library already, so no member is taken twice.
-set(_mr_core_layers mr_stb mr_terrain mr_particles mr_field mr_surface mr_scene mr_io)
+set(_mr_core_layers mr_stb mr_terrain mr_particles mr_field mr_surface mr_swe mr_scene mr_io)
 if(METARIVER_WITH_BULLET)
   list(APPEND _mr_core_layers mr_bullet)
 endif()

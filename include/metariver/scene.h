@@ -14,6 +14,7 @@
 #include <metariver/scene_view.h>
 #include <metariver/solver_registry.h>
 #include <metariver/surface.h>
+#include <metariver/swe_solver.h>
 #include <metariver/terrain.h>
 
 #include <array>
@@ -104,6 +105,7 @@ struct SceneDef {
                            .friction_speed = 4.0f};
     IntegratorDef integrator{.gravity = 9.82f, .fixed_dt = 0.0f, .substeps = 2};
     BulletDef bullet;  ///< solver = bullet only
+    SweDef swe;        ///< [swe]: solver = swe only
     /// solver = pbf only. Sleeping, damping, the contact band and the wall density
     /// "auto": off for the river, on for still water; a pool levels out before it sleeps
     /// (a river does not sleep); the spacing sized to the terrain.

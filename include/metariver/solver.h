@@ -29,6 +29,8 @@ struct SolverCounters {
     /// Particle-steps ending inside a rigid body (bodies.h), counted after the coupling's
     /// response and before any correction pushes them out (as tunneled is for the terrain).
     uint64_t inside_bodies = 0;
+    uint64_t substeps = 0;      ///< heightfield solvers (swe): time steps taken under the CFL limit
+    uint64_t cell_updates = 0;  ///< heightfield solvers (swe): cells updated (wet spans, both stages), summed over steps
     // Latest step's state (not cumulative):
     float density_error_mean = 0.0f;  ///< PBF: mean over active particles of max(rho/rho0 - 1, 0)
     float density_error_max = 0.0f;   ///< PBF: max of rho/rho0 - 1

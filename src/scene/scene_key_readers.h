@@ -54,6 +54,10 @@ constexpr ReadIf kBulletSection{
     .holds = [](S d) { return d.solver == SolverKind::Bullet; },
     .refusal = [](F f) { return fmt::format("only solver = \"bullet\" reads [bullet] (this scene has {})", solver_is(f.def)); },
     .scope = ReadScope::Section};
+constexpr ReadIf kSweSection{
+    .holds = [](S d) { return d.solver == SolverKind::Swe; },
+    .refusal = [](F f) { return fmt::format("only solver = \"swe\" reads [swe] (this scene has {})", solver_is(f.def)); },
+    .scope = ReadScope::Section};
 constexpr ReadIf kSpringsSection{.holds = [](S d) { return d.solver != SolverKind::Pbf; },
                                  .refusal = [](F) -> std::string {
                                      return "solver = \"pbf\" does not use springs (its density constraint keeps the "
@@ -293,6 +297,7 @@ MR_READERS(kSeed, "solver = springs, bullet", kSeedSolver);
 MR_READERS(kNotBullet, "solver = springs, pbf", kSinkBoxSolver);  // [[sink.box]]
 MR_READERS(kPbf, "solver = pbf", kPbfSection, kPbfOnly);
 MR_READERS(kBullet, "solver = bullet", kBulletSection);
+MR_READERS(kSwe, "solver = swe", kSweSection);
 MR_READERS(kFile, "terrain.source = file", kFileSource);
 MR_READERS(kProcedural, "a procedural terrain.source", kProceduralSource);
 MR_READERS(kValley, "terrain.source = valley", kProceduralSource, kValleySource);

@@ -99,6 +99,15 @@ constexpr KeyWords kCentreWords{kCentres, [](S d) { return d.spawn.auto_center ?
                                     d.spawn.auto_channel = i == 1;
                                 }};
 
+// [swe]: the source at the particle source's centre ("auto"), and no initial lake ("none").
+constexpr KeyWords kSweSourceWords{kAuto, [](S d) { return d.swe.auto_source ? 0 : -1; },
+                                   [](SceneDef& d, int i) { d.swe.auto_source = i == 0; }};
+constexpr std::string_view kNone[] = {"none"};
+constexpr KeyWords kLevelWords{kNone, [](S d) { return std::isnan(d.swe.initial_level) ? 0 : -1; },
+                               [](SceneDef& d, int i) {
+                                   if (i == 0) d.swe.initial_level = std::nanf("");
+                               }};
+
 using K = KeyType;
 using E = KeyEdit;
 const SceneKey kKeys[] = {
@@ -106,7 +115,8 @@ const SceneKey kKeys[] = {
     {.name = "name", .type = K::String, .readers = kAll, .edit = E::Live, .help = "Shown in reports.", .field = MR_FIELD(name)},
     {.name = "solver", .type = K::Choice, .choices = kBuiltinSolverNames, .readers = kAll, .edit = E::Rebuild,
      .help = "pbf: Position Based Fluids (the default river, docs/river.md); springs: the paper's own physics; bullet: its "
-             "engine physics (rigid spheres on Bullet, [bullet], docs/bullet.md).",
+             "engine physics (rigid spheres on Bullet, [bullet], docs/bullet.md); swe: shallow water on the terrain's grid, depth "
+             "and velocity per sample ([swe], docs/shallow-water.md).",
      .field = MR_FIELD(solver)},
     {.name = "seed", .type = K::Seed, .range = closed(0, 4294967295.0), .readers = kSeed, .edit = E::Rebuild,
      .help = "Particle spawn RNG seed (refused with solver = \"pbf\", as --seed is: its lattice source places every "
@@ -419,6 +429,25 @@ const SceneKey kKeys[] = {
      .help = "Bullet's deactivation of resting spheres (spheres with springs never sleep).", .field = MR_FIELD(bullet.sleep)},
     {.name = "bullet.springs", .type = K::Bool, .readers = kBullet, .edit = E::Rebuild,
      .help = "The paper's eq. 3 ([springs]) as external forces: its future work.", .field = MR_FIELD(bullet.springs)},
+    // [swe]
+    {.name = "swe.manning", .type = K::Float, .unit = "s/m^(1/3)", .range = closed(0, 1), .readers = kSwe, .edit = E::Solver,
+     .help = "Manning's n of the bed (0.03: a natural channel; 0: frictionless), applied semi-implicitly.", .field = MR_FIELD(swe.manning)},
+    {.name = "swe.cfl", .type = K::Float, .range = above(0, 0.5), .readers = kSwe, .edit = E::Solver,
+     .help = "Courant number of the adaptive time step (substeps per frame follow it).", .field = MR_FIELD(swe.cfl)},
+    {.name = "swe.dry_depth", .type = K::Float, .unit = "m", .range = closed(0, 1), .readers = kSwe, .edit = E::Solver,
+     .help = "Water shallower than this has no velocity (wetting and drying).", .field = MR_FIELD(swe.dry_depth)},
+    {.name = "swe.second_order", .type = K::Bool, .readers = kSwe, .edit = E::Solver,
+     .help = "MUSCL slopes with Heun's two stages; false: first order at half the cost.", .field = MR_FIELD(swe.second_order)},
+    {.name = "swe.discharge", .type = K::Float, .unit = "m^3/s", .range = closed(0, 1e6), .readers = kSwe, .edit = E::Solver,
+     .help = "The source's discharge at swe.source_center; 0: no source.", .field = MR_FIELD(swe.discharge)},
+    {.name = "swe.source_center", .type = K::Vec3, .unit = "m", .range = big_vec(-1e6), .words = kSweSourceWords, .readers = kSwe,
+     .edit = E::Solver, .help = "Where the source pours (x, z; y unused); auto: particles.spawn_center's resolved place.",
+     .field = MR_FIELD(swe.source_center)},
+    {.name = "swe.rain", .type = K::Float, .unit = "mm/h", .range = closed(0, 1e4), .readers = kSwe, .edit = E::Solver,
+     .help = "Rain over the whole map.", .field = MR_FIELD(swe.rain)},
+    {.name = "swe.initial_level", .type = K::Float, .unit = "m", .range = closed(-1e6, 1e6), .words = kLevelWords, .readers = kSwe,
+     .edit = E::Rebuild, .help = "A still lake up to this height at the start (every sample below it wet); none: the map starts dry.",
+     .field = MR_FIELD(swe.initial_level)},
 };
 #undef MR_FIELD
 
@@ -451,6 +480,8 @@ const SceneSection kSections[] = {
                "without bullet.springs (stiffness 0 is fine), integrator.substeps, [collision] (but its "
                "bvh_leaf_triangles), [pbf]; left out, the "
                "flow rate and sink are off and spawn_interval is the paper-engine preset's."},
+    {"swe", "Shallow water on the terrain's grid (docs/shallow-water.md): solver = \"swe\" only; the terrain's edges are "
+            "open (water leaves the map)."},
 };
 
 // [[particles.source]] and [[sink.box]]: the entries' keys (the name is the leaf).

@@ -11,6 +11,7 @@
 #include <metariver/pbf_solver.h>
 #include <metariver/scene.h>
 #include <metariver/spring_solver.h>
+#include <metariver/swe_solver.h>
 
 #include <fmt/format.h>
 
@@ -93,6 +94,19 @@ SolverEntry pbf_entry() {
     };
 }
 
+SolverEntry swe_entry() {
+    return {
+        .kind = SolverKind::Swe,
+        .help = "shallow water on the terrain's grid (Audusse et al. 2004, HLL; docs/shallow-water.md): depth and velocity per sample",
+        .create = [](const SceneDef& d, const Terrain& t, const Bvh&) -> std::unique_ptr<Solver> {
+            return std::make_unique<SweSolver>(t, d.swe, d.spawn.center, d.integrator.gravity);
+        },
+        .apply = edits<SweSolver>([](SweSolver& s, const SceneDef& d) { return s.set_params(d.swe, d.spawn.center); }),
+        .no_push = "has no particles to push (its water is a heightfield)",
+        .no_sculpt = "reads the bed once when it is made; sculpt with pbf or springs",
+    };
+}
+
 }  // namespace
 
 const SolverRegistry& SolverRegistry::builtin() {
@@ -100,9 +114,9 @@ const SolverRegistry& SolverRegistry::builtin() {
         SolverRegistry r;
         // kBuiltinSolverNames' order.
 #ifndef METARIVER_NO_BULLET
-        for (SolverEntry e : {springs_entry(), bullet_entry(), pbf_entry()}) (void)r.add(std::move(e));
+        for (SolverEntry e : {springs_entry(), bullet_entry(), pbf_entry(), swe_entry()}) (void)r.add(std::move(e));
 #else
-        for (SolverEntry e : {springs_entry(), pbf_entry()}) (void)r.add(std::move(e));
+        for (SolverEntry e : {springs_entry(), pbf_entry(), swe_entry()}) (void)r.add(std::move(e));
 #endif
         return r;
     }();

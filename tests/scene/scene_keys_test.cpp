@@ -141,12 +141,13 @@ std::vector<std::string> other_values(const SceneKey& k) {
 }
 
 TEST(SceneKeys, EveryKeyInTheTableIsReadIntoItsField) {
-    // Scenes in which the keys are read: the default river (PBF), the springs and Bullet
-    // solvers, a box sink, a file terrain, Taubin and uniform smoothing, no flow rate.
+    // Scenes in which the keys are read: the default river (PBF), the springs, Bullet and
+    // shallow-water solvers, a box sink, a file terrain, Taubin and uniform smoothing, no flow rate.
     const std::vector<FileLines> contexts = {
         {},
         {{"", {{"solver", "\"springs\""}}}},
         {{"", {{"solver", "\"bullet\""}}}},
+        {{"", {{"solver", "\"swe\""}}}},
         {{"sink", {{"kind", "\"box\""}, {"min", "[-10, -10, -10]"}, {"max", "[10, 10, 10]"}}}},
         {{"terrain", {{"source", "\"file\""}, {"heightmap", "\"map.png\""}}}},
         {{"surface", {{"method", "\"taubin\""}}}},

@@ -86,8 +86,9 @@ void lake_at_rest(double level, const char* name) {
                 if (w.depth(i, 0) > 0.0) dev = std::max(dev, std::abs(w.depth(i, 0) + w.bed(i, 0) - level));
                 q = std::max(q, std::abs(w.discharge_x(i, 0)));
             }
-            fmt::print("| {} ({} order) | {} | {:.1e} | - | {:.1e} | - | max abs q {:.1e} | | | |\n", name, second ? "2nd" : "1st",
-                       n, swashes::norms(eh, w.dx()).l1, swashes::norms(eh, w.dx()).linf, q);
+            const swashes::Norms nh = swashes::norms(eh, w.dx());
+            fmt::print("| {} ({} order, 20 s) | {} | {:.1e} | {:.1e} | {:.1e} | - | - | - | {:.1e} | - |\n", name,
+                       second ? "2nd" : "1st", n, nh.l1, nh.l2, nh.linf, q);
             // Round-off: a few ulps of the 2 m level per step, over hundreds of steps.
             EXPECT_LT(dev, 1e-12) << name << " n=" << n;
             EXPECT_LT(q, 1e-12) << name << " n=" << n;
@@ -141,8 +142,8 @@ TEST(Swashes, StokerDamBreakOnAWetBedConverges) {
 
 TEST(Swashes, RitterDamBreakOnADryBedConverges) {
     const std::vector<double> o = report("Ritter dam break (dry bed)", dam_break(swashes::Ritter{}), true);
-    // The dry front (h ~ (x_B - x)^2) bounds the order below 1.
-    for (double v : o) EXPECT_GT(v, 0.5);
+    // The dry front (h ~ (x_B - x)^2, a kink in h) bounds the order by 1 (0.96-0.99 here).
+    for (double v : o) EXPECT_GT(v, 0.7);
 }
 
 namespace {
@@ -166,12 +167,12 @@ void steady_bump(const char* name, double q, Edge east, const std::function<doub
 
 TEST(Swashes, SubcriticalFlowOverABumpConverges) {
     steady_bump("steady flow over a bump, subcritical", 4.42, {EdgeKind::Depth, 2.0},
-                [](double x) { return swashes::bump_subcritical(x); }, 1.0);
+                [](double x) { return swashes::bump_subcritical(x); }, 1.5);  // smooth: second order (1.95 here)
 }
 
 TEST(Swashes, TranscriticalFlowOverABumpConverges) {
     steady_bump("steady flow over a bump, transcritical", 1.53, {EdgeKind::Open},
-                [](double x) { return swashes::bump_transcritical(x); }, 0.8);
+                [](double x) { return swashes::bump_transcritical(x); }, 1.3);  // the limiter clips at the critical point (1.65-1.79 here)
 }
 
 TEST(Swashes, ThackerPlanarSurfaceInAParaboloidConverges) {
@@ -207,6 +208,6 @@ TEST(Swashes, ThackerPlanarSurfaceInAParaboloidConverges) {
         EXPECT_EQ(w.balance().outflow, 0.0);
     }
     const std::vector<double> o = report("Thacker planar surface (2D, one period)", rows, true);
-    // Wetting and drying: the shoreline's cells bound the order near 1.
-    for (double v : o) EXPECT_GT(v, 0.6);
+    // Wetting and drying: the shoreline's cells pull the order from 2 towards 1 (1.47-1.56 here).
+    for (double v : o) EXPECT_GT(v, 1.0);
 }

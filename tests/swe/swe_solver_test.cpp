@@ -1,0 +1,107 @@
+// The "swe" solver at scene level: made by the registry from a scene, its water a
+// heightfield the Simulation meshes, its [swe] keys read and checked, its mass balance on a
+// real terrain, a lake at rest on a terrain staying at rest.
+#include <metariver/scene.h>
+#include <metariver/scene_keys.h>
+#include <metariver/swe_solver.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace mr {
+namespace {
+
+SceneDef swe_scene(float discharge) {
+    SceneDef d = default_scene();
+    d.solver = SolverKind::Swe;
+    d.swe.discharge = discharge;
+    return d;
+}
+
+TEST(SweSolver, ASourceOnTheValleyFillsCellsTheSimulationMeshes) {
+    auto sim = Simulation::create(swe_scene(2.0f));
+    ASSERT_TRUE(sim.ok()) << sim.error().message;
+    Simulation& s = *sim.value();
+    EXPECT_EQ(s.solver_entry().kind, SolverKind::Swe);
+    for (int f = 0; f < 120; ++f) s.step(1.0f / 60.0f);
+    const HeightfieldWater* w = s.heightfield();
+    ASSERT_NE(w, nullptr);
+    const size_t wet = static_cast<size_t>(std::count_if(w->depth.begin(), w->depth.end(), [](float h) { return h > 1e-3f; }));
+    EXPECT_GT(wet, 10u);
+    EXPECT_LT(wet, w->size());
+    EXPECT_GT(s.surface().triangle_count(), 0u);
+    EXPECT_GE(s.counters().substeps, 120u);  // at least one step a frame
+    EXPECT_GT(s.counters().cell_updates, 0u);
+    EXPECT_EQ(s.particles().size(), 0u);
+}
+
+TEST(SweSolver, MassBalanceOnTheValleyWithRain) {
+    auto sim = Simulation::create(swe_scene(0.0f));
+    ASSERT_TRUE(sim.ok()) << sim.error().message;
+    SweDef def;
+    def.discharge = 5.0f;
+    def.rain = 100.0f;
+    SweSolver solver(sim.value()->terrain(), def, sim.value()->def().spawn.center);
+    for (int f = 0; f < 600; ++f) solver.step_frame(1.0f / 60.0f);
+    const SweBalance b = solver.balance();
+    EXPECT_NEAR(b.inflow, 5.0 * 600.0 * double(1.0f / 60.0f), 1e-9);  // 600 frames of 5 m^3/s
+    EXPECT_GT(b.rain, 0.0);
+    EXPECT_GT(b.stored, 0.0);
+    // inflow + rain - outflow - stored, relative to what came in: the 1e-5 per
+    // minute, here to round-off of doubles.
+    EXPECT_LT(std::abs(b.error()), 1e-9 * (b.inflow + b.rain));
+}
+
+TEST(SweSolver, ALakeAtRestOnTheBowlStaysAtRest) {
+    SceneDef d = preset("paper-bowl").value();
+    auto sim = Simulation::create(d);
+    ASSERT_TRUE(sim.ok()) << sim.error().message;
+    const Terrain& t = sim.value()->terrain();
+    const float lo = t.mesh_bounds().min.y, hi = t.mesh_bounds().max.y;
+    SweDef def;
+    def.initial_level = lo + 0.3f * (hi - lo);
+    SweSolver solver(t, def, Vec3(0.0f));
+    const std::vector<float> before = solver.water_heightfield()->depth;
+    ASSERT_GT(std::count_if(before.begin(), before.end(), [](float h) { return h > 0.0f; }), 0);
+    for (int f = 0; f < 120; ++f) solver.step_frame(1.0f / 60.0f);
+    const HeightfieldWater& w = *solver.water_heightfield();
+    float dev = 0.0f, speed = 0.0f;
+    for (size_t k = 0; k < w.size(); ++k) {
+        dev = std::max(dev, std::abs(w.depth[k] - before[k]));
+        speed = std::max(speed, glm::length(w.velocity[k]));
+    }
+    // Well balanced: the lake's depth is the float of a double unchanged to round-off.
+    EXPECT_LT(dev, 1e-5f);
+    EXPECT_LT(speed, 1e-6f);
+    EXPECT_LT(std::abs(solver.balance().error()), 1e-9 * solver.balance().initial);
+}
+
+TEST(SweSolver, SweKeysAreReadByTheSweSolverOnlyAndRangeChecked) {
+    const std::string ok = "solver = \"swe\"\n[swe]\nmanning = 0.05\ndischarge = 3.5\nrain = 20\ninitial_level = \"none\"\n";
+    auto d = parse_scene_toml(ok, "ok.toml", default_scene());
+    ASSERT_TRUE(d.ok()) << d.error().message;
+    EXPECT_FLOAT_EQ(d.value().swe.manning, 0.05f);
+    EXPECT_FLOAT_EQ(d.value().swe.discharge, 3.5f);
+    EXPECT_TRUE(std::isnan(d.value().swe.initial_level));
+    EXPECT_TRUE(d.value().swe.auto_source);
+
+    auto pbf = parse_scene_toml("[swe]\nmanning = 0.05\n", "pbf.toml", default_scene());
+    ASSERT_FALSE(pbf.ok());
+    EXPECT_NE(pbf.error().message.find("swe"), std::string::npos) << pbf.error().message;
+
+    auto bad = parse_scene_toml("solver = \"swe\"\n[swe]\ncfl = 0.9\n", "bad.toml", default_scene());
+    ASSERT_FALSE(bad.ok());
+    EXPECT_NE(bad.error().message.find("swe.cfl"), std::string::npos) << bad.error().message;
+    EXPECT_NE(bad.error().message.find("0.5"), std::string::npos) << bad.error().message;
+
+    auto placed = parse_scene_toml("solver = \"swe\"\n[swe]\nsource_center = [3, 0, 4]\ninitial_level = 2.5\n", "p.toml", default_scene());
+    ASSERT_TRUE(placed.ok()) << placed.error().message;
+    EXPECT_FALSE(placed.value().swe.auto_source);
+    EXPECT_FLOAT_EQ(placed.value().swe.initial_level, 2.5f);
+}
+
+}  // namespace
+}  // namespace mr
