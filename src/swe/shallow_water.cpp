@@ -35,6 +35,8 @@ ShallowWater::ShallowWater(int nx, int ny, double dx, std::span<const double> be
     h_.assign(n, 0.0);
     hu_.assign(n, 0.0);
     hv_.assign(n, 0.0);
+    u_.assign(n, 0.0);
+    v_.assign(n, 0.0);
     for (auto& s : sx_) s.assign(n, 0.0);
     for (auto& s : sy_) s.assign(n, 0.0);
     fx_.assign((static_cast<size_t>(nx_) + 1) * ny_ * 4, 0.0);
@@ -61,10 +63,16 @@ void ShallowWater::set_state(int i, int j, double depth, double qx, double qy) {
     h_[k] = std::isfinite(depth) ? std::max(depth, 0.0) : 0.0;
     hu_[k] = h_[k] > 0.0 && std::isfinite(qx) ? qx : 0.0;
     hv_[k] = h_[k] > 0.0 && std::isfinite(qy) ? qy : 0.0;
+    refresh(k);
     if (h_[k] > 0.0) {
         wet_lo_[j] = std::min(wet_lo_[j], i);
         wet_hi_[j] = std::max(wet_hi_[j], i);
     }
+}
+
+void ShallowWater::refresh(size_t k) {
+    u_[k] = velocity(h_[k], hu_[k], def_.dry_depth);
+    v_[k] = velocity(h_[k], hv_[k], def_.dry_depth);
 }
 
 void ShallowWater::set_bed(int i, int j, double bed) {
@@ -128,6 +136,7 @@ void ShallowWater::fill_ghosts() {
             break;
         }
         }
+        refresh(g);
     };
     for (int j = 0; j < ny_; ++j) {
         ghost(at(-1, j), at(0, j), def_.west, hu_, hv_, 1.0);
@@ -159,11 +168,10 @@ void ShallowWater::update_spans() {
 }
 
 void ShallowWater::compute_slopes() {
-    std::vector<double>* q[4] = {&h_, nullptr, &hu_, &hv_};
     auto value = [&](int var, size_t k) {
         if (var == 0) return h_[k];
         if (var == 1) return h_[k] + z_[k];
-        return velocity(h_[k], (*q[var])[k], def_.dry_depth);
+        return var == 2 ? u_[k] : v_[k];
     };
     const size_t sn = stride_;
     for_rows(ny_, [&](int j) {
@@ -198,13 +206,12 @@ namespace {
 
 /// Cell k's reconstructed state on its side `side` (+1: towards +x or +y) along the axis
 /// whose slopes are `s` (h, eta, u, v) and whose normal velocity is u (x) or v (y).
-FaceState face_state(const std::vector<double>& z, const std::vector<double>& h, const std::vector<double>& hu,
-                     const std::vector<double>& hv, const std::vector<double> (&s)[4], size_t k, double side, bool y_axis,
-                     double dry) {
+FaceState face_state(const std::vector<double>& z, const std::vector<double>& h, const std::vector<double>& uc,
+                     const std::vector<double>& vc, const std::vector<double> (&s)[4], size_t k, double side, bool y_axis) {
     const double hf = h[k] + 0.5 * side * s[0][k];
     const double etaf = h[k] + z[k] + 0.5 * side * s[1][k];
-    const double u = velocity(h[k], hu[k], dry) + 0.5 * side * s[2][k];
-    const double v = velocity(h[k], hv[k], dry) + 0.5 * side * s[3][k];
+    const double u = uc[k] + 0.5 * side * s[2][k];
+    const double v = vc[k] + 0.5 * side * s[3][k];
     return y_axis ? FaceState{hf, v, u, etaf - hf} : FaceState{hf, u, v, etaf - hf};
 }
 
@@ -218,7 +225,7 @@ void put(std::vector<double>& faces, size_t f, const FaceFlux& flux) {
 }  // namespace
 
 void ShallowWater::flux_rows(double weight) {
-    const double g = def_.gravity, dry = def_.dry_depth;
+    const double g = def_.gravity;
     const size_t nfx = static_cast<size_t>(nx_) + 1;
     auto y_faces = [&](int j, int lo, int hi, int both_lo, int both_hi) {
         // Face row j (between rows j-1 and j) over [lo, hi]; only [both_lo, both_hi] can
@@ -229,8 +236,8 @@ void ShallowWater::flux_rows(double weight) {
                 put(fy_, f, {});
                 continue;
             }
-            const FaceState a = face_state(z_, h_, hu_, hv_, sy_, at(i, j - 1), 1.0, true, dry);
-            const FaceState b = face_state(z_, h_, hu_, hv_, sy_, at(i, j), -1.0, true, dry);
+            const FaceState a = face_state(z_, h_, u_, v_, sy_, at(i, j - 1), 1.0, true);
+            const FaceState b = face_state(z_, h_, u_, v_, sy_, at(i, j), -1.0, true);
             put(fy_, f, hydrostatic_flux(a, b, g));
         }
     };
@@ -238,8 +245,8 @@ void ShallowWater::flux_rows(double weight) {
         row_out_[j] = row_in_[j] = 0.0;
         if (hi_[j] >= lo_[j]) {
             for (int i = lo_[j]; i <= hi_[j] + 1; ++i) {
-                const FaceState a = face_state(z_, h_, hu_, hv_, sx_, at(i - 1, j), 1.0, false, dry);
-                const FaceState b = face_state(z_, h_, hu_, hv_, sx_, at(i, j), -1.0, false, dry);
+                const FaceState a = face_state(z_, h_, u_, v_, sx_, at(i - 1, j), 1.0, false);
+                const FaceState b = face_state(z_, h_, u_, v_, sx_, at(i, j), -1.0, false);
                 put(fx_, static_cast<size_t>(j) * nfx + i, hydrostatic_flux(a, b, g));
             }
         }
@@ -301,6 +308,7 @@ void ShallowWater::euler_stage(double dt, std::vector<double>& h, std::vector<do
             h[k] = hn;
             hu[k] = qx;
             hv[k] = qy;
+            if (&h == &h_) refresh(k);
         }
         row_clip_[j] += clip;
     });
@@ -323,6 +331,7 @@ void ShallowWater::finish_step(double dt) {
                 hu_[k] /= f;
                 hv_[k] /= f;
             }
+            refresh(k);
             if (h_[k] > 0.0) {
                 wlo = std::min(wlo, i);
                 whi = std::max(whi, i);
@@ -335,6 +344,7 @@ void ShallowWater::finish_step(double dt) {
     for (const PointSource& s : sources_) {
         if (s.i < 0 || s.j < 0 || s.i >= nx_ || s.j >= ny_ || !(s.discharge > 0.0)) continue;
         h_[at(s.i, s.j)] += s.discharge * dt / (dx_ * dx_);
+        refresh(at(s.i, s.j));
         balance_.inflow += s.discharge * dt;
         wet_lo_[s.j] = std::min(wet_lo_[s.j], s.i);
         wet_hi_[s.j] = std::max(wet_hi_[s.j], s.i);
@@ -371,6 +381,7 @@ double ShallowWater::step(double max_dt) {
             for (int i = lo_[j]; i <= hi_[j]; ++i) {
                 const size_t k = at(i, j);
                 if (h_[k] <= def_.dry_depth) hu_[k] = hv_[k] = 0.0;
+                refresh(k);
             }
         });
         euler_stage(dt, h_, hu_, hv_);
@@ -380,6 +391,7 @@ double ShallowWater::step(double max_dt) {
                 h_[k] = 0.5 * (h0_[k] + h_[k]);
                 hu_[k] = 0.5 * (hu0_[k] + hu_[k]);
                 hv_[k] = 0.5 * (hv0_[k] + hv_[k]);
+                refresh(k);
             }
         });
         cells *= 2;

@@ -118,6 +118,8 @@ private:
     void euler_stage(double dt, std::vector<double>& h, std::vector<double>& hu, std::vector<double>& hv);
     void flux_rows(double dt);
     void finish_step(double dt);
+    /// Cell k's velocity cache from its state (0 at or below the dry depth).
+    void refresh(size_t k);
 
     int nx_, ny_;
     double dx_;
@@ -125,6 +127,9 @@ private:
     ShallowWaterDef def_;
     double time_ = 0.0;
     std::vector<double> z_, h_, hu_, hv_;
+    // The velocity of every cell's current state (one division per change, not per read):
+    // refreshed wherever a state changes (the spans' updates, the ghosts, sources, set_state).
+    std::vector<double> u_, v_;
     // Second order: the state before the step (Heun) and the limited slopes per cell.
     std::vector<double> h0_, hu0_, hv0_;
     std::vector<double> sx_[4], sy_[4];  // h, eta, u, v
