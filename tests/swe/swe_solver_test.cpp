@@ -38,6 +38,26 @@ TEST(SweSolver, ASourceOnTheValleyFillsCellsTheSimulationMeshes) {
     EXPECT_EQ(s.particles().size(), 0u);
 }
 
+TEST(SweSolver, DischargeAndRainAreLiveEditsTheInitialLakeARebuild) {
+    auto sim = Simulation::create(swe_scene(1.0f));
+    ASSERT_TRUE(sim.ok()) << sim.error().message;
+    Simulation& s = *sim.value();
+    for (int f = 0; f < 30; ++f) s.step(1.0f / 60.0f);
+    SceneDef next = swe_scene(1.0f);  // the scene as written (def() holds the resolved values)
+    next.swe.discharge = 4.0f;
+    next.swe.rain = 10.0f;
+    auto r = s.apply(next);
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    EXPECT_TRUE(r.value().applied);
+    EXPECT_EQ(r.value().keys, (std::vector<std::string>{"swe.discharge", "swe.rain"}));
+    s.step(1.0f / 60.0f);  // runs on with the edited source
+    next.swe.initial_level = 3.0f;
+    r = s.apply(next);
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    EXPECT_FALSE(r.value().applied);
+    EXPECT_EQ(r.value().rebuild_key, "swe.initial_level");
+}
+
 TEST(SweSolver, MassBalanceOnTheValleyWithRain) {
     auto sim = Simulation::create(swe_scene(0.0f));
     ASSERT_TRUE(sim.ok()) << sim.error().message;
