@@ -168,20 +168,22 @@ void ShallowWater::update_spans() {
 }
 
 void ShallowWater::compute_slopes() {
-    auto value = [&](int var, size_t k) {
-        if (var == 0) return h_[k];
-        if (var == 1) return h_[k] + z_[k];
-        return var == 2 ? u_[k] : v_[k];
-    };
+    // Limited slopes of h, eta = h + z, u and v along x (neighbours k -/+ 1) and y (k -/+ stride).
     const size_t sn = stride_;
+    const double *h = h_.data(), *z = z_.data(), *u = u_.data(), *v = v_.data();
+    auto slope = [](double l, double c, double r) { return minmod(c - l, r - c); };
     for_rows(ny_, [&](int j) {
         if (hi_[j] < lo_[j]) return;
-        for (int i = std::max(lo_[j] - 1, 0); i <= std::min(hi_[j] + 1, nx_ - 1); ++i) {
+        const int i1 = std::min(hi_[j] + 1, nx_ - 1);
+        for (int i = std::max(lo_[j] - 1, 0); i <= i1; ++i) {
             const size_t k = at(i, j);
-            for (int var = 0; var < 4; ++var) {
-                const double c = value(var, k);
-                sx_[var][k] = minmod(c - value(var, k - 1), value(var, k + 1) - c);
-                sy_[var][k] = minmod(c - value(var, k - sn), value(var, k + sn) - c);
+            for (int axis = 0; axis < 2; ++axis) {
+                const size_t d = axis ? sn : 1;
+                std::vector<double>* out = axis ? sy_ : sx_;
+                out[0][k] = slope(h[k - d], h[k], h[k + d]);
+                out[1][k] = slope(h[k - d] + z[k - d], h[k] + z[k], h[k + d] + z[k + d]);
+                out[2][k] = slope(u[k - d], u[k], u[k + d]);
+                out[3][k] = slope(v[k - d], v[k], v[k + d]);
             }
         }
     });
@@ -307,8 +309,7 @@ void ShallowWater::euler_stage(double dt, std::vector<double>& h, std::vector<do
             }
             h[k] = hn;
             hu[k] = qx;
-            hv[k] = qy;
-            if (&h == &h_) refresh(k);
+            hv[k] = qy;  // velocities refreshed by the caller's next pass (Heun's or finish_step)
         }
         row_clip_[j] += clip;
     });
@@ -327,7 +328,7 @@ void ShallowWater::finish_step(double dt) {
             } else if (n2 > 0.0) {
                 // Semi-implicit Manning: q / (1 + dt g n^2 |u| / h^(4/3)).
                 const double speed = std::hypot(hu_[k], hv_[k]) / h_[k];
-                const double f = 1.0 + dt * g * n2 * speed / std::pow(h_[k], 4.0 / 3.0);
+                const double f = 1.0 + dt * g * n2 * speed / (h_[k] * std::cbrt(h_[k]));
                 hu_[k] /= f;
                 hv_[k] /= f;
             }
@@ -390,8 +391,7 @@ double ShallowWater::step(double max_dt) {
                 const size_t k = at(i, j);
                 h_[k] = 0.5 * (h0_[k] + h_[k]);
                 hu_[k] = 0.5 * (hu0_[k] + hu_[k]);
-                hv_[k] = 0.5 * (hv0_[k] + hv_[k]);
-                refresh(k);
+                hv_[k] = 0.5 * (hv0_[k] + hv_[k]);  // finish_step refreshes the velocities
             }
         });
         cells *= 2;

@@ -63,9 +63,10 @@ inline FaceFlux hydrostatic_flux(const FaceState& l, const FaceState& r, double 
     return {f[0], f[1] + 0.5 * g * (l.h * l.h - hl * hl), f[1] + 0.5 * g * (r.h * r.h - hr * hr), f[2]};
 }
 
+/// The smaller of a and b in magnitude when they share a sign, else 0 (branch-free: the
+/// half sum of their signs times the smaller magnitude).
 inline double minmod(double a, double b) {
-    if (a * b <= 0.0) return 0.0;
-    return std::abs(a) < std::abs(b) ? a : b;
+    return 0.5 * (std::copysign(1.0, a) + std::copysign(1.0, b)) * std::min(std::abs(a), std::abs(b));
 }
 
 }  // namespace mr::swe
