@@ -42,6 +42,11 @@ struct BodyDef {
     bool operator==(const BodyDef&) const = default;
 };
 
+/// Checks a BodyDef's values (not its mesh file): an error naming the key
+/// ("bodies.density: must be in (0, 100000] (got -1)"). Simulation::add_body checks the
+/// mesh file too.
+Status validate_body(const BodyDef& def);
+
 /// The triangles a body is drawn and exported with, in the body's own frame (centre of
 /// mass at the origin): generated for the primitives, the OBJ's for mesh shapes.
 struct BodyMesh {

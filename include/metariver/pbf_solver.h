@@ -4,6 +4,7 @@
 // confinement, sleeping; emission through the lattice sources.
 #pragma once
 
+#include <metariver/bodies.h>
 #include <metariver/particles.h>
 #include <metariver/solver_parts.h>
 
@@ -24,6 +25,14 @@ public:
     const PbfDef& def() const { return pbf_; }
     /// Rest number density (lattice sum of the poly6 kernel).
     float pbf_rest_density() const { return rest_density_; }
+
+    /// Rigid bodies two-way coupled with the water (bodies.h; src/particles/pbf_bodies.cpp):
+    /// the Simulation's add_body, remove_body, set_body_motion and bodies() (scene.h).
+    Result<uint32_t> add_body(const BodyDef& def);
+    Status remove_body(uint32_t id);
+    Status set_body_motion(uint32_t id, const Vec3& position, const glm::quat& orientation, const Vec3& velocity,
+                           const Vec3& angular_velocity);
+    std::span<const BodyState> bodies() const;
 
     /// One step of dt seconds (algorithm 1 of the paper; the stages in pbf.cpp).
     void step(float dt) override;
@@ -49,6 +58,11 @@ private:
     void density_pass(const Stage& s, const NeighborLists* nl, bool simd);
     void correction_pass(const Stage& s, const NeighborLists* nl, bool simd);
     void bed_friction(const Stage& s);
+    // The bodies' coupling (pbf_bodies.cpp).
+    void assign_bodies(const Stage& s);
+    void push_out_of_bodies(const Stage& s, bool into_velocity);
+    void react_on_bodies(float into_velocity_dt);
+    void count_inside_bodies(const Stage& s);
     ContactCounts collide(const Stage& s);
     void viscosity(const Stage& s);
     void xsph_simd(const Stage& s, const NeighborLists* nl);

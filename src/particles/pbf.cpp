@@ -198,16 +198,28 @@ void PbfSolver::step(float dt) {
                   .kc = pbf_simd::KernelConsts{k.h, k.h2, k.poly6, k.spiky},
                   .terrain = terrain,
                   .wall = terrain && pbf_.wall_density > 0.0f,
+                  .bodies = !st.bodies_.empty(),
+                  .body_mass = 1000.0f * pbf_.spacing * pbf_.spacing * pbf_.spacing,
                   .simd = st.pbf_simd_on_ && pbf_simd::available()};
     predict(s);
     bin();
+    if (s.bodies) assign_bodies(s);
     if (s.wall) measure_walls();
     for (int it = 0; it < pbf_.iterations; ++it) iterate(s);
     if (terrain && water_.collider.def().damping > 0.0f) bed_friction(s);
+    if (s.bodies) {  // the bodies' contacts, the water out of them again, their velocities
+        st.bodies_.contacts(water_.collider.terrain());
+        st.bodies_.velocities(s.dt, water_.integrator.gravity);
+        push_out_of_bodies(s, true);
+    }
     const ContactCounts contacts = collide(s);
     if (pbf_.xsph > 0.0f || pbf_.vorticity > 0.0f) viscosity(s);
     if (pbf_.damping > 0.0f) damp(s);
     sleep(s);
+    if (s.bodies) {
+        count_inside_bodies(s);
+        st.bodies_.update_states();
+    }
     water_.sinks.flag_exits(water_.pool.particles);
     record_density_error();
     water_.finish_step(contacts);
@@ -217,6 +229,7 @@ void PbfSolver::step(float dt) {
 void PbfSolver::predict(const Stage& s) {
     Particles& p = water_.pool.particles;
     const Vec3 g(0.0f, -water_.integrator.gravity, 0.0f);
+    if (s.bodies) st_->bodies_.predict(s.dt, water_.integrator.gravity);
     for_each_slot(p.size(), 1024, [&](size_t i) {
         if (!p.active[i]) return;
         p.velocity[i] += g * s.dt;
@@ -350,9 +363,14 @@ void PbfSolver::sleep(const Stage& s) {
     const float alpha = rule.drift_alpha;
     std::vector<uint16_t>& slow = st.sleep_.slow_steps;
     std::vector<Vec3>& mean = st.sleep_.mean_velocity;
+    const int32_t* const near_body = s.bodies ? st.body_of_.data() : nullptr;
     for_each_slot(p.size(), 1024, [&](size_t i) {
         if (!p.active[i]) return;
-        const bool asleep = slow[i] >= after;
+        bool asleep = slow[i] >= after;
+        if (asleep && near_body && near_body[i] >= 0) {  // a body took its place: awake
+            Vec3 n;
+            if (st.bodies_.all()[size_t(near_body[i])].sdf(p.last_position[i], n) < 0.0f) slow[i] = 0, asleep = false;
+        }
         bool drifting = false;
         if (pbf_.sleep_drift > 0.0f && !asleep) {
             mean[i] += alpha * (Vec3(p.velocity[i].x, 0.0f, p.velocity[i].z) - mean[i]);

@@ -37,6 +37,7 @@ void PbfSolver::iterate(const Stage& s) {
         if (s.terrain && collider.push_out(x, p.last_position[i])) st.contact_[i] = 1;
         p.position[i] = x;
     });
+    if (s.bodies) push_out_of_bodies(s, false);
 }
 
 // rho_i, C_i (with the terrain's extrapolated share) and lambda_i.
@@ -79,6 +80,12 @@ void PbfSolver::density_pass(const Stage& s, const NeighborLists* nl, bool simd)
         if (s.wall && (st.wall_share_[i] > 0.0f || st.wall_grad_[i] != Vec3(0.0f))) {  // the terrain's share, extrapolated
             C += std::clamp(st.wall_share_[i] + glm::dot(st.wall_grad_[i], xi - st.wall_at_[i]), 0.0f, 1.0f);
             gi += st.wall_grad_[i];
+        }
+        if (s.bodies && st.body_of_[i] >= 0) {  // the body's share (pbf_bodies.cpp)
+            Vec3 gb;
+            C += pbf_body_share(st.bodies_.all()[size_t(st.body_of_[i])], k.h, xi, gb);
+            gi += gb;
+            st.body_grad_[i] = gb;
         }
         sum_g2 += glm::dot(gi, gi);
         st.density_[i] = C;
@@ -128,8 +135,15 @@ void PbfSolver::correction_pass(const Stage& s, const NeighborLists* nl, bool si
         }
         dx *= inv_rho0;
         if (s.wall) dx += li * st.wall_grad_[i];  // off the terrain (lambda < 0 when compressed)
+        Vec3 off_body(0.0f);
+        if (s.bodies && st.body_of_[i] >= 0) {
+            off_body = li * st.body_grad_[i];
+            dx += off_body;
+        }
         const float len = glm::length(dx);
-        if (len > max_move) dx *= max_move / len;
+        const float cap = len > max_move ? max_move / len : 1.0f;
+        dx *= cap;
+        if (s.bodies) st.body_dx_[i] = cap * off_body;  // its reaction on the body
         st.delta_[i] = dx;
     });
 }

@@ -32,6 +32,9 @@ struct PbfProbe {
     static void set_simd(PbfSolver& s, bool on) { PbfSolver::State::of(s).pbf_simd_on_ = on; }
     /// The lists of the latest step (their builds() counts rebuilds too).
     static const NeighborLists& neighbor_lists(const PbfSolver& s) { return PbfSolver::State::of(s).pbf_lists_; }
+    /// The water meets the bodies (true, the default) or does not see them (false: the
+    /// bodies fall through it, and SolverCounters::inside_bodies counts what they cover).
+    static void set_body_coupling(PbfSolver& s, bool on) { PbfSolver::State::of(s).body_coupling_on_ = on; }
     /// The terrain's share of a kernel centred at `x` and its gradient (PbfDef::wall_density).
     static float wall_share(const PbfSolver& s, const Vec3& x, Vec3& grad) {
         return pbf_terrain_share(s.water().collider.terrain(), s.def().kernel_radius, x, grad);

@@ -46,6 +46,8 @@ struct PbfSolver::Stage {
     pbf_simd::KernelConsts kc;
     bool terrain;  ///< the terrain collides (CollisionMode other than None)
     bool wall;     ///< wall density (PbfDef::wall_density > 0, with a terrain)
+    bool bodies;   ///< rigid bodies are coupled (pbf_bodies.cpp)
+    float body_mass;  ///< kg of water a particle stands for (the bodies' reactions)
     bool simd;     ///< the list passes eight entries at a time (pbf_simd.h) where the CPU has AVX2
 };
 

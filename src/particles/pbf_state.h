@@ -6,6 +6,8 @@
 
 #include <metariver/pbf_solver.h>
 
+#include "rigid_bodies.h"
+
 #include <array>
 #include <cstdint>
 #include <span>
@@ -46,6 +48,13 @@ struct PbfSolver::State {
     std::vector<float> pair_w_, pair_g_;
     std::array<std::vector<int16_t>, 3> pair_fixed_;
 
+    /// Rigid bodies (pbf_bodies.cpp): per particle of the step, the body it meets (-1:
+    /// none) and the position corrections the body's terms gave it this iteration.
+    RigidBodies bodies_;
+    std::vector<int32_t> body_of_;
+    std::vector<Vec3> body_grad_, body_dx_;
+    bool body_coupling_on_ = true;  ///< off (test probe): the water does not see the bodies
+
     /// A solver's state (for the test probe, pbf_probe.h: a member type reaches the
     /// solver's private members).
     static State& of(PbfSolver& s) { return *s.st_; }
@@ -56,6 +65,10 @@ struct PbfSolver::State {
 /// the heightfield quadrature), in [0, 1], and its gradient w.r.t. x (into `grad`); 0
 /// (and grad 0) where no terrain is within h.
 float pbf_terrain_share(const Terrain& terrain, float h, const Vec3& x, Vec3& grad);
+
+/// A body's share of a kernel of radius `h` centred at `x` (pbf_bodies.cpp), in [0, 1],
+/// and its gradient w.r.t. x (into `grad`).
+float pbf_body_share(const RigidBody& body, float h, const Vec3& x, Vec3& grad);
 
 /// Number density of every particle through the grid (after the cell sort: it reorders
 /// the particles) and by brute force over all active pairs: the twin tests compare them.

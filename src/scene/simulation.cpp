@@ -342,6 +342,7 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, cons
     std::unique_ptr<Simulation> sim(new Simulation(
         std::make_unique<Impl>(resolved, std::move(terrain.value()), std::move(bvh.value()), sizing, *entry.value())));
     if (!sim->impl_->solver_) return Error{fmt::format("solver: \"{}\"'s factory built no solver", def.solver.name)};
+    if (auto b = sim->impl_->add_scene_bodies(resolved.bodies); !b) return b.error();
     if (auto v = validate_on_terrain(sim->def(), sim->terrain()); !v) return v.error();  // resolved source
     sim->impl_->requested_ = def;
     return sim;
@@ -470,6 +471,13 @@ uint64_t Simulation::Impl::state_hash() const {
     if (const HeightfieldWater* w = solver_->water_heightfield()) {
         mix(w->depth.data(), w->depth.size() * sizeof(float));
         mix(w->velocity.data(), w->velocity.size() * sizeof(Vec3));
+    }
+    for (const BodyState& b : bodies()) {  // none: the hash of the water alone, as before bodies
+        mix(&b.id, sizeof(b.id));
+        mix(&b.position, sizeof(b.position));
+        mix(&b.orientation, sizeof(b.orientation));
+        mix(&b.velocity, sizeof(b.velocity));
+        mix(&b.angular_velocity, sizeof(b.angular_velocity));
     }
     return h;
 }

@@ -104,6 +104,7 @@ SceneView Simulation::view() const {
                      .surface = &impl_->surface_,
                      .foam = f ? &f->particles() : nullptr,
                      .flow_radius = flow_radius(impl_->def_),
+                     .bodies = bodies(),
                      .owner = this,
                      .frame = frame()};
 }

@@ -1,5 +1,6 @@
 // Live changes to a running Simulation (issue 14): apply() for edited scenes, sculpt()
 // and restore() for the terrain, push() and move_source() for the water and its source.
+#include <metariver/pbf_solver.h>
 #include <metariver/scene.h>
 #include <metariver/scene_keys.h>
 
@@ -56,10 +57,22 @@ Result<ApplyResult> Simulation::Impl::apply(const SceneDef& next) {
     if (auto v = validate_on_terrain(edited, terrain_); !v) return v.error();
     // The solver takes the keys it reads by its registry entry's rule (the budget's key
     // asks for a rebuild above, so a refusal is not reached).
+    const bool bodies_changed = requested_.bodies != next.bodies;
+    if (bodies_changed) {  // checked before anything changes (replace_bodies checks again)
+        if (!next.bodies.empty() && !dynamic_cast<const PbfSolver*>(solver_.get()))
+            return Error{fmt::format("bodies: solver = \"{}\" has no bodies (use solver = \"pbf\")", solver_entry_.kind.name)};
+        for (const BodyDef& b : next.bodies)
+            if (auto v = validate_body(b); !v) return v.error();
+    }
     const bool taken = !solver_entry_.apply || solver_entry_.apply(*solver_, edited);
     if (!taken) {
         r.rebuild_key = "particles.count";
         return r;
+    }
+    if (bodies_changed) {
+        if (auto b = replace_bodies(next.bodies); !b) return b.error();
+        edited.bodies = next.bodies;
+        if (std::find(r.keys.begin(), r.keys.end(), "bodies") == r.keys.end()) r.keys.emplace_back("bodies");
     }
     const bool foam_changed = std::any_of(r.keys.begin(), r.keys.end(), [](const std::string& k) {
         return k.starts_with("foam.") || k == "forces.gravity" || k == "pbf.kernel_radius";

@@ -86,6 +86,10 @@ struct Simulation::Impl {
     float spray_fraction() const;
     float channel_coverage() const;
     uint64_t state_hash() const;
+    // Bodies (simulation_bodies.cpp).
+    Status add_scene_bodies(const std::vector<BodyDef>& bodies);
+    Status replace_bodies(const std::vector<BodyDef>& bodies);
+    std::span<const BodyState> bodies() const;
 
     void prefill_channel();
     float prefill_share() const;

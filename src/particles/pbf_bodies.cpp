@@ -1,0 +1,186 @@
+// Rigid bodies two-way coupled with the PBF water (bodies.h; the solver in rigid_bodies.h).
+//
+// A body is water at rest to the density constraint, as the terrain is with the wall
+// density (pbf.cpp): rho_i counts the share of particle i's kernel that lies inside the
+// body, with the body's surface taken as the plane at the body's signed distance d from
+// x_i (Koschier and Bender 2017's density maps in closed form for a half space: the
+// poly6 kernel's mass beyond a plane at distance d is
+//   share(d) = 315 / (256 h^9) int_d^h (h^2 - z^2)^4 dz,  1 at d = -h, 0 at d = h),
+// and grad C_i gains d share/dd times the body's normal. The correction lambda_i grad
+// pushes the particle off the body; the body takes the opposite position-level impulse,
+// m (the water a particle stands for, 1000 kg/m^3 x spacing^3) times the particle's
+// share of the correction, at the particle (Macklin et al. 2014's two-way coupling).
+// After each iteration a particle whose centre is inside a body is moved to its surface,
+// the body again taking the reaction. The pair sums are antisymmetric, so what holds a
+// body up is what the water under it weighs: buoyancy and drag are not modelled but what
+// the density constraint does.
+//
+// Honest count: after the whole step (contacts of the bodies included, sleeping too) a
+// particle whose centre is inside a body (signed distance < 0) is counted in
+// SolverCounters::inside_bodies, then moved out (the guard, as for the terrain).
+//
+// Each particle meets one body, the nearest one whose bounding sphere (+ h) holds it
+// (body_of_, per step after binning). The reactions are summed serially in slot order:
+// the same result for any thread count.
+#include <metariver/pbf_solver.h>
+
+#include "pbf_state.h"
+#include "pbf_stages.h"
+
+#include <cmath>
+
+namespace mr {
+
+namespace {
+
+/// Spacings off a body's surface where a particle pushed out of it is put.
+constexpr float kBodySkin = 1e-3f;
+
+/// The poly6 kernel's share beyond a plane at signed distance d, and d share / dd.
+struct BodyShare {
+    float h, h2, k;
+    explicit BodyShare(float radius) : h(radius), h2(radius * radius), k(315.0f / (256.0f * std::pow(radius, 9.0f))) {}
+    float F(float z) const {  // antiderivative of (h^2 - z^2)^4
+        const float z2 = z * z, h4 = h2 * h2;
+        return z * (h4 * h4 - z2 * (4.0f / 3.0f * h4 * h2 - z2 * (1.2f * h4 - z2 * (4.0f / 7.0f * h2 - z2 / 9.0f))));
+    }
+    float share(float d) const {
+        if (d >= h) return 0.0f;
+        if (d <= -h) return 1.0f;
+        return k * (F(h) - F(d));
+    }
+    float slope(float d) const {
+        if (d >= h || d <= -h) return 0.0f;
+        const float a = h2 - d * d;
+        return -k * (a * a) * (a * a);
+    }
+};
+
+}  // namespace
+
+Result<uint32_t> PbfSolver::add_body(const BodyDef& def) { return st_->bodies_.add(def); }
+Status PbfSolver::remove_body(uint32_t id) { return st_->bodies_.remove(id); }
+Status PbfSolver::set_body_motion(uint32_t id, const Vec3& position, const glm::quat& orientation, const Vec3& velocity,
+                                  const Vec3& angular_velocity) {
+    return st_->bodies_.set_motion(id, position, orientation, velocity, angular_velocity);
+}
+std::span<const BodyState> PbfSolver::bodies() const { return st_->bodies_.states(); }
+
+// Per particle of the step: the nearest body within reach (its signed distance), or -1.
+void PbfSolver::assign_bodies(const Stage& s) {
+    State& st = *st_;
+    const Particles& p = water_.pool.particles;
+    const std::vector<RigidBody>& bodies = st.bodies_.all();
+    const size_t n = p.size();
+    st.body_of_.assign(n, -1);
+    st.body_grad_.assign(n, Vec3(0.0f));
+    st.body_dx_.assign(n, Vec3(0.0f));
+    if (!st.body_coupling_on_) return;
+    const float reach = s.k.h + pbf_.spacing;  // the iterations move a particle at most 1.5 spacings
+    for_each_slot(n, 256, [&](size_t i) {
+        if (!p.active[i]) return;
+        const Vec3 x = p.position[i];
+        float best = reach;
+        for (size_t b = 0; b < bodies.size(); ++b) {
+            const RigidBody& body = bodies[b];
+            const Vec3 d = x - body.x;
+            const float r = body.shape.bound + reach;
+            if (glm::dot(d, d) > r * r) continue;
+            Vec3 nrm;
+            const float sd = body.sdf(x, nrm);
+            if (sd < best) best = sd, st.body_of_[i] = int32_t(b);
+        }
+    });
+}
+
+// The bodies' share of the kernels (the density pass's C and grad C), body_grad_.
+float pbf_body_share(const RigidBody& body, float h, const Vec3& x, Vec3& grad) {
+    const BodyShare bs(h);
+    Vec3 n;
+    const float d = body.sdf(x, n);
+    grad = bs.slope(d) * n;
+    return bs.share(d);
+}
+
+// After an iteration's corrections: a particle inside its body goes to the surface. At the
+// step's end (`into_velocity`, after the bodies' contacts and velocities) the reaction goes
+// into the bodies' velocities, not their poses: a body moved then would cover other water.
+void PbfSolver::push_out_of_bodies(const Stage& s, bool into_velocity) {
+    State& st = *st_;
+    Particles& p = water_.pool.particles;
+    const std::vector<RigidBody>& bodies = st.bodies_.all();
+    const float skin = kBodySkin * pbf_.spacing;
+    for_each_slot(p.size(), 256, [&](size_t i) {
+        const int32_t b = st.body_of_[i];
+        if (b < 0) return;
+        Vec3 n;
+        const float d = bodies[size_t(b)].sdf(p.position[i], n);
+        if (d >= 0.0f) return;
+        const Vec3 out = (skin - d) * n;  // to just off the surface: rounding keeps it outside
+        p.position[i] += out;
+        st.body_dx_[i] += out;
+    });
+    react_on_bodies(into_velocity ? s.dt : 0.0f);
+}
+
+// The opposite of the particles' body corrections (body_dx_, then cleared) on the bodies:
+// on their predicted poses, or (into_velocity_dt > 0) on their velocities.
+void PbfSolver::react_on_bodies(float into_velocity_dt) {
+    State& st = *st_;
+    std::vector<RigidBody>& bodies = st.bodies_.all();
+    const Particles& p = water_.pool.particles;
+    const float m = 1000.0f * pbf_.spacing * pbf_.spacing * pbf_.spacing;
+    std::vector<Vec3> impulse(bodies.size(), Vec3(0.0f)), torque(bodies.size(), Vec3(0.0f));
+    for (size_t i = 0; i < p.size(); ++i) {
+        const int32_t b = st.body_of_[i];
+        if (b < 0 || st.body_dx_[i] == Vec3(0.0f)) continue;
+        const Vec3 P = -m * st.body_dx_[i];
+        impulse[size_t(b)] += P;
+        torque[size_t(b)] += glm::cross(p.position[i] - bodies[size_t(b)].x, P);
+        st.body_dx_[i] = Vec3(0.0f);
+    }
+    for (size_t b = 0; b < bodies.size(); ++b) {
+        RigidBody& body = bodies[b];
+        const Vec3 dx = impulse[b] * body.inv_mass;
+        const Vec3 dtheta = body.inv_inertia_world() * torque[b];
+        body.lift += impulse[b];
+        if (into_velocity_dt > 0.0f) {
+            body.v += dx / into_velocity_dt;
+            body.w += dtheta / into_velocity_dt;
+            continue;
+        }
+        body.x += dx;
+        body.q = glm::normalize(body.q + 0.5f * (glm::quat(0.0f, dtheta.x, dtheta.y, dtheta.z) * body.q));
+    }
+}
+
+// The honest count at the step's end, then the guard: out to the surface, the velocity
+// into the body removed (relative to the body's surface there).
+void PbfSolver::count_inside_bodies(const Stage&) {
+    State& st = *st_;
+    Particles& p = water_.pool.particles;
+    const std::vector<RigidBody>& bodies = st.bodies_.all();
+    std::vector<uint8_t> inside(p.size(), 0);
+    for_each_slot(p.size(), 256, [&](size_t i) {
+        if (!p.active[i]) return;
+        const Vec3 x = p.position[i];
+        for (const RigidBody& body : bodies) {
+            const Vec3 d = x - body.x;
+            if (glm::dot(d, d) > body.shape.bound * body.shape.bound) continue;
+            Vec3 n;
+            const float sd = body.sdf(x, n);
+            if (sd >= 0.0f) continue;
+            inside[i] = 1;
+            p.position[i] = x + (kBodySkin * pbf_.spacing - sd) * n;
+            const Vec3 vb = body.v + glm::cross(body.w, p.position[i] - body.x);
+            const float vn = glm::dot(p.velocity[i] - vb, n);
+            if (vn < 0.0f) p.velocity[i] -= vn * n;
+            break;
+        }
+    });
+    uint64_t count = 0;
+    for (uint8_t c : inside) count += c;
+    water_.pool.counters.inside_bodies += count;
+}
+
+}  // namespace mr

@@ -1,0 +1,201 @@
+// Position-based rigid bodies (rigid_bodies.h): prediction, contacts with the terrain and
+// between bodies with Coulomb friction, and the velocities from the poses' change.
+#include "rigid_bodies.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace mr {
+
+namespace {
+
+/// Contact passes over all contacts per substep (Gauss-Seidel).
+constexpr int kContactPasses = 2;
+/// Water's density for the measured submerged share, kg/m^3.
+constexpr float kWaterDensity = 1000.0f;
+
+glm::quat rotate_by(const glm::quat& q, const Vec3& dtheta) {
+    const glm::quat dq(0.0f, dtheta.x, dtheta.y, dtheta.z);
+    return glm::normalize(q + 0.5f * (dq * q));
+}
+
+struct Contact {
+    RigidBody* a;
+    RigidBody* b;     ///< null: the terrain
+    Vec3 local_a;     ///< the sample on a, in a's frame
+    Vec3 n;           ///< pushes a out (world)
+    float depth;      ///< > 0: penetration, metres
+};
+
+// One contact's normal correction and its position-level Coulomb friction.
+void resolve(const Contact& c, float friction) {
+    RigidBody& a = *c.a;
+    const Vec3 p = a.to_world(c.local_a);
+    const float wa = a.inv_mass_along(c.n, p);
+    const float wb = c.b ? c.b->inv_mass_along(c.n, p) : 0.0f;
+    if (wa + wb <= 0.0f) return;
+    const float dl = c.depth / (wa + wb);
+    a.apply(dl * c.n, p);
+    if (c.b) c.b->apply(-dl * c.n, p);
+    // Slip of the contact point over the substep (a's point against b's material point).
+    const Vec3 pa = a.to_world(c.local_a);
+    Vec3 dp = pa - (a.x_prev + a.q_prev * c.local_a);
+    if (c.b) {
+        const Vec3 lb = c.b->to_local(pa);
+        dp -= pa - (c.b->x_prev + c.b->q_prev * lb);
+    }
+    const Vec3 dt = dp - glm::dot(dp, c.n) * c.n;
+    const float slip = glm::length(dt);
+    if (slip < 1e-9f) return;
+    const Vec3 t = dt / slip;
+    const float wta = a.inv_mass_along(t, pa), wtb = c.b ? c.b->inv_mass_along(t, pa) : 0.0f;
+    const float lt = std::min(slip / (wta + wtb), friction * dl);
+    a.apply(-lt * t, pa);
+    if (c.b) c.b->apply(lt * t, pa);
+}
+
+}  // namespace
+
+void RigidBody::apply(const Vec3& p, const Vec3& at) {
+    x += p * inv_mass;
+    q = rotate_by(q, inv_inertia_world() * glm::cross(at - x, p));
+}
+
+float RigidBody::inv_mass_along(const Vec3& n, const Vec3& at) const {
+    const Vec3 rn = glm::cross(at - x, n);
+    return inv_mass + glm::dot(rn, inv_inertia_world() * rn);
+}
+
+Result<uint32_t> RigidBodies::add(const BodyDef& def) {
+    if (bodies_.size() >= kMaxBodies) return Error{fmt::format("bodies: at most {} bodies", kMaxBodies)};
+    auto shape = make_shape(def);
+    if (!shape) return shape.error();
+    RigidBody b;
+    b.id = next_id_++;
+    b.shape = std::move(shape.value());
+    b.size = def.size;
+    b.density = def.density;
+    b.friction = def.friction;
+    b.mass = def.density * b.shape.volume;
+    b.inv_mass = 1.0f / b.mass;
+    b.inv_inertia_local = glm::inverse(def.density * b.shape.inertia_unit);
+    b.x = b.x_prev = def.position;
+    b.q = b.q_prev = rotation_from_degrees(def.rotation);
+    b.v = def.velocity;
+    b.w = def.angular_velocity;
+    bodies_.push_back(std::move(b));
+    update_states();
+    return bodies_.back().id;
+}
+
+Status RigidBodies::remove(uint32_t id) {
+    const auto it = std::find_if(bodies_.begin(), bodies_.end(), [&](const RigidBody& b) { return b.id == id; });
+    if (it == bodies_.end()) return Error{fmt::format("id: no body {}", id)};
+    bodies_.erase(it);
+    update_states();
+    return Ok{};
+}
+
+Status RigidBodies::set_motion(uint32_t id, const Vec3& position, const glm::quat& orientation, const Vec3& velocity,
+                               const Vec3& angular_velocity) {
+    const auto it = std::find_if(bodies_.begin(), bodies_.end(), [&](const RigidBody& b) { return b.id == id; });
+    if (it == bodies_.end()) return Error{fmt::format("id: no body {}", id)};
+    const auto finite = [](const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
+    if (!finite(position)) return Error{"position: must be finite"};
+    if (!(std::isfinite(orientation.w) && finite(Vec3(orientation.x, orientation.y, orientation.z))) ||
+        glm::length(orientation) < 1e-6f)
+        return Error{"orientation: must be a finite, non-zero quaternion"};
+    if (!finite(velocity)) return Error{"velocity: must be finite"};
+    if (!finite(angular_velocity)) return Error{"angular_velocity: must be finite"};
+    it->x = it->x_prev = position;
+    it->q = it->q_prev = glm::normalize(orientation);
+    it->v = velocity;
+    it->w = angular_velocity;
+    update_states();
+    return Ok{};
+}
+
+void RigidBodies::predict(float dt, float gravity) {
+    for (RigidBody& b : bodies_) {
+        b.x_prev = b.x;
+        b.q_prev = b.q;
+        b.lift = Vec3(0.0f);
+        b.v.y -= gravity * dt;
+        b.x += b.v * dt;
+        b.q = rotate_by(b.q, b.w * dt);
+    }
+}
+
+void RigidBodies::terrain_contacts(const Terrain& terrain) {
+    for (RigidBody& b : bodies_)
+        for (const Vec3& s : b.shape.samples) {
+            const Vec3 p = b.to_world(s);
+            if (!terrain.contains_xz(p.x, p.z)) continue;
+            const float ground = terrain.height_mesh(p.x, p.z);
+            if (p.y >= ground) continue;
+            const Vec3 n = terrain.normal_mesh(p.x, p.z);
+            resolve(Contact{&b, nullptr, s, n, (ground - p.y) * n.y}, b.friction);
+        }
+}
+
+void RigidBodies::body_contacts() {
+    for (size_t i = 0; i < bodies_.size(); ++i)
+        for (size_t j = i + 1; j < bodies_.size(); ++j) {
+            RigidBody& a = bodies_[i];
+            RigidBody& b = bodies_[j];
+            const float reach = a.shape.bound + b.shape.bound;
+            if (glm::dot(a.x - b.x, a.x - b.x) > reach * reach) continue;
+            const float mu = 0.5f * (a.friction + b.friction);
+            for (int side = 0; side < 2; ++side) {
+                RigidBody& p = side ? b : a;  // p's samples against q's distance
+                RigidBody& q = side ? a : b;
+                for (const Vec3& s : p.shape.samples) {
+                    Vec3 n;
+                    const float d = q.sdf(p.to_world(s), n);
+                    if (d < 0.0f) resolve(Contact{&p, &q, s, n, -d}, mu);
+                }
+            }
+        }
+}
+
+void RigidBodies::contacts(const Terrain& terrain) {
+    for (int pass = 0; pass < kContactPasses; ++pass) {
+        body_contacts();
+        terrain_contacts(terrain);
+    }
+}
+
+void RigidBodies::velocities(float dt, float gravity) {
+    const float inv_dt = 1.0f / dt;
+    for (RigidBody& b : bodies_) {
+        b.v = (b.x - b.x_prev) * inv_dt;
+        glm::quat dq = b.q * glm::conjugate(b.q_prev);
+        if (dq.w < 0.0f) dq = -dq;
+        b.w = 2.0f * Vec3(dq.x, dq.y, dq.z) * inv_dt;
+        const float weight = kWaterDensity * gravity * b.shape.volume * dt * dt;
+        const float share = weight > 0.0f ? std::clamp(b.lift.y / weight, 0.0f, 1.0f) : 0.0f;
+        b.submerged += 0.05f * (share - b.submerged);
+    }
+}
+
+void RigidBodies::update_states() {
+    states_.resize(bodies_.size());
+    for (size_t i = 0; i < bodies_.size(); ++i) {
+        const RigidBody& b = bodies_[i];
+        states_[i] = BodyState{.id = b.id,
+                               .shape = b.shape.kind,
+                               .size = b.size,
+                               .position = b.x,
+                               .orientation = b.q,
+                               .velocity = b.v,
+                               .angular_velocity = b.w,
+                               .mass = b.mass,
+                               .volume = b.shape.volume,
+                               .submerged_fraction = b.submerged,
+                               .mesh = b.shape.mesh};
+    }
+}
+
+}  // namespace mr
