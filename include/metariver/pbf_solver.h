@@ -61,7 +61,9 @@ private:
     // The bodies' coupling (pbf_bodies.cpp).
     void assign_bodies(const Stage& s);
     void push_out_of_bodies(const Stage& s, bool into_velocity);
-    void react_on_bodies(float into_velocity_dt);
+    void react_on_bodies(float dt, bool into_velocity);
+    void drag_bodies(const Stage& s);
+    void clear_body_volume(uint32_t id);
     void count_inside_bodies(const Stage& s);
     ContactCounts collide(const Stage& s);
     void viscosity(const Stage& s);

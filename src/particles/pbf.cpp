@@ -208,11 +208,14 @@ void PbfSolver::step(float dt) {
     for (int it = 0; it < pbf_.iterations; ++it) iterate(s);
     if (terrain && water_.collider.def().damping > 0.0f) bed_friction(s);
     if (s.bodies) {  // the bodies' contacts, the water out of them again, their velocities
-        st.bodies_.contacts(water_.collider.terrain());
+        st.bodies_.contacts(water_.collider.terrain(), s.dt);
         st.bodies_.velocities(s.dt, water_.integrator.gravity);
-        push_out_of_bodies(s, true);
     }
     const ContactCounts contacts = collide(s);
+    if (s.bodies) {  // after the terrain's collision: the water it lifted into a body goes out again
+        push_out_of_bodies(s, true);
+        if (st.body_coupling_on_) drag_bodies(s);
+    }
     if (pbf_.xsph > 0.0f || pbf_.vorticity > 0.0f) viscosity(s);
     if (pbf_.damping > 0.0f) damp(s);
     sleep(s);

@@ -27,6 +27,7 @@
 #include "pbf_state.h"
 #include "pbf_stages.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace mr {
@@ -35,6 +36,17 @@ namespace {
 
 /// Spacings off a body's surface where a particle pushed out of it is put.
 constexpr float kBodySkin = 1e-3f;
+
+/// Most a pass of the water's reactions accelerates a body, in g (and turns it, rad/s^2):
+/// water pushed out of a body placed in it must not launch it.
+constexpr float kBodyMaxAccel = 5.0f;
+constexpr float kBodyMaxTurnAccel = 50.0f;
+
+/// The water's drag on a body (Akinci et al. 2012's boundary viscosity, in XSPH's form):
+/// per second a particle's velocity relative to the body's surface relaxes at this rate
+/// (1 - exp(-rate dt) per step), times the body's share of its kernel; the body takes the
+/// opposite momentum.
+constexpr float kBodyDragRate = 3.0f;
 
 /// The poly6 kernel's share beyond a plane at signed distance d, and d share / dd.
 struct BodyShare {
@@ -58,11 +70,36 @@ struct BodyShare {
 
 }  // namespace
 
-Result<uint32_t> PbfSolver::add_body(const BodyDef& def) { return st_->bodies_.add(def); }
+// A body placed (added, or moved by set_body_motion) takes its volume from the water at
+// once: the particles it covers go to its surface, without a reaction (the body did not
+// push them; a reaction would launch it). Not counted as inside_bodies: no step ended so.
+void PbfSolver::clear_body_volume(uint32_t id) {
+    const std::vector<RigidBody>& bodies = st_->bodies_.all();
+    const auto it = std::find_if(bodies.begin(), bodies.end(), [&](const RigidBody& b) { return b.id == id; });
+    if (it == bodies.end()) return;
+    Particles& p = water_.pool.particles;
+    const float skin = kBodySkin * pbf_.spacing;
+    for_each_slot(p.size(), 1024, [&](size_t i) {
+        if (!p.active[i]) return;
+        const Vec3 d = p.position[i] - it->x;
+        if (glm::dot(d, d) > it->shape.bound * it->shape.bound) return;
+        Vec3 n;
+        const float sd = it->sdf(p.position[i], n);
+        if (sd < 0.0f) p.position[i] += (skin - sd) * n;
+    });
+}
+
+Result<uint32_t> PbfSolver::add_body(const BodyDef& def) {
+    auto id = st_->bodies_.add(def);
+    if (id) clear_body_volume(id.value());
+    return id;
+}
 Status PbfSolver::remove_body(uint32_t id) { return st_->bodies_.remove(id); }
 Status PbfSolver::set_body_motion(uint32_t id, const Vec3& position, const glm::quat& orientation, const Vec3& velocity,
                                   const Vec3& angular_velocity) {
-    return st_->bodies_.set_motion(id, position, orientation, velocity, angular_velocity);
+    auto r = st_->bodies_.set_motion(id, position, orientation, velocity, angular_velocity);
+    if (r) clear_body_volume(id);
+    return r;
 }
 std::span<const BodyState> PbfSolver::bodies() const { return st_->bodies_.states(); }
 
@@ -120,12 +157,12 @@ void PbfSolver::push_out_of_bodies(const Stage& s, bool into_velocity) {
         p.position[i] += out;
         st.body_dx_[i] += out;
     });
-    react_on_bodies(into_velocity ? s.dt : 0.0f);
+    react_on_bodies(s.dt, into_velocity);
 }
 
 // The opposite of the particles' body corrections (body_dx_, then cleared) on the bodies:
-// on their predicted poses, or (into_velocity_dt > 0) on their velocities.
-void PbfSolver::react_on_bodies(float into_velocity_dt) {
+// on their predicted poses, or (into_velocity) on their velocities (a step of dt).
+void PbfSolver::react_on_bodies(float dt, bool into_velocity) {
     State& st = *st_;
     std::vector<RigidBody>& bodies = st.bodies_.all();
     const Particles& p = water_.pool.particles;
@@ -139,19 +176,63 @@ void PbfSolver::react_on_bodies(float into_velocity_dt) {
         torque[size_t(b)] += glm::cross(p.position[i] - bodies[size_t(b)].x, P);
         st.body_dx_[i] = Vec3(0.0f);
     }
+    const float max_move = kBodyMaxAccel * water_.integrator.gravity * dt * dt;
+    const float max_turn = kBodyMaxTurnAccel * dt * dt;
     for (size_t b = 0; b < bodies.size(); ++b) {
         RigidBody& body = bodies[b];
-        const Vec3 dx = impulse[b] * body.inv_mass;
-        const Vec3 dtheta = body.inv_inertia_world() * torque[b];
+        Vec3 dx = impulse[b] * body.inv_mass;
+        Vec3 dtheta = body.inv_inertia_world() * torque[b];
+        // A body lighter than the water pushing it would overshoot: at most this far per pass.
+        if (const float l = glm::length(dx); l > max_move) dx *= max_move / l;
+        if (const float a = glm::length(dtheta); a > max_turn) dtheta *= max_turn / a;
         body.lift += impulse[b];
-        if (into_velocity_dt > 0.0f) {
-            body.v += dx / into_velocity_dt;
-            body.w += dtheta / into_velocity_dt;
+        if (into_velocity) {
+            body.v += dx / dt;
+            body.w += dtheta / dt;
             continue;
         }
         body.x += dx;
         body.q = glm::normalize(body.q + 0.5f * (glm::quat(0.0f, dtheta.x, dtheta.y, dtheta.z) * body.q));
     }
+}
+
+// Drag (kBodyDragRate): the water at a body and the body exchange momentum along their
+// relative velocity, after the step's velocities are known. With k_i = m (1 - exp(-rate dt)) share_i
+// the body's velocity becomes the weighted mean (M v + sum k_i v_i) / (M + sum k_i) and
+// each particle moves (1 - exp(-rate dt)) share_i of the way to the body's surface velocity: the
+// momentum is conserved and a body lighter than the water around it does not overshoot.
+// (The drag's torque is left out.)
+void PbfSolver::drag_bodies(const Stage& s) {
+    State& st = *st_;
+    Particles& p = water_.pool.particles;
+    std::vector<RigidBody>& bodies = st.bodies_.all();
+    const BodyShare bs(s.k.h);
+    const float relax = 1.0f - std::exp(-kBodyDragRate * s.dt);
+    std::vector<float>& share = st.lambda_;  // free after the iterations
+    for_each_slot(p.size(), 256, [&](size_t i) {
+        const int32_t b = st.body_of_[i];
+        share[i] = 0.0f;
+        if (b < 0) return;
+        Vec3 n;
+        share[i] = relax * bs.share(bodies[size_t(b)].sdf(p.position[i], n));
+    });
+    std::vector<Vec3> momentum(bodies.size(), Vec3(0.0f));
+    std::vector<float> weight(bodies.size(), 0.0f);
+    for (size_t i = 0; i < p.size(); ++i) {  // serial, in slot order: deterministic
+        const int32_t b = st.body_of_[i];
+        if (b < 0 || share[i] <= 0.0f) continue;
+        momentum[size_t(b)] += (s.body_mass * share[i]) * p.velocity[i];
+        weight[size_t(b)] += s.body_mass * share[i];
+    }
+    for (size_t b = 0; b < bodies.size(); ++b)
+        bodies[b].v = (bodies[b].mass * bodies[b].v + momentum[b]) / (bodies[b].mass + weight[b]);
+    for_each_slot(p.size(), 256, [&](size_t i) {
+        const int32_t b = st.body_of_[i];
+        if (b < 0 || share[i] <= 0.0f) return;
+        const RigidBody& body = bodies[size_t(b)];
+        const Vec3 vb = body.v + glm::cross(body.w, p.position[i] - body.x);
+        p.velocity[i] += share[i] * (vb - p.velocity[i]);
+    });
 }
 
 // The honest count at the step's end, then the guard: out to the surface, the velocity

@@ -13,6 +13,8 @@ namespace {
 
 /// Contact passes over all contacts per substep (Gauss-Seidel).
 constexpr int kContactPasses = 2;
+/// Metres per second at most that an overlap with the ground is undone.
+constexpr float kMaxDepenetration = 1.0f;
 /// Water's density for the measured submerged share, kg/m^3.
 constexpr float kWaterDensity = 1000.0f;
 
@@ -128,7 +130,7 @@ void RigidBodies::predict(float dt, float gravity) {
     }
 }
 
-void RigidBodies::terrain_contacts(const Terrain& terrain) {
+void RigidBodies::terrain_contacts(const Terrain& terrain, float dt) {
     for (RigidBody& b : bodies_)
         for (const Vec3& s : b.shape.samples) {
             const Vec3 p = b.to_world(s);
@@ -136,7 +138,16 @@ void RigidBodies::terrain_contacts(const Terrain& terrain) {
             const float ground = terrain.height_mesh(p.x, p.z);
             if (p.y >= ground) continue;
             const Vec3 n = terrain.normal_mesh(p.x, p.z);
-            resolve(Contact{&b, nullptr, s, n, (ground - p.y) * n.y}, b.friction);
+            // An overlap the substep started with (a body placed or moved into the ground,
+            // the ground sculpted up) goes at most kMaxDepenetration m/s: a full push
+            // would become the velocity of a launch.
+            const Vec3 was = b.x_prev + b.q_prev * s;
+            float depth = (ground - p.y) * n.y;
+            if (terrain.contains_xz(was.x, was.z)) {
+                const float old = std::max(0.0f, (terrain.height_mesh(was.x, was.z) - was.y) * n.y);
+                depth -= std::max(0.0f, old - kMaxDepenetration * dt);  // the overlap left this substep
+            }
+            if (depth > 0.0f) resolve(Contact{&b, nullptr, s, n, depth}, b.friction);
         }
 }
 
@@ -160,10 +171,10 @@ void RigidBodies::body_contacts() {
         }
 }
 
-void RigidBodies::contacts(const Terrain& terrain) {
+void RigidBodies::contacts(const Terrain& terrain, float dt) {
     for (int pass = 0; pass < kContactPasses; ++pass) {
         body_contacts();
-        terrain_contacts(terrain);
+        terrain_contacts(terrain, dt);
     }
 }
 

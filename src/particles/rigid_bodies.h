@@ -63,7 +63,7 @@ public:
     /// Substep start: gravity and the predicted poses.
     void predict(float dt, float gravity);
     /// After the water's iterations: terrain and body-body contacts.
-    void contacts(const Terrain& terrain);
+    void contacts(const Terrain& terrain, float dt);
     /// Substep end: the velocities from the poses' change, the submerged share measured.
     void velocities(float dt, float gravity);
     /// The states after a frame (rebuilt by update_states()).
@@ -71,7 +71,7 @@ public:
     void update_states();
 
 private:
-    void terrain_contacts(const Terrain& terrain);
+    void terrain_contacts(const Terrain& terrain, float dt);
     void body_contacts();
     std::vector<RigidBody> bodies_;
     std::vector<BodyState> states_;
