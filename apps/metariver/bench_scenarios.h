@@ -65,5 +65,8 @@ ScenarioResult bench_w3(int nx, int warmup, int steps);
 ScenarioResult bench_w3_gpu(int nx, int warmup, int steps);
 /// Export cost by format of the default river (or `particles` of it) after `warmup` frames.
 ScenarioResult bench_export(int particles, int warmup, int frames);
+/// The default river after `warmup` frames, without bodies and with 20 logs dropped on its
+/// water (bench_bodies.cpp): two rows, the second with its frame time's ratio to the first.
+void bench_river_bodies(int warmup, int frames, std::vector<ScenarioResult>& out);
 
 }  // namespace mr::app
