@@ -130,8 +130,25 @@ void RigidBodies::predict(float dt, float gravity) {
     }
 }
 
+namespace {
+// True when a body's bounding sphere is above the ground under its square (the centre and
+// the four corners: a cheap test that skips the samples of a floating body).
+bool clear_of_ground(const Terrain& terrain, const RigidBody& b) {
+    const float r = b.shape.bound, low = b.x.y - r;
+    for (const Vec3& o : {Vec3(0, 0, 0), Vec3(-r, 0, -r), Vec3(r, 0, -r), Vec3(-r, 0, r), Vec3(r, 0, r)}) {
+        const Vec3 q = b.x + o;
+        if (!terrain.contains_xz(q.x, q.z) || terrain.height_mesh(q.x, q.z) >= low) return false;
+    }
+    // Between the corners the ground may rise by the slope over half the square's diagonal.
+    const Vec3 n = terrain.contains_xz(b.x.x, b.x.z) ? terrain.normal_mesh(b.x.x, b.x.z) : Vec3(0, 1, 0);
+    const float slope = n.y > 1e-3f ? std::sqrt(std::max(0.0f, 1.0f - n.y * n.y)) / n.y : 1e3f;
+    return terrain.height_mesh(b.x.x, b.x.z) + 1.5f * r * slope + 0.5f * r < low;
+}
+}  // namespace
+
 void RigidBodies::terrain_contacts(const Terrain& terrain, float dt) {
-    for (RigidBody& b : bodies_)
+    for (RigidBody& b : bodies_) {
+        if (clear_of_ground(terrain, b)) continue;
         for (const Vec3& s : b.shape.samples) {
             const Vec3 p = b.to_world(s);
             if (!terrain.contains_xz(p.x, p.z)) continue;
@@ -149,6 +166,7 @@ void RigidBodies::terrain_contacts(const Terrain& terrain, float dt) {
             }
             if (depth > 0.0f) resolve(Contact{&b, nullptr, s, n, depth}, b.friction);
         }
+    }
 }
 
 void RigidBodies::body_contacts() {
