@@ -129,69 +129,65 @@ TEST(BodiesRiver, ALogRidesTheCurrentToTheOutlet) {
     EXPECT_EQ(s.counters().inside_bodies - inside0, 0u);
 }
 
+/// The 90th percentile of the particles' heights within 1.5 m of x horizontally (the
+/// water's level there; 0 when there are none).
+float level_at(const Simulation& s, const Vec3& x) {
+    std::vector<float> y;
+    const Particles& p = s.particles();
+    for (size_t i = 0; i < p.size(); ++i)
+        if (p.active[i] && std::hypot(p.position[i].x - x.x, p.position[i].z - x.z) < 1.5f) y.push_back(p.position[i].y);
+    if (y.empty()) return 0.0f;
+    std::sort(y.begin(), y.end());
+    return y[y.size() * 9 / 10];
+}
+
+// The same river twice from the same state (deterministic): with a heavy block dropped
+// across the channel at 10 s, and without; the level behind the block's resting place is
+// compared between the two over 15-20 s; the block must stay (it is heavy and rough) and
+// no particle may end a step inside it.
 TEST(BodiesRiver, AHeavyBlockDamsTheChannel) {
-    River r = flowing_river(10.0f);
-    Simulation& s = *r.sim;
-    const float sp = s.def().pbf.spacing;
-    const size_t k0 = r.path.size() / 3;
-    const Vec3 t0 = downstream(r.path, k0);
-    const Vec3 behind = r.path[k0] - 2.5f * t0;  // upstream, 1.75 m from the block
-    // The water's level there: the 90th percentile of the particles' heights within 1.5 m.
-    auto level = [&] {
-        std::vector<float> y;
-        const Particles& p = s.particles();
-        for (size_t i = 0; i < p.size(); ++i)
-            if (p.active[i] && std::hypot(p.position[i].x - behind.x, p.position[i].z - behind.z) < 1.5f) y.push_back(p.position[i].y);
-        if (y.empty()) return 0.0f;
-        std::sort(y.begin(), y.end());
-        return y[y.size() * 9 / 10];
-    };
-    double before = 0.0;
-    for (int f = 0; f < 300; ++f) {
-        s.step(1.0f / 60.0f);
-        before += level() / 300.0;
-    }
+    River with = flowing_river(10.0f);
+    Simulation& s = *with.sim;
+    const size_t k0 = with.path.size() / 3;
+    const Vec3 t0 = downstream(with.path, k0);
     BodyDef block;
-    block.size = Vec3(1.5f, 1.6f, 5.0f);  // across the channel: its 3 m bed and its walls
+    block.size = Vec3(1.5f, 1.6f, 2.9f);  // across the channel's 3 m bed
     block.density = 2700.0f;  // granite
     block.friction = 1.0f;    // rough
-    const float ground = s.terrain().height_mesh(r.path[k0].x, r.path[k0].z);
-    block.position = Vec3(r.path[k0].x, ground + 0.8f + 0.05f, r.path[k0].z);
+    const float ground = s.terrain().height_mesh(with.path[k0].x, with.path[k0].z);
+    block.position = Vec3(with.path[k0].x, ground + 0.8f + 0.05f, with.path[k0].z);
     block.rotation = Vec3(0.0f, glm::degrees(std::atan2(-t0.z, t0.x)), 0.0f);
     auto id = s.add_body(block);
     ASSERT_TRUE(id.ok()) << id.error().message;
     const uint64_t inside0 = s.counters().inside_bodies;
-    for (int f = 0; f < 900; ++f) {
-        s.step(1.0f / 60.0f);
-        const BodyState& b = s.bodies()[0];
-        if (f % 300 == 0)
-            std::printf("  t %.2f pos %.2f %.2f %.2f ground %.2f v %.2f %.2f %.2f w %.2f\n", f / 60.0f, b.position.x, b.position.y,
-                        b.position.z, s.terrain().height_mesh(b.position.x, b.position.z), b.velocity.x, b.velocity.y,
-                        b.velocity.z, glm::length(b.angular_velocity));
-    }
-    double after = 0.0;
+    for (int f = 0; f < 300; ++f) s.step(1.0f / 60.0f);
+    const Vec3 rest = s.bodies()[0].position;
+    for (int f = 0; f < 600; ++f) s.step(1.0f / 60.0f);
+    const Vec3 behind = s.bodies()[0].position - 2.0f * t0;  // 1.25 m before its upstream face
+    River without = flowing_river(25.0f);
+    double dammed = 0.0, free = 0.0;
     for (int f = 0; f < 300; ++f) {
         s.step(1.0f / 60.0f);
-        after += level() / 300.0;
+        without.sim->step(1.0f / 60.0f);
+        dammed += level_at(s, behind) / 300.0;
+        free += level_at(*without.sim, behind) / 300.0;
     }
-    for (float back : {-3.0f, -1.5f, 1.2f, 2.0f, 3.0f, 5.0f, 8.0f}) {
-        const Vec3 at = r.path[k0] - back * t0;
-        int n = 0;
-        float top = -1e30f;
-        for (size_t i = 0; i < s.particles().size(); ++i)
-            if (s.particles().active[i] && std::hypot(s.particles().position[i].x - at.x, s.particles().position[i].z - at.z) < 1.0f)
-                ++n, top = std::max(top, s.particles().position[i].y);
-        std::printf("  %.1f m upstream: %d particles, top %.2f, ground %.2f\n", back, n, top, s.terrain().height_mesh(at.x, at.z));
+    for (float back : {-3.0f, 1.2f, 2.0f, 3.0f, 5.0f}) {
+        const Vec3 at = s.bodies()[0].position - back * t0;
+        std::printf("  %.1f m upstream: level %.2f with, %.2f without, ground %.2f\n", back, level_at(s, at), level_at(*without.sim, at),
+                    s.terrain().height_mesh(at.x, at.z));
     }
-    const BodyState& b = s.bodies()[0];
-    const float moved = std::hypot(b.position.x - block.position.x, b.position.z - block.position.z);
-    std::printf("dam: level 2.5 m upstream %.3f m before, %.3f m after (rise %.3f m); the block moved %.2f m; "
-                "particles inside bodies %llu\n",
-                before, after, after - before, moved, (unsigned long long)(s.counters().inside_bodies - inside0));
-    // The rise behind the block is printed, not asserted: in the default river (one or two
-    // particles deep) the water goes around the block over the channel's sloped walls and
-    // its level 2.5 m upstream rose by a few millimetres only.
-    EXPECT_LT(moved, 2.0f) << "the block was carried away";
+    const Vec3 end = s.bodies()[0].position;
+    const float moved = std::hypot(end.x - rest.x, end.z - rest.z);
+    std::printf("dam: level 2 m upstream of the block %.3f m, %.3f m without it (rise %.3f m); the block moved %.2f m "
+                "after settling; particles inside bodies %llu\n",
+                dammed, free, dammed - free, moved, (unsigned long long)(s.counters().inside_bodies - inside0));
+    // Not asserted (issue 44 asks for it; not reached): the block, 2.9 m across the 3 m
+    // bed, does not raise the level behind it: the 0.3-0.4 m deep default river (one or two
+    // particles of 0.5 m) finds its way around the block's ends and the levels with and
+    // without it agree within 0.05 m. A 5 m block rests on the channel's walls and the
+    // water runs under it.
+    EXPECT_LT(moved, 1.0f) << "the block was carried away";
     EXPECT_EQ(s.counters().inside_bodies - inside0, 0u);
 }
 
