@@ -191,6 +191,7 @@ std::vector<std::array<Vec3, 3>> hull_faces(std::vector<Vec3> pts) {
         pts = kept;
     }
     std::vector<std::array<Vec3, 3>> faces;
+    std::vector<glm::vec4> planes;  // found so far (normal, offset)
     const size_t n = pts.size();
     Vec3 extent(0.0f);
     for (const Vec3& p : pts) extent = glm::max(extent, glm::abs(p));
@@ -209,8 +210,25 @@ std::vector<std::array<Vec3, 3>> hull_faces(std::vector<Vec3> pts) {
                     below += s < -eps;
                 }
                 if (above && below) continue;
-                if (above) faces.push_back({pts[a], pts[c], pts[b]});
-                else faces.push_back({pts[a], pts[b], pts[c]});
+                if (above) nrm = -nrm;  // outward
+                const float off = glm::dot(nrm, pts[a]);
+                bool seen = false;  // one polygon per supporting plane (coplanar points)
+                for (const glm::vec4& pl : planes)
+                    if (glm::dot(Vec3(pl), nrm) > 1.0f - 1e-5f && std::abs(pl.w - off) < eps) seen = true;
+                if (seen) continue;
+                planes.push_back(glm::vec4(nrm, off));
+                // The plane's points in angular order around their centroid, as a fan.
+                std::vector<Vec3> on;
+                for (const Vec3& q : pts)
+                    if (std::abs(glm::dot(q, nrm) - off) <= eps) on.push_back(q);
+                Vec3 mid(0.0f);
+                for (const Vec3& q : on) mid += q / float(on.size());
+                const Vec3 u = glm::normalize(on[0] - mid), v = glm::cross(nrm, u);
+                std::sort(on.begin(), on.end(), [&](const Vec3& p1, const Vec3& p2) {
+                    return std::atan2(glm::dot(p1 - mid, v), glm::dot(p1 - mid, u)) <
+                           std::atan2(glm::dot(p2 - mid, v), glm::dot(p2 - mid, u));
+                });
+                for (size_t k = 2; k < on.size(); ++k) faces.push_back({on[0], on[k - 1], on[k]});
             }
     return faces;
 }

@@ -11,11 +11,15 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <filesystem>
+#include <fstream>
 #include <cstdio>
 #include <vector>
 
 namespace mr {
 namespace {
+
+namespace fs = std::filesystem;
 
 constexpr float kSpacing = 0.2f;
 constexpr int kLayers = 8;  // 1.6 m of water
@@ -184,6 +188,46 @@ TEST(Bodies, ErrorsNameTheKey) {
     auto no = Simulation::create(springs, pool.map);
     ASSERT_FALSE(no.ok());
     EXPECT_NE(no.error().message.find("bodies: solver = \"springs\""), std::string::npos) << no.error().message;
+}
+
+// Shapes: the mass and volume of each primitive, and of an OBJ (a unit cube with a vertex
+// inside it: the convex hull leaves it out; the triangle mesh needs the cube's faces).
+TEST(Bodies, ShapesHaveTheirVolumeAndMass) {
+    test::Pool pool = test::still_pool(kSpacing, 2);
+    auto sim = Simulation::create(pool.def, pool.map);
+    ASSERT_TRUE(sim.ok());
+    Simulation& w = *sim.value();
+    const fs::path obj = fs::temp_directory_path() / "metariver_bodies_cube.obj";
+    {
+        std::ofstream f(obj);
+        f << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\nv 0.5 0.5 0.5\n"
+             "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+    }
+    struct Case {
+        BodyDef def;
+        float volume;
+    };
+    const float pi = 3.14159265f;
+    const Case cases[] = {
+        {BodyDef{.shape = BodyShape::Box, .size = Vec3(2.0f, 0.5f, 0.4f)}, 0.4f},
+        {BodyDef{.shape = BodyShape::Sphere, .size = Vec3(0.5f, 0.0f, 0.0f)}, 4.0f / 3.0f * pi * 0.125f},
+        {BodyDef{.shape = BodyShape::Capsule, .size = Vec3(0.2f, 1.0f, 0.0f)}, pi * 0.04f * 1.0f + 4.0f / 3.0f * pi * 0.008f},
+        {BodyDef{.shape = BodyShape::ConvexMesh, .size = Vec3(2.0f), .mesh = obj.string()}, 8.0f},
+        {BodyDef{.shape = BodyShape::TriangleMesh, .size = Vec3(1.0f), .mesh = obj.string()}, 1.0f},
+    };
+    for (const Case& c : cases) {
+        Case k = c;
+        k.def.position = Vec3(4.0f, 3.0f, 4.0f);
+        auto id = w.add_body(k.def);
+        ASSERT_TRUE(id.ok()) << id.error().message;
+        const BodyState& b = w.bodies().back();
+        EXPECT_NEAR(b.volume, c.volume, 1e-3f * c.volume) << to_string(c.def.shape);
+        EXPECT_NEAR(b.mass, c.volume * k.def.density, 1e-3f * c.volume * k.def.density) << to_string(c.def.shape);
+        ASSERT_TRUE(b.mesh);
+        EXPECT_GE(b.mesh->indices.size(), 36u);
+        EXPECT_EQ(b.mesh->positions.size(), b.mesh->normals.size());
+    }
+    fs::remove(obj);
 }
 
 }  // namespace
