@@ -200,6 +200,10 @@ std::string field_range_error(const SceneKey& key, const FieldRef& f);
 /// its key ("particles.source[2].flow_rate: must be in [0, 10000000] (got -1)", or too
 /// many entries).
 std::string list_range_error(const SceneDef& d);
+/// What the table's ranges cannot say of [[bodies]]: "" or the first message naming the
+/// key ("bodies: ..." outside solver = "pbf"; "bodies[2].size: ..." for a component the
+/// shape reads that is 0; "bodies[1].mesh: ..." missing for a mesh shape or given to another).
+std::string bodies_error(const SceneDef& d);
 /// The list's entries in `d` as TOML ([[name]] blocks, one key per line); "" when empty.
 std::string list_toml(const SceneList& list, const SceneDef& d);
 

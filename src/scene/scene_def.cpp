@@ -257,6 +257,7 @@ Status validate(const SceneDef& d) {
         check(d.sink.min.x <= d.sink.max.x && d.sink.min.y <= d.sink.max.y && d.sink.min.z <= d.sink.max.z,
               "sink.max: every component must be >= sink.min's");
     if (const std::string e = list_range_error(d); !e.empty()) check(false, "{}", e);
+    if (const std::string e = bodies_error(d); !e.empty()) check(false, "{}", e);
     if (d.solver != SolverKind::Bullet)
         for (size_t i = 0; i < d.sink.boxes.size(); ++i) {
             const SinkBox& b = d.sink.boxes[i];

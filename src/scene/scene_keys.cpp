@@ -38,6 +38,13 @@ FieldRef field_ref(SolverKind* p) {
                    },
                    [](const void* f) { return static_cast<const SolverKind*>(f)->name; }};
 }
+// A body's shape: its name in the scene file ([[bodies]] shape), in BodyShape's order.
+constexpr std::string_view kBodyShapes[] = {"box", "sphere", "capsule", "convex_mesh", "triangle_mesh"};
+FieldRef field_ref(BodyShape* p) {
+    return EnumRef{p, [](const void* f) { return static_cast<int>(*static_cast<const BodyShape*>(f)); },
+                   [](void* f, int i) { *static_cast<BodyShape*>(f) = static_cast<BodyShape>(i); },
+                   [](const void* f) { return kBodyShapes[static_cast<size_t>(*static_cast<const BodyShape*>(f))]; }};
+}
 // Where a key lives: `d.<expr>`.
 #define MR_FIELD(expr) [](SceneDef& d) { return field_ref(&d.expr); }
 
@@ -503,6 +510,37 @@ const SceneListKey kSinkBoxKeys[] = {
       .help = "The opposite corner."},
      MR_ITEM(sink.boxes, max)},
 };
+// [[bodies]]: BodyDef's fields (bodies.h).
+const SceneListKey kBodyKeys[] = {
+    {{.name = "shape", .type = K::Choice, .choices = kBodyShapes,
+      .help = "box; sphere; capsule (a cylinder with round caps along the body's x); convex_mesh (the convex hull of an "
+              "OBJ's vertices); triangle_mesh (a closed OBJ triangle mesh)."},
+     MR_ITEM(bodies, shape)},
+    {{.name = "size", .type = K::Vec3, .unit = "m", .range = {.lo = 0, .hi = 1000, .text = "(0, 1000] (the components the shape reads)"},
+      .help = "box: full extents along x, y, z; sphere: radius .x; capsule: radius .x, length .y of the cylinder between "
+              "the caps; convex_mesh, triangle_mesh: scale .x of the OBJ's coordinates. The components a shape does not "
+              "read may be 0."},
+     MR_ITEM(bodies, size)},
+    {{.name = "mesh", .type = K::String,
+      .help = "convex_mesh, triangle_mesh only (required there): the OBJ file, relative to the scene file."},
+     MR_ITEM(bodies, mesh)},
+    {{.name = "density", .type = K::Float, .unit = "kg/m^3", .range = above(0, 100000),
+      .help = "The body's density; water is 1000 (below floats, above sinks)."},
+     MR_ITEM(bodies, density)},
+    {{.name = "position", .type = K::Vec3, .unit = "m", .range = big_vec(-1e6), .help = "Centre of mass at the start."},
+     MR_ITEM(bodies, position)},
+    {{.name = "rotation", .type = K::Vec3, .unit = "deg", .range = closed(-360, 360),
+      .help = "Orientation at the start: rotations about the world's x, then y, then z."},
+     MR_ITEM(bodies, rotation)},
+    {{.name = "velocity", .type = K::Vec3, .unit = "m/s", .range = closed(-100, 100), .help = "Velocity at the start."},
+     MR_ITEM(bodies, velocity)},
+    {{.name = "angular_velocity", .type = K::Vec3, .unit = "rad/s", .range = closed(-100, 100),
+      .help = "Angular velocity at the start (world axes)."},
+     MR_ITEM(bodies, angular_velocity)},
+    {{.name = "friction", .type = K::Float, .range = closed(0, 2),
+      .help = "Coulomb friction coefficient against the terrain and the other bodies."},
+     MR_ITEM(bodies, friction)},
+};
 #undef MR_ITEM
 
 const SceneList kLists[] = {
@@ -524,6 +562,15 @@ const SceneList kLists[] = {
      .size = [](S d) { return d.sink.boxes.size(); },
      .resize = [](SceneDef& d, size_t n) { d.sink.boxes.resize(n); },
      .keys = kSinkBoxKeys},
+    {.name = "bodies",
+     .help = "Rigid bodies in the water (logs, boats, crates, debris; docs/bodies.md), each `[[bodies]]` one body, "
+             "two-way coupled with the PBF water: the water carries and lifts it, it pushes the water aside, and it "
+             "collides with the terrain and the other bodies.",
+     .readers = kBodies,
+     .max = kMaxBodies,
+     .size = [](S d) { return d.bodies.size(); },
+     .resize = [](SceneDef& d, size_t n) { d.bodies.resize(n); },
+     .keys = kBodyKeys},
 };
 
 }  // namespace
@@ -541,8 +588,15 @@ std::string_view SceneKey::leaf() const {
 std::span<const SceneKey> scene_keys() { return kKeys; }
 std::span<const SceneList> scene_lists() { return kLists; }
 
-std::string_view SceneList::section() const { return name.substr(0, name.find('.')); }
-std::string_view SceneList::leaf() const { return name.substr(name.find('.') + 1); }
+// A list at the top level ([[bodies]]) has no section: its name is its leaf.
+std::string_view SceneList::section() const {
+    const size_t dot = name.find('.');
+    return dot == std::string_view::npos ? std::string_view{} : name.substr(0, dot);
+}
+std::string_view SceneList::leaf() const {
+    const size_t dot = name.find('.');
+    return dot == std::string_view::npos ? name : name.substr(dot + 1);
+}
 std::string SceneList::entry_key(size_t i, const SceneListKey& k) const {
     return fmt::format("{}[{}].{}", name, i + 1, k.key.name);
 }

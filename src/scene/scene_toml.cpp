@@ -245,9 +245,11 @@ void refuse_unread_keys(const toml::table& root, Reader& r, const SceneDef& d) {
                 r.fail(std::string(scope == ReadScope::Section ? s.name : k.name), c->refusal(file));
             }
         }
-    for (const SceneList& l : scene_lists())  // a list the scene as written never reads
-        if (const toml::table* t = root[l.section()].as_table(); t && t->get(l.leaf()) && !l.readers(d))
+    for (const SceneList& l : scene_lists()) {  // a list the scene as written never reads
+        const toml::table* t = l.section().empty() ? &root : root[l.section()].as_table();
+        if (t && t->get(l.leaf()) && !l.readers(d))
             r.fail(std::string(l.name), fmt::format("ignored: only {} reads it; remove it", l.readers.text));
+    }
 }
 
 /// Values a key the scene reads cannot take in this scene (what a scene reads at all is
@@ -346,6 +348,12 @@ Result<SceneDef> parse_scene_toml_lines(std::string_view text, const std::string
             if (k.section() == s.name && r.key(*t, k, d) && k.numeric()) given.push_back(&k);
         for (const SceneList& l : scene_lists())
             if (l.section() == s.name) r.list(*t, l, d);
+        if (s.name.empty() && root.get("bodies") && !r.failed())  // a body's OBJ, as the heightmap: relative to the scene file
+            for (BodyDef& b : d.bodies) {
+                const std::filesystem::path mp(b.mesh);
+                if (mp.is_relative() && !mp.empty())
+                    b.mesh = (std::filesystem::path(origin).parent_path() / mp).lexically_normal().string();
+            }
         if (s.name == "terrain" && t->get("heightmap") && !r.failed()) {
             if (!t->get("source")) d.source.kind = TerrainSource::File;
             std::filesystem::path hp(d.source.heightmap);

@@ -180,7 +180,7 @@ std::string scene_reference_markdown() {
             out += "| key | type | unit | range | meaning |\n|---|---|---|---|---|\n";
             for (const SceneListKey& k : l.keys)
                 out += fmt::format("| `{}.{}` | {} | {} | {} | {} |\n", l.name, k.key.name, cell(key_kind(k.key, " | ")),
-                                   k.key.unit, k.key.range.describe(), cell(k.key.help));
+                                   k.key.unit, k.key.numeric() ? k.key.range.describe() : "", cell(k.key.help));
         }
     }
     return out + "\n" + std::string(kReferenceEnd) + "\n";

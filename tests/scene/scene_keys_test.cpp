@@ -318,10 +318,19 @@ TEST(SceneKeys, AFileMaySetAKeyExactlyWhereItsReadersSayTheSceneReadsIt) {
                 }
             }
         }
-        // The lists: [[particles.source]], [[sink.box]] (an entry without a rate of its own).
+        // The lists: [[particles.source]], [[sink.box]] (an entry without a rate of its own),
+        // [[bodies]] (a box: its first shape, no mesh, the highest density).
         for (const SceneList& l : scene_lists()) {
             std::string entry;
-            for (const SceneListKey& k : l.keys) entry += fmt::format("{} = {}\n", k.key.name, k.key.type == KeyType::Vec3 ? "[1, 2, 3]" : "0.0");
+            for (const SceneListKey& k : l.keys) {
+                const KeyType t = k.key.type;
+                const std::string v = t == KeyType::Vec3     ? "[1, 2, 3]"
+                                      : t == KeyType::Choice ? fmt::format("\"{}\"", k.key.choices[0])
+                                      : t == KeyType::String ? "\"\""
+                                      : k.key.range.contains(0.0) ? "0.0"
+                                                                  : fmt::format("{:.1f}", k.key.range.hi);
+                entry += fmt::format("{} = {}\n", k.key.name, v);
+            }
             const std::string text = fmt::format("[[{}]]\n{}", l.name, entry);
             auto r = parse_scene_toml(text, "s.toml", base);
             EXPECT_EQ(r.ok(), l.readers(base)) << name << ": " << text << (r ? "" : r.error().message);
