@@ -5,6 +5,7 @@
 
 #include <metariver/foam.h>
 #include <metariver/io.h>
+#include <metariver/scene_keys.h>
 
 #include <fmt/format.h>
 
@@ -62,6 +63,7 @@ json plausibility_json(const Simulation& sim, const RiverMeter& m) {
     const Percentiles final_speed = percentiles(sim.active_speeds());
     return {{"tunneled", c.tunneled},
             {"guarded", c.guarded},
+            {"inside_bodies", c.inside_bodies},
             {"respawned", c.respawned},
             {"emitted", c.emitted},
             {"sunk", c.sunk},
@@ -123,6 +125,36 @@ json stage_ms_json(const Simulation& sim, const Checkpoints& stage_ms) {
 }
 
 }  // namespace
+
+json bodies_json(std::span<const BodyState> bodies, uint64_t inside) {
+    // The shape's name as the scene file writes it ([[bodies]] shape's choices, BodyShape's order).
+    const auto lists = scene_lists();
+    const auto list = std::find_if(lists.begin(), lists.end(), [](const SceneList& l) { return l.name == "bodies"; });
+    const std::span<const std::string_view> names = list->keys[0].key.choices;
+    json each = json::array();
+    double submerged = 0.0, speed = 0.0;
+    float max_speed = 0.0f;
+    for (const BodyState& b : bodies) {
+        const float v = glm::length(b.velocity);
+        submerged += b.submerged_fraction;
+        speed += v;
+        max_speed = std::max(max_speed, v);
+        const auto shape = static_cast<size_t>(b.shape);
+        each.push_back({{"id", b.id},
+                        {"shape", shape < names.size() ? names[shape] : "?"},
+                        {"position", {b.position.x, b.position.y, b.position.z}},
+                        {"speed", v},
+                        {"submerged_fraction", b.submerged_fraction},
+                        {"mass", b.mass}});
+    }
+    const double n = static_cast<double>(std::max<size_t>(bodies.size(), 1));
+    return {{"count", bodies.size()},
+            {"submerged_fraction_mean", submerged / n},
+            {"speed_mean", speed / n},
+            {"speed_max", max_speed},
+            {"inside_bodies", inside},
+            {"bodies", each}};
+}
 
 RiverMeter::RiverMeter(const Simulation& sim, long long frames)
     : frames_(frames), outlets_(sim.terrain(), sim.channel(), sim.main_channel().back()) {}
@@ -186,6 +218,7 @@ json run_stats_json(const Simulation& sim, const RiverMeter& meter, const Checkp
     j["state_hash"] = fmt::format("{:016x}", sim.state_hash());
     j["stage_ms"] = stage_ms_json(sim, stage_ms);
     j["foam"] = foam_json(sim);
+    j["bodies"] = bodies_json(sim.view().bodies, c.inside_bodies);
     return j;
 }
 
@@ -195,15 +228,23 @@ std::string run_summary(const Simulation& sim, const RiverMeter& meter, const Ch
     const OutletMeter::Summary os = meter.outlets().summary();
     const Percentiles final_speed = percentiles(sim.active_speeds());
     const Percentiles tot = percentiles(stage_ms.column(kStageTotal));
+    const std::span<const BodyState> bodies = sim.view().bodies;
+    std::string with_bodies;  // nothing without bodies: the line stays as it was
+    if (!bodies.empty()) {
+        const json b = bodies_json(bodies, c.inside_bodies);
+        with_bodies = fmt::format(", {} bodies (submerged {:.0f} %, speed mean {:.2f} m/s, {} particle-steps inside)",
+                                  bodies.size(), 100.0 * b["submerged_fraction_mean"].get<double>(),
+                                  b["speed_mean"].get<double>(), c.inside_bodies);
+    }
     return fmt::format("{}: {} frames, {}/{} particles active, surface {} triangles / {} vertices, "
                        "tunneled {}, guarded {}, respawned {}, outflow {:.1f}/s ({}), main outlet {:.1f}/s = {:.2f} of "
                        "inflow (first at {:.2f} s), channel coverage {:.0f} %, wet {:.0f} %, spray {:.1f} %, "
-                       "final speed p95 {:.2f} m/s, frame median {:.3f} ms (p95 {:.3f})",
+                       "final speed p95 {:.2f} m/s{}, frame median {:.3f} ms (p95 {:.3f})",
                        sim.def().name, frames, sim.particles().active_count(), sim.particles().size(),
                        sim.surface().triangle_count(), sim.surface().vertex_count(), c.tunneled, c.guarded,
                        c.respawned, fs.rate, fs.steady ? "steady" : "not steady", os.main.rate,
                        outflow_over_inflow(sim, os), os.main.first_s, 100.0 * meter.channel_coverage(),
-                       100.0 * meter.wet_fraction(), 100.0 * meter.spray_fraction(), final_speed.p95, tot.median,
+                       100.0 * meter.wet_fraction(), 100.0 * meter.spray_fraction(), final_speed.p95, with_bodies, tot.median,
                        tot.p95);
 }
 

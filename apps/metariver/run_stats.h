@@ -10,6 +10,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cstdint>
+#include <span>
 #include <string>
 
 namespace mr::app {
@@ -41,6 +43,11 @@ private:
     long long wet_n_ = 0, spray_n_ = 0;
     float max_speed_ = 0.0f, density_max_ = 0.0f;
 };
+
+/// The bodies after the last frame (bodies.h, from SceneView::bodies): count, mean
+/// submerged fraction and speed, the largest speed, the inside_bodies counter (`inside`)
+/// and one entry per body (id, shape, position, speed, submerged fraction, mass).
+nlohmann::json bodies_json(std::span<const BodyState> bodies, uint64_t inside);
 
 /// The run as `run --stats` writes it: the scene, the final state, the plausibility
 /// (`meter`), the state hash and the stage times (`stage_ms`: driver.h's columns).
