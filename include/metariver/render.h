@@ -4,7 +4,7 @@
 //
 // This header carries no OpenGL type: the renderer keeps its GL objects behind a
 // pointer, so apps and tests include it without the GL headers. The renderer reads
-// a SceneView (scene_view.h: terrain, tree, particles, surface, foam); it never changes them.
+// a SceneView (scene_view.h: terrain, tree, particles, surface, foam, bodies); it never changes them.
 //
 // Water shading: Schlick's Fresnel term (F0 = 0.02, water) mixes a reflection of the
 // analytic sky with the refracted terrain colour behind the water, absorbed with
@@ -88,6 +88,7 @@ struct RenderSettings {
     bool particles = false;           ///< debug: the active particles as shaded spheres
     float particle_radius = 0.3f;     ///< metres, drawn radius of a particle sphere
     bool foam = true;                 ///< diffuse particles ([foam]): foam on the water, spray, bubbles
+    bool bodies = true;               ///< the rigid bodies (SceneView::bodies): their meshes, wood-coloured
     bool bvh = false;                 ///< debug: the AABB tree's boxes as lines
     int bvh_level = -1;               ///< tree depth to draw (0 = root); -1 = the leaves
     WaterShading shading = WaterShading::Realistic;
@@ -122,6 +123,8 @@ struct RenderStats {
     size_t terrain_triangles = 0;
     size_t particles = 0;
     size_t foam_particles = 0;        ///< diffuse particles uploaded (spray, foam and bubbles)
+    size_t bodies = 0;                ///< bodies uploaded (those with a mesh)
+    size_t body_triangles = 0;        ///< their triangles
     size_t bvh_boxes = 0;             ///< boxes drawn in the latest frame
     double flow_ms = 0.0;             ///< latest update(): surface_velocities, milliseconds
 };

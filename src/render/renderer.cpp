@@ -1,7 +1,7 @@
-// The OpenGL 4.5 renderer: sky, terrain, water surface, debug particles and tree boxes.
+// The OpenGL 4.5 renderer: sky, terrain, bodies, water surface, debug particles and tree boxes.
 //
 // A frame, in passes:
-//   1. scene framebuffer (colour + depth textures): sky, terrain with skirts, debug
+//   1. scene framebuffer (colour + depth textures): sky, terrain with skirts, bodies, debug
 //      particles and boxes;
 //   2. final framebuffer: the scene's colour and depth are blitted in, then the water
 //      is drawn depth-tested against the terrain, sampling the scene's colour (what
@@ -13,6 +13,7 @@
 // buffers (orphaned with glBufferData, grown by 1.5x) and re-specify textures on resize.
 #include <metariver/render.h>
 
+#include "body_geometry.h"
 #include "flow_texture.h"
 #include "gl_objects.h"
 #include "gl_shader.h"
@@ -56,12 +57,12 @@ static_assert(kFlowDetailMinSpeed == static_cast<float>(MR_FLOW_MIN_SPEED) &&
 
 struct Renderer::Impl {
     RenderStats stats;
-    GLuint prog_sky = 0, prog_terrain = 0, prog_water = 0, prog_particles = 0, prog_boxes = 0, prog_foam = 0;
+    GLuint prog_sky = 0, prog_terrain = 0, prog_water = 0, prog_particles = 0, prog_boxes = 0, prog_foam = 0, prog_bodies = 0;
     GLuint ubo = 0;
-    GLuint vao_empty = 0, vao_terrain = 0, vao_water = 0, vao_particles = 0, vao_boxes = 0, vao_foam = 0;
+    GLuint vao_empty = 0, vao_terrain = 0, vao_water = 0, vao_particles = 0, vao_boxes = 0, vao_foam = 0, vao_bodies = 0;
     GLuint terrain_vbo = 0, terrain_ibo = 0, cube_vbo = 0, box_vbo = 0;
     GLuint terrain_tex = 0, flow_tex = 0;
-    DynamicBuffer water_pos, water_normal, water_vel, water_idx, particle_pos, foam_buf;
+    DynamicBuffer water_pos, water_normal, water_vel, water_idx, particle_pos, foam_buf, body_vbo, body_ibo;
     Target scene, final;
 
     size_t terrain_index_count = 0;
@@ -75,6 +76,8 @@ struct Renderer::Impl {
     std::vector<Vec3> scratch_positions;  // reused for the active particles
     std::vector<glm::vec4> scratch_foam;  // reused: diffuse position, kind
     std::vector<Vec3> scratch_velocity;   // reused: the fluid's velocity per water vertex
+    std::vector<BodyVertex> scratch_body;       // reused: the bodies' world-space vertices
+    std::vector<uint32_t> scratch_body_index;   // and their triangles
     SurfaceVelocityWorkspace flow_ws;
 
     GLuint create_buffer() {
@@ -120,7 +123,8 @@ struct Renderer::Impl {
                               {&prog_water, glsl::kWaterVert, glsl::kWaterFrag, "water"},
                               {&prog_particles, glsl::kParticleVert, glsl::kParticleFrag, "particle"},
                               {&prog_boxes, glsl::kBoxVert, glsl::kBoxFrag, "box"},
-                              {&prog_foam, glsl::kFoamVert, glsl::kFoamFrag, "foam"}};
+                              {&prog_foam, glsl::kFoamVert, glsl::kFoamFrag, "foam"},
+                              {&prog_bodies, glsl::kTerrainVert, glsl::kBodyFrag, "body"}};
         for (const P& p : programs) {
             auto r = link(p.vs, p.fs, p.name);
             if (!r) return r.error();
@@ -174,6 +178,18 @@ struct Renderer::Impl {
         glEnableVertexArrayAttrib(vao_foam, 0);
         glVertexArrayAttribFormat(vao_foam, 0, 4, GL_FLOAT, GL_FALSE, 0);
         glVertexArrayAttribBinding(vao_foam, 0, 0);
+
+        body_vbo.id = create_buffer();
+        body_ibo.id = create_buffer();
+        vao_bodies = create_vao();
+        glVertexArrayVertexBuffer(vao_bodies, 0, body_vbo.id, 0, sizeof(BodyVertex));
+        glVertexArrayElementBuffer(vao_bodies, body_ibo.id);
+        for (GLuint a = 0; a < 2; ++a) {
+            glEnableVertexArrayAttrib(vao_bodies, a);
+            glVertexArrayAttribFormat(vao_bodies, a, 3, GL_FLOAT, GL_FALSE, a == 0 ? offsetof(BodyVertex, pos)
+                                                                                      : offsetof(BodyVertex, normal));
+            glVertexArrayAttribBinding(vao_bodies, a, 0);
+        }
 
         // The unit cube's 12 edges as 24 line endpoints.
         std::vector<Vec3> cube;
@@ -303,6 +319,11 @@ struct Renderer::Impl {
         }
         foam_buf.upload(scratch_foam.data(), scratch_foam.size() * sizeof(glm::vec4), stats);
         stats.foam_particles = scratch_foam.size();
+        build_body_geometry(view.bodies, scratch_body, scratch_body_index);
+        body_vbo.upload(scratch_body.data(), scratch_body.size() * sizeof(BodyVertex), stats);
+        body_ibo.upload(scratch_body_index.data(), scratch_body_index.size() * sizeof(uint32_t), stats);
+        stats.bodies = size_t(std::count_if(view.bodies.begin(), view.bodies.end(), [](const BodyState& b) { return b.mesh != nullptr; }));
+        stats.body_triangles = scratch_body_index.size() / 3;
         last_owner = view.owner;
         last_frame = view.frame;
     }
@@ -312,12 +333,14 @@ Renderer::Renderer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
 Renderer::~Renderer() {
     Impl& r = *impl_;
-    const GLuint programs[] = {r.prog_sky, r.prog_terrain, r.prog_water, r.prog_particles, r.prog_boxes, r.prog_foam};
+    const GLuint programs[] = {r.prog_sky,       r.prog_terrain, r.prog_water, r.prog_particles,
+                               r.prog_boxes,     r.prog_foam,    r.prog_bodies};
     for (GLuint p : programs) glDeleteProgram(p);
     const GLuint buffers[] = {r.ubo, r.terrain_vbo, r.terrain_ibo, r.cube_vbo, r.box_vbo, r.water_pos.id,
-                              r.water_normal.id, r.water_vel.id, r.water_idx.id, r.particle_pos.id, r.foam_buf.id};
+                              r.water_normal.id, r.water_vel.id, r.water_idx.id, r.particle_pos.id, r.foam_buf.id,
+                              r.body_vbo.id, r.body_ibo.id};
     glDeleteBuffers(static_cast<GLsizei>(std::size(buffers)), buffers);
-    const GLuint vaos[] = {r.vao_empty, r.vao_terrain, r.vao_water, r.vao_particles, r.vao_boxes, r.vao_foam};
+    const GLuint vaos[] = {r.vao_empty, r.vao_terrain, r.vao_water, r.vao_particles, r.vao_boxes, r.vao_foam, r.vao_bodies};
     glDeleteVertexArrays(static_cast<GLsizei>(std::size(vaos)), vaos);
     const GLuint textures[] = {r.terrain_tex, r.flow_tex, r.scene.color, r.scene.depth, r.final.color, r.final.depth};
     glDeleteTextures(static_cast<GLsizei>(std::size(textures)), textures);
@@ -435,6 +458,11 @@ void Renderer::draw(const Camera& camera, int width, int height, const RenderSet
         glBindTextureUnit(0, r.terrain_tex);
         glBindVertexArray(r.vao_terrain);
         glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(r.terrain_index_count), GL_UNSIGNED_INT, nullptr);
+    }
+    if (s.bodies && r.stats.body_triangles > 0) {  // under the water's pass: submerged parts are seen through it
+        glUseProgram(r.prog_bodies);
+        glBindVertexArray(r.vao_bodies);
+        glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(r.stats.body_triangles * 3), GL_UNSIGNED_INT, nullptr);
     }
     if (s.particles && r.stats.particles > 0) {
         glEnable(GL_PROGRAM_POINT_SIZE);

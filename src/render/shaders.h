@@ -293,6 +293,24 @@ void main() {
 }
 )";
 
+// ---- bodies (bodies.h): wood, lit by the sun and the sky; the water is drawn over them ----
+// The vertex stage is the terrain's (kTerrainVert: position and normal; no skirt).
+inline constexpr const char* kBodyFrag = R"(
+in vec3 v_pos;
+in vec3 v_normal;
+out vec4 o_color;
+void main() {
+    vec3 n = normalize(gl_FrontFacing ? v_normal : -v_normal);
+    // Grain: bands along the body, broken by a slow wave (any orientation reads as wood).
+    float grain = 0.5 + 0.5 * sin((v_pos.x + v_pos.z) * 9.0 + sin(v_pos.y * 3.0 + v_pos.x * 0.7) * 2.5);
+    vec3 base = mix(vec3(0.30, 0.18, 0.09), vec3(0.48, 0.32, 0.17), grain);
+    float sun = max(dot(n, u_sun.xyz), 0.0);
+    float sky = 0.5 + 0.5 * n.y;
+    vec3 c = base * (kSunColor * sun * 0.8 + vec3(0.60, 0.65, 0.75) * (0.35 + 0.35 * sky));
+    o_color = vec4(to_srgb(apply_fog(c, v_pos)), 1.0);
+}
+)";
+
 // ---- particles (debug): point sprites shaded as spheres ----
 inline constexpr const char* kParticleVert = R"(
 layout(location = 0) in vec3 a_pos;
