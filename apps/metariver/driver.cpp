@@ -41,7 +41,7 @@ nlohmann::json stage_json(const std::vector<double>& ms) {
 
 Status write_export_frame(Exporter& exporter, long long frame, double time_s, const Simulation& sim) {
     return exporter.write_frame(frame, time_s, sim.surface(), sim.particles(), sim.frame(),
-                                sim.foam() ? &sim.foam()->particles() : nullptr);
+                                sim.foam() ? &sim.foam()->particles() : nullptr, sim.view().bodies);
 }
 
 // ---- Outputs ----

@@ -16,6 +16,7 @@
 // fails part-way, or is destroyed before finish(), removes what it wrote.
 #pragma once
 
+#include <metariver/bodies.h>
 #include <metariver/core.h>
 #include <metariver/foam.h>
 #include <metariver/particles.h>
@@ -101,6 +102,11 @@ Result<std::string> encode_glb_mesh(const MeshView& m, std::string_view name, bo
 /// _VELOCITY (VEC3 float, m/s), _ID (float: exact below 2^24 > kMaxParticles; glTF
 /// allows UNSIGNED_INT only for indices) and _AGE (float, seconds).
 Result<std::string> encode_glb_points(const ParticleFrame& p, std::string_view name);
+/// glTF 2.0 binary of the bodies (bodies.h): one scene, one node per body named
+/// "body_<id>" with its transform (translation: the centre of mass; rotation: the
+/// orientation as x, y, z, w) and its mesh in the body's own frame (POSITION, NORMAL,
+/// UNSIGNED_INT indices, material "wood"); a body without a mesh is a node without one.
+Result<std::string> encode_glb_bodies(std::span<const BodyState> bodies);
 
 /// What a VDB file holds (for the manifest and the tests).
 struct VdbStats {
@@ -151,6 +157,7 @@ struct ExportedFrame {
     size_t triangles = 0;             ///< water mesh
     size_t particles = 0;             ///< active particles written
     size_t foam = 0;                  ///< diffuse particles written (foam_NNNNN.ply; 0 without [foam])
+    std::vector<BodyState> bodies;    ///< the bodies' states (their transforms go to the manifest)
     uint64_t active_voxels = 0;       ///< VDB level set (0 without vdb)
     std::vector<std::string> files;   ///< file names in the folder, water then particles per format
 };
@@ -173,10 +180,13 @@ public:
     /// Writes frame `frame`'s files for every format. `time_s`: simulated time of the
     /// frame; `solver_frame`: the solver's frame counter (for particle ages); `foam`:
     /// the diffuse particles (Simulation::foam()), written to foam_NNNNN.ply with the
-    /// particles, or null. On an error this export's files are all removed, and the
+    /// particles, or null; `bodies`: the rigid bodies (SceneView::bodies), their
+    /// transforms in the manifest and, with glb, bodies_NNNNN.glb (encode_glb_bodies)
+    /// when there are any. On an error this export's files are all removed, and the
     /// error names the file.
     Status write_frame(long long frame, double time_s, const SurfaceMesh& water, const Particles& particles,
-                       uint64_t solver_frame, const DiffuseParticles* foam = nullptr);
+                       uint64_t solver_frame, const DiffuseParticles* foam = nullptr,
+                       std::span<const BodyState> bodies = {});
     /// Writes the manifest (export.json) last; after it the files stay.
     Status finish();
     /// Removes every file this export wrote (and the folder if it created it).

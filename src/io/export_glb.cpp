@@ -74,8 +74,11 @@ public:
         return int(model_.materials.size()) - 1;
     }
 
-    /// A node named `name`, with the primitive when it has any attribute (else empty).
-    void add_node(std::string_view name, std::optional<tinygltf::Primitive> primitive) {
+    /// A node named `name`, with the primitive when it has any attribute (else empty),
+    /// in the file's one scene (made by the first node, named after it); `transform`:
+    /// translation x y z then rotation x y z w, or none.
+    tinygltf::Node& add_node(std::string_view name, std::optional<tinygltf::Primitive> primitive,
+                             const std::optional<std::array<double, 7>>& transform = std::nullopt) {
         tinygltf::Node node;
         node.name = std::string(name);
         if (primitive) {
@@ -85,12 +88,18 @@ public:
             model_.meshes.push_back(std::move(mesh));
             node.mesh = int(model_.meshes.size()) - 1;
         }
+        if (transform) {
+            node.translation.assign(transform->begin(), transform->begin() + 3);
+            node.rotation.assign(transform->begin() + 3, transform->end());
+        }
         model_.nodes.push_back(std::move(node));
-        tinygltf::Scene scene;
-        scene.name = std::string(name);
-        scene.nodes.push_back(int(model_.nodes.size()) - 1);
-        model_.scenes.push_back(std::move(scene));
+        if (model_.scenes.empty()) {
+            model_.scenes.emplace_back();
+            model_.scenes.back().name = std::string(name);
+        }
+        model_.scenes.front().nodes.push_back(int(model_.nodes.size()) - 1);
         model_.defaultScene = 0;
+        return model_.nodes.back();
     }
 
     Result<std::string> bytes() {
@@ -122,12 +131,11 @@ private:
 
 }  // namespace
 
-Result<std::string> encode_glb_mesh(const MeshView& m, std::string_view name, bool water) {
-    GlbBuilder b;
-    if (m.triangle_count() == 0 || m.positions.empty()) {
-        b.add_node(name, std::nullopt);
-        return b.bytes();
-    }
+namespace {
+
+/// The triangles of `m` with POSITION, unit NORMAL (when given), TEXCOORD_0 (when given)
+/// and indices, into `b`.
+tinygltf::Primitive mesh_primitive(GlbBuilder& b, const MeshView& m) {
     tinygltf::Primitive prim;
     prim.mode = TINYGLTF_MODE_TRIANGLES;
     prim.attributes["POSITION"] = b.add_floats(&m.positions[0].x, m.vertex_count(), 3, TINYGLTF_TYPE_VEC3, true,
@@ -146,6 +154,18 @@ Result<std::string> encode_glb_mesh(const MeshView& m, std::string_view name, bo
         prim.attributes["TEXCOORD_0"] =
             b.add_floats(&m.uvs[0].x, m.uvs.size(), 2, TINYGLTF_TYPE_VEC2, false, TINYGLTF_TARGET_ARRAY_BUFFER);
     prim.indices = b.add_indices(m.indices);
+    return prim;
+}
+
+}  // namespace
+
+Result<std::string> encode_glb_mesh(const MeshView& m, std::string_view name, bool water) {
+    GlbBuilder b;
+    if (m.triangle_count() == 0 || m.positions.empty()) {
+        b.add_node(name, std::nullopt);
+        return b.bytes();
+    }
+    tinygltf::Primitive prim = mesh_primitive(b, m);
     prim.material = water ? b.add_material("water", {0.10, 0.35, 0.60, 0.70}, 0.05, true)
                           : b.add_material("terrain", {0.42, 0.45, 0.33, 1.0}, 0.9, false);
     b.add_node(name, std::move(prim));
@@ -169,6 +189,31 @@ Result<std::string> encode_glb_points(const ParticleFrame& p, std::string_view n
     prim.attributes["_AGE"] =
         b.add_floats(p.age.data(), p.age.size(), 1, TINYGLTF_TYPE_SCALAR, false, TINYGLTF_TARGET_ARRAY_BUFFER);
     b.add_node(name, std::move(prim));
+    return b.bytes();
+}
+
+Result<std::string> encode_glb_bodies(std::span<const BodyState> bodies) {
+    GlbBuilder b;
+    if (bodies.empty()) {
+        b.add_node("bodies", std::nullopt);
+        return b.bytes();
+    }
+    int wood = -1;
+    for (const BodyState& s : bodies) {
+        const glm::quat q = glm::normalize(s.orientation);
+        const std::array<double, 7> t{s.position.x, s.position.y, s.position.z, q.x, q.y, q.z, q.w};
+        std::optional<tinygltf::Primitive> prim;
+        const BodyMesh* m = s.mesh.get();
+        const size_t n = m ? m->positions.size() : 0;
+        if (m && n > 0 && !m->indices.empty() && m->indices.size() % 3 == 0 &&
+            std::all_of(m->indices.begin(), m->indices.end(), [&](uint32_t i) { return i < n; })) {
+            const MeshView view{.positions = m->positions, .normals = m->normals, .indices = m->indices};
+            prim = mesh_primitive(b, view);
+            if (wood < 0) wood = b.add_material("wood", {0.45, 0.30, 0.16, 1.0}, 0.8, false);
+            prim->material = wood;
+        }
+        b.add_node(fmt::format("body_{}", s.id), std::move(prim), t);
+    }
     return b.bytes();
 }
 

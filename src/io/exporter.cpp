@@ -158,11 +158,12 @@ Status Exporter::write(const std::string& name, const std::string& bytes) {
 }
 
 Status Exporter::write_frame(long long frame, double time_s, const SurfaceMesh& water, const Particles& particles,
-                             uint64_t solver_frame, const DiffuseParticles* foam) {
+                             uint64_t solver_frame, const DiffuseParticles* foam, std::span<const BodyState> bodies) {
     ExportedFrame rec{.frame = frame,
                       .time_s = time_s,
                       .vertices = water.vertex_count(),
-                      .triangles = water.triangle_count()};
+                      .triangles = water.triangle_count(),
+                      .bodies = {bodies.begin(), bodies.end()}};
     if (def_.particles) {
         gather_particle_frame(particles, solver_frame, def_.solver_dt, scratch_);
         rec.particles = scratch_.size();
@@ -195,6 +196,8 @@ Status Exporter::write_frame(long long frame, double time_s, const SurfaceMesh& 
                 bytes_written += bytes.size();
             }
         }
+        // The bodies as nodes with their transforms, once per frame, with glb.
+        if (s && !bodies.empty() && st.format == ExportFormat::Glb) s = emit("bodies", encode_glb_bodies(bodies));
         if (!s) {
             abort();
             return s;
@@ -225,12 +228,15 @@ Status Exporter::finish() {
     json formats = json::array();
     for (ExportFormat f : def_.formats) formats.push_back(std::string(to_string(f)));
     j["formats"] = formats;
+    const bool has_glb = std::find(def_.formats.begin(), def_.formats.end(), ExportFormat::Glb) != def_.formats.end();
     j["patterns"] = {{"water", fmt::format("water_{}.EXT", std::string(static_cast<size_t>(def_.digits), '#'))},
                      {"particles", def_.particles ? json(fmt::format("particles_{}.EXT",
                                                                      std::string(static_cast<size_t>(def_.digits), '#')))
                                                   : json(nullptr)},
                      {"foam", def_.particles ? json(fmt::format("foam_{}.ply", std::string(static_cast<size_t>(def_.digits), '#')))
-                                             : json(nullptr)}};
+                                             : json(nullptr)},
+                     {"bodies", has_glb ? json(fmt::format("bodies_{}.glb", std::string(static_cast<size_t>(def_.digits), '#')))
+                                        : json(nullptr)}};
     j["terrain"] = terrain_files_;
     j["contents"] = {
         {"obj", "water: v, vn, f a//a; particles: v + p (positions only); terrain: v, vt, vn"},
@@ -242,6 +248,10 @@ Status Exporter::finish() {
                  {"particles", {{"grid", "points"}, {"attributes", {"P", "v", "id", "age"}}}},
                  {"voxel_size", std::stod(fmt::format("{}", def_.voxel_size))}}},  // 0.33333334, not the double of the float
         {"age", "seconds since the particle's latest emission by the source"},
+        {"bodies", "per frame: each body's id, position (centre of mass, m), orientation (quaternion x y z w, body to "
+                   "world), velocity (m/s), angular_velocity (rad/s, world axes), submerged_fraction; with glb and "
+                   "bodies: bodies_#.glb, one node per body 'body_<id>' with that transform and its mesh in its own "
+                   "frame, material 'wood'"},
         {"foam", "with [foam]: foam_#.ply per frame whatever the formats, binary_little_endian 1.0: float x y z vx vy vz, "
                  "uchar kind (0 spray, 1 foam, 2 bubble), float life (seconds left)"}};
     json per_format = json::object();
@@ -255,11 +265,21 @@ Status Exporter::finish() {
     }
     j["stats"] = per_format;
     const bool has_vdb = std::find(def_.formats.begin(), def_.formats.end(), ExportFormat::Vdb) != def_.formats.end();
+    auto vec = [](const Vec3& v) { return json{v.x, v.y, v.z}; };
     json files = json::array();
     for (const ExportedFrame& f : frames_) {
         json e = {{"frame", f.frame},      {"time_s", f.time_s},       {"files", f.files},
                   {"vertices", f.vertices}, {"triangles", f.triangles}, {"particles", f.particles}, {"foam", f.foam}};
         if (has_vdb) e["active_voxels"] = f.active_voxels;
+        json bodies = json::array();
+        for (const BodyState& b : f.bodies)
+            bodies.push_back({{"id", b.id},
+                              {"position", vec(b.position)},
+                              {"orientation", {b.orientation.x, b.orientation.y, b.orientation.z, b.orientation.w}},
+                              {"velocity", vec(b.velocity)},
+                              {"angular_velocity", vec(b.angular_velocity)},
+                              {"submerged_fraction", b.submerged_fraction}});
+        e["bodies"] = std::move(bodies);
         files.push_back(std::move(e));
     }
     j["frame_files"] = files;

@@ -112,7 +112,18 @@ struct Samples {
     Terrain terrain = test::small_terrain();
     TerrainAttributes attributes = terrain_attributes(terrain);
     ParticleFrame particles;
-    Samples() { gather_particle_frame(test::sample_particles(50, 40, 10), 10, 1.0 / 60.0, particles); }
+    std::vector<BodyState> bodies;  ///< a turned body with the sphere as its mesh, one without a mesh
+    Samples() {
+        gather_particle_frame(test::sample_particles(50, 40, 10), 10, 1.0 / 60.0, particles);
+        auto m = std::make_shared<BodyMesh>();
+        for (const Vec3& p : water.mesh.positions) m->positions.push_back(p - water.center);  // its own frame
+        m->normals = water.mesh.normals;
+        m->indices = water.mesh.indices;
+        bodies.resize(2);
+        bodies[0] = {.id = 4, .shape = BodyShape::ConvexMesh, .position = Vec3(10.0f, 2.0f, -3.0f),
+                     .orientation = glm::angleAxis(0.5f, glm::normalize(Vec3(1.0f, 2.0f, 0.5f))), .mesh = m};
+        bodies[1] = {.id = 9, .shape = BodyShape::Box, .position = Vec3(1.0f, 0.5f, 2.0f)};
+    }
     MeshView water_view() const { return mesh_view(water.mesh); }
     MeshView terrain_mesh() const { return terrain_view(terrain, attributes); }
 };
@@ -233,6 +244,33 @@ TEST_F(ExportAssimp, ReadsTheGlbWaterTerrainAndParticlesWithTheCountsWritten) {
     EXPECT_EQ(read_points(points), s.particles.position);
 }
 
+TEST_F(ExportAssimp, ReadsTheGlbBodiesAsNodesWithTheirTransformsAndMeshes) {
+    const Samples s;
+    const auto file = put("bodies_00000.glb", encode_glb_bodies(s.bodies).value());
+    Assimp::Importer importer;
+    const aiScene* scene = importer.ReadFile(file.string(), 0);
+    ASSERT_NE(scene, nullptr) << importer.GetErrorString();
+    ASSERT_EQ(scene->mNumMeshes, 1u) << "the body without a mesh is a node without one";
+    EXPECT_EQ(scene->mMeshes[0]->mNumVertices, s.water.mesh.vertex_count());
+    EXPECT_EQ(scene->mMeshes[0]->mNumFaces, s.water.mesh.triangle_count());
+    for (const BodyState& b : s.bodies) {
+        const aiNode* node = scene->mRootNode->FindNode(fmt::format("body_{}", b.id).c_str());
+        ASSERT_NE(node, nullptr) << b.id;
+        EXPECT_EQ(node->mNumMeshes, b.mesh ? 1u : 0u);
+        aiVector3D scaling, position;
+        aiQuaternion rotation;
+        node->mTransformation.Decompose(scaling, rotation, position);
+        EXPECT_NEAR(position.x, b.position.x, 1e-5f);
+        EXPECT_NEAR(position.y, b.position.y, 1e-5f);
+        EXPECT_NEAR(position.z, b.position.z, 1e-5f);
+        EXPECT_NEAR(std::abs(rotation.w * b.orientation.w + rotation.x * b.orientation.x + rotation.y * b.orientation.y +
+                             rotation.z * b.orientation.z),
+                    1.0f, 1e-5f)
+            << "the same rotation";
+        EXPECT_NEAR(scaling.x, 1.0f, 1e-5f);
+    }
+}
+
 #else
 
 TEST(ExportAssimp, ReadsTheExportedFiles) {
@@ -244,7 +282,7 @@ TEST(ExportAssimp, ReadsTheExportedFiles) {
 
 class ExportGltfValidator : public ExportFixture {};
 
-TEST_F(ExportGltfValidator, KhronosValidatorFindsNoErrorsInWaterTerrainParticlesAndEmptyFrames) {
+TEST_F(ExportGltfValidator, KhronosValidatorFindsNoErrorsInWaterTerrainParticlesBodiesAndEmptyFrames) {
     const std::string node = test::find_program("node");
     const std::filesystem::path modules = std::filesystem::path(METARIVER_SOURCE_DIR) / "build/npm/node_modules";
     if (node.empty()) MR_SKIP_OR_FAIL("node is not installed (apt-get install nodejs npm): glb files not validated");
@@ -258,7 +296,9 @@ TEST_F(ExportGltfValidator, KhronosValidatorFindsNoErrorsInWaterTerrainParticles
         put("terrain.glb", encode_glb_mesh(s.terrain_mesh(), "terrain", false).value()),
         put("particles_00000.glb", encode_glb_points(s.particles, "particles").value()),
         put("water_00001.glb", encode_glb_mesh(MeshView{}, "water", true).value()),
-        put("particles_00001.glb", encode_glb_points(ParticleFrame{}, "particles").value())};
+        put("particles_00001.glb", encode_glb_points(ParticleFrame{}, "particles").value()),
+        put("bodies_00000.glb", encode_glb_bodies(s.bodies).value()),
+        put("bodies_00001.glb", encode_glb_bodies({}).value())};
     std::string cmd = "NODE_PATH=" + modules.string() + " " + node + " " + METARIVER_SOURCE_DIR +
                       "/scripts/gltf_validate.cjs";
     for (const auto& file : files) cmd += " " + file.string();

@@ -159,6 +159,42 @@ TEST_F(Exporting, FoamGoesToOnePlyPerFrameBesideTheParticlesAndIntoTheManifest) 
     EXPECT_FALSE(names(bare).count("foam_00000.ply"));
 }
 
+TEST_F(Exporting, BodiesGoToTheManifestEveryFrameAndToAGlbWithGlb) {
+    auto sim = small_river();
+    ASSERT_TRUE(sim);
+    sim->step(1.0f / 60.0f);
+    auto mesh = std::make_shared<BodyMesh>(BodyMesh{.positions = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 0, -1)},
+                                                     .normals = {Vec3(0, 1, 0), Vec3(0, 1, 0), Vec3(0, 1, 0)},
+                                                     .indices = {0, 1, 2}});
+    std::vector<BodyState> bodies(1);
+    bodies[0] = {.id = 5, .position = Vec3(12.0f, 3.0f, 40.0f), .orientation = glm::quat(0.0f, 0.0f, 1.0f, 0.0f),
+                 .velocity = Vec3(0.5f, 0.0f, -1.5f), .submerged_fraction = 0.4f, .mesh = mesh};
+    for (const bool glb : {false, true}) {
+        const fs::path out = dir_ / (glb ? "with_glb" : "obj_only");
+        auto e = Exporter::begin(ExportDef{.dir = out.string(),
+                                           .formats = glb ? std::vector{ExportFormat::Obj, ExportFormat::Glb}
+                                                          : std::vector{ExportFormat::Obj}});
+        ASSERT_TRUE(e.ok()) << e.error().message;
+        ASSERT_TRUE(e.value()->write_frame(0, 0.0, sim->surface(), sim->particles(), sim->frame(), nullptr, bodies).ok());
+        ASSERT_TRUE(e.value()->write_frame(1, 0.1, sim->surface(), sim->particles(), sim->frame()).ok());  // none
+        ASSERT_TRUE(e.value()->finish().ok());
+        EXPECT_EQ(fs::exists(out / "bodies_00000.glb"), glb);
+        EXPECT_FALSE(fs::exists(out / "bodies_00001.glb")) << "a frame without bodies has no bodies file";
+        const auto j = nlohmann::json::parse(test::slurp(out / "export.json"));
+        EXPECT_EQ(j["patterns"]["bodies"].is_null(), !glb);
+        const auto& f0 = j["frame_files"][0];
+        ASSERT_EQ(f0["bodies"].size(), 1u);
+        EXPECT_EQ(f0["bodies"][0]["id"], 5);
+        EXPECT_EQ(f0["bodies"][0]["position"], (nlohmann::json{12.0f, 3.0f, 40.0f}));
+        EXPECT_EQ(f0["bodies"][0]["orientation"], (nlohmann::json{0.0f, 1.0f, 0.0f, 0.0f})) << "x y z w";
+        EXPECT_EQ(f0["bodies"][0]["velocity"], (nlohmann::json{0.5f, 0.0f, -1.5f}));
+        EXPECT_FLOAT_EQ(f0["bodies"][0]["submerged_fraction"].get<float>(), 0.4f);
+        EXPECT_TRUE(j["frame_files"][1]["bodies"].empty());
+        const auto& files = f0["files"];
+        EXPECT_EQ(std::count(files.begin(), files.end(), "bodies_00000.glb"), glb ? 1 : 0);
+    }
+}
+
 TEST_F(Exporting, DroppedBeforeFinishItRemovesWhatItWroteAndTheFolderItMade) {
     auto sim = small_river();
     ASSERT_TRUE(sim);
