@@ -5,7 +5,6 @@
 
 #include <metariver/foam.h>
 #include <metariver/io.h>
-#include <metariver/scene_keys.h>
 
 #include <fmt/format.h>
 
@@ -127,10 +126,6 @@ json stage_ms_json(const Simulation& sim, const Checkpoints& stage_ms) {
 }  // namespace
 
 json bodies_json(std::span<const BodyState> bodies, uint64_t inside) {
-    // The shape's name as the scene file writes it ([[bodies]] shape's choices, BodyShape's order).
-    const auto lists = scene_lists();
-    const auto list = std::find_if(lists.begin(), lists.end(), [](const SceneList& l) { return l.name == "bodies"; });
-    const std::span<const std::string_view> names = list->keys[0].key.choices;
     json each = json::array();
     double submerged = 0.0, speed = 0.0;
     float max_speed = 0.0f;
@@ -139,9 +134,8 @@ json bodies_json(std::span<const BodyState> bodies, uint64_t inside) {
         submerged += b.submerged_fraction;
         speed += v;
         max_speed = std::max(max_speed, v);
-        const auto shape = static_cast<size_t>(b.shape);
         each.push_back({{"id", b.id},
-                        {"shape", shape < names.size() ? names[shape] : "?"},
+                        {"shape", to_string(b.shape)},
                         {"position", {b.position.x, b.position.y, b.position.z}},
                         {"speed", v},
                         {"submerged_fraction", b.submerged_fraction},

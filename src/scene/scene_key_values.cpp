@@ -156,14 +156,11 @@ std::string bodies_error(const SceneDef& d) {
         return fmt::format("bodies: only solver = \"pbf\" moves bodies (their coupling with the water is PBF's; solver = "
                            "\"{}\" has none): remove [[bodies]]",
                            to_string(d.solver));
-    const auto& lists = scene_lists();
-    const auto list = std::find_if(lists.begin(), lists.end(), [](const SceneList& l) { return l.name == "bodies"; });
-    const SceneKey& shape_key = list->keys[0].key;  // the shape's names, in BodyShape's order
     for (size_t i = 0; i < d.bodies.size(); ++i) {
         const BodyDef& b = d.bodies[i];
         const bool mesh_shape = b.shape == BodyShape::ConvexMesh || b.shape == BodyShape::TriangleMesh;
         const int used = b.shape == BodyShape::Box ? 3 : 1;  // a capsule's length .y may be 0 (a sphere)
-        const std::string_view shape = shape_key.choices[static_cast<size_t>(b.shape)];
+        const std::string_view shape = to_string(b.shape);
         for (int c = 0; c < used; ++c)
             if (!(b.size[c] > 0.0f))
                 return fmt::format("bodies[{}].size: component {} must be in (0, 1000] for shape = \"{}\" (got {})", i + 1,

@@ -70,6 +70,17 @@ TEST(SceneBodies, AWrittenSceneLoadsBackWithItsBodies) {
     EXPECT_NE(plain.find("#   density: "), std::string::npos);
 }
 
+TEST(SceneBodies, TheShapesNamesAreToStringsInBodyShapesOrder) {
+    const SceneList* bodies = nullptr;
+    for (const SceneList& l : scene_lists())
+        if (l.name == "bodies") bodies = &l;
+    ASSERT_NE(bodies, nullptr);
+    const SceneKey& shape = bodies->keys[0].key;
+    ASSERT_EQ(shape.name, "shape");
+    ASSERT_EQ(shape.choices.size(), 5u);
+    for (size_t i = 0; i < shape.choices.size(); ++i) EXPECT_EQ(shape.choices[i], to_string(static_cast<BodyShape>(i)));
+}
+
 TEST(SceneBodies, TheReferenceListsEveryKey) {
     const std::string ref = scene_reference_markdown();
     EXPECT_NE(ref.find("#### [[bodies]]"), std::string::npos);
