@@ -33,7 +33,7 @@ extern "C" {
 
 /* The API this header describes; mr_api_version() is the library's (same major: compatible). */
 #define MR_API_VERSION_MAJOR 1
-#define MR_API_VERSION_MINOR 0
+#define MR_API_VERSION_MINOR 1 /* 1: bodies (mr_world_add_body & co) */
 #define MR_API_VERSION ((MR_API_VERSION_MAJOR << 16) | MR_API_VERSION_MINOR)
 
 typedef enum mr_status {
@@ -176,6 +176,56 @@ MR_API mr_status mr_world_move_source(mr_world* world, const float center[3]);
 /* Replaces the scene's box sinks (where water leaves) with count boxes, each min xyz then
  * max xyz (6 floats); count 0 removes them. At most 16. The edge sink of a river stays. */
 MR_API mr_status mr_world_set_sink_boxes(mr_world* world, const float* boxes, size_t count);
+
+/* Rigid bodies in the water (logs, boats, crates; solver "pbf" only, docs/bodies.md): the
+ * scene's [[bodies]] keys as a flat struct. Start from mr_body_desc_default(). */
+typedef enum mr_body_shape {
+    MR_BODY_BOX = 0,          /* size: full extents along the body's x, y, z */
+    MR_BODY_SPHERE = 1,       /* size[0]: radius */
+    MR_BODY_CAPSULE = 2,      /* size[0]: radius, size[1]: the cylinder's length along the body's x */
+    MR_BODY_CONVEX_MESH = 3,  /* the convex hull of mesh's vertices, scaled by size[0] */
+    MR_BODY_TRIANGLE_MESH = 4 /* the closed triangle mesh of mesh, scaled by size[0] */
+} mr_body_shape;
+typedef struct mr_body_desc {
+    int32_t shape;              /* an mr_body_shape */
+    float size[3];              /* metres, see mr_body_shape; the components the shape reads in (0, 1000] */
+    const char* mesh;           /* the OBJ file of a mesh shape (NULL or "" otherwise); copied */
+    float density;              /* kg/m^3, (0, 100000]; water is 1000 */
+    float position[3];          /* the centre of mass, metres */
+    float rotation[3];          /* degrees: about the world's x, then y, then z */
+    float velocity[3];          /* m/s */
+    float angular_velocity[3];  /* rad/s, world axes */
+    float friction;             /* Coulomb coefficient against the terrain and other bodies, [0, 2] */
+} mr_body_desc;
+/* A log: a 2 x 0.5 x 0.5 m box of 500 kg/m^3 at the origin, at rest, friction 0.5. */
+MR_API mr_body_desc mr_body_desc_default(void);
+/* Adds a body; *out_id: its id (stable, never reused in the world). A bad value is
+ * MR_ERROR_INVALID_ARGUMENT naming its scene key ("bodies.density"), an unreadable mesh
+ * MR_ERROR_IO, a solver without bodies MR_ERROR_UNSUPPORTED. */
+MR_API mr_status mr_world_add_body(mr_world* world, const mr_body_desc* desc, uint32_t* out_id);
+/* Removes a body; an id with no body is MR_ERROR_INVALID_ARGUMENT naming `id`. */
+MR_API mr_status mr_world_remove_body(mr_world* world, uint32_t id);
+/* Moves a body (a drag, a throw): its centre of mass, orientation (a quaternion x, y, z, w;
+ * normalised here, not zero), velocity and angular velocity (world axes). */
+MR_API mr_status mr_world_set_body_motion(mr_world* world, uint32_t id, const float position[3],
+                                          const float orientation[4], const float velocity[3],
+                                          const float angular_velocity[3]);
+/* A body after the latest frame. */
+typedef struct mr_body_state {
+    uint32_t id;
+    int32_t shape;              /* an mr_body_shape */
+    float size[3];
+    float position[3];          /* centre of mass, metres */
+    float orientation[4];       /* body to world, a unit quaternion x, y, z, w */
+    float velocity[3];          /* m/s */
+    float angular_velocity[3];  /* rad/s, world axes */
+    float mass;                 /* kg */
+    float submerged_fraction;   /* share of the volume under the water, [0, 1] */
+} mr_body_state;
+/* Copies the bodies, in the order they were added, into out; *count: how many there
+ * are. out may be NULL (count only); MR_ERROR_BUFFER_TOO_SMALL (nothing written) when
+ * capacity is smaller than the count. */
+MR_API mr_status mr_world_bodies(const mr_world* world, mr_body_state* out, size_t capacity, size_t* count);
 
 /* Water queries on the latest frame (the first query after a step builds their grids).
  * Batches of count points; outputs are arrays the caller owns. */

@@ -38,6 +38,29 @@ static void check_errors(mr_world* world) {
     CHECK(strcmp(mr_status_name((mr_status)99), "MR_STATUS_UNKNOWN") == 0);
 }
 
+/* A body: added, read back, thrown, stepped and removed, in plain C99. */
+static void check_bodies(mr_world* world) {
+    mr_body_desc body = mr_body_desc_default();
+    mr_body_state states[2];
+    mr_terrain_info terrain;
+    const float q[4] = {0.0f, 0.0f, 0.0f, 1.0f}, v[3] = {1.0f, 0.0f, 0.0f}, w[3] = {0.0f, 0.0f, 0.0f};
+    uint32_t id = 0;
+    size_t n = 0;
+    CHECK(mr_world_terrain(world, &terrain) == MR_OK);
+    body.position[0] = 0.5f * (float)(terrain.columns - 1) * terrain.area_scale;
+    body.position[1] = terrain.max_y + 2.0f;
+    body.position[2] = 0.5f * (float)(terrain.rows - 1) * terrain.area_scale;
+    CHECK(mr_world_add_body(world, &body, &id) == MR_OK);
+    CHECK(mr_world_bodies(world, NULL, 0, &n) == MR_OK && n == 1);
+    CHECK(mr_world_bodies(world, states, 2, &n) == MR_OK && states[0].id == id && states[0].shape == MR_BODY_BOX);
+    CHECK(states[0].mass > 0.0f);
+    CHECK(mr_world_set_body_motion(world, id, body.position, q, v, w) == MR_OK);
+    CHECK(mr_world_step(world, 1.0f / 60.0f) == MR_OK);
+    CHECK(mr_world_remove_body(world, id) == MR_OK);
+    CHECK(mr_world_remove_body(world, id) == MR_ERROR_INVALID_ARGUMENT);
+    CHECK(mr_world_bodies(world, states, 2, &n) == MR_OK && n == 0);
+}
+
 int main(void) {
     mr_world_desc desc = mr_world_desc_default();
     mr_world* world = NULL;
@@ -78,6 +101,7 @@ int main(void) {
     CHECK(index_count == 0 || memcmp(indices, surface.indices, index_count * sizeof(uint32_t)) == 0);
     free(indices);
 
+    check_bodies(world);
     check_errors(world);
     mr_world_destroy(world);
     if (failures == 0) printf("c99_test: all checks passed (%lu active particles)\n", (unsigned long)active);
