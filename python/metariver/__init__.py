@@ -7,6 +7,9 @@ ctypes over the library's C API (include/metariver/metariver.h). Start with::
         world.step(frames=60)
         positions, velocities = world.particles()   # copies, (N, 3) float32
         vertices, normals, indices = world.surface()
+        log = world.add_body("box", (3.0, 0.4, 0.4), density=600.0, position=(30.0, 20.0, 80.0))
+        world.step(frames=60)
+        world.bodies()["position"]               # a record array, one row per body
 
 What is a copy and what is a view: particles(), surface(), terrain_heights() and the
 query results are copies the caller owns; particles_view() gives read-only numpy views
@@ -16,7 +19,7 @@ file the METARIVER_LIBRARY environment variable names.
 """
 from __future__ import annotations
 
-from ._capi import RAY_HIT_DTYPE, WATER_SAMPLE_DTYPE, Error, StaleViewError, library_path
+from ._capi import BODY_SHAPES, BODY_STATE_DTYPE, RAY_HIT_DTYPE, WATER_SAMPLE_DTYPE, Error, StaleViewError, library_path
 from ._capi import lib as _lib
 from .world import Particles, ParticlesView, Stats, Surface, TerrainInfo, World
 
@@ -31,7 +34,8 @@ except ImportError:  # the source tree: the project's version from CMakeLists.tx
     __version__ = _m.group(1) if _m else "0+unknown"
 
 __all__ = ["World", "Error", "StaleViewError", "Stats", "TerrainInfo", "Particles", "ParticlesView", "Surface",
-           "WATER_SAMPLE_DTYPE", "RAY_HIT_DTYPE", "api_version", "version_string", "library_path", "__version__"]
+           "WATER_SAMPLE_DTYPE", "RAY_HIT_DTYPE", "BODY_SHAPES", "BODY_STATE_DTYPE", "api_version", "version_string",
+           "library_path", "__version__"]
 
 
 def api_version() -> tuple[int, int]:

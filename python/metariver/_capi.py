@@ -78,6 +78,19 @@ class mr_brush(ctypes.Structure):
                 ("target", c_float)]
 
 
+class mr_body_desc(ctypes.Structure):
+    _fields_ = [("shape", c_int32), ("size", c_float * 3), ("mesh", c_char_p), ("density", c_float),
+                ("position", c_float * 3), ("rotation", c_float * 3), ("velocity", c_float * 3),
+                ("angular_velocity", c_float * 3), ("friction", c_float)]
+
+
+# mr_body_shape, in its order: the scene file's names of [[bodies]] shape.
+BODY_SHAPES = ("box", "sphere", "capsule", "convex_mesh", "triangle_mesh")
+# mr_body_state as a numpy record (4-byte fields, no padding).
+BODY_STATE_DTYPE = np.dtype([("id", "<u4"), ("shape", "<i4"), ("size", "<f4", (3,)), ("position", "<f4", (3,)),
+                             ("orientation", "<f4", (4,)), ("velocity", "<f4", (3,)),
+                             ("angular_velocity", "<f4", (3,)), ("mass", "<f4"), ("submerged_fraction", "<f4")])
+
 # mr_water_sample and mr_ray_hit as numpy records (same layout, 4-byte fields, no padding).
 WATER_SAMPLE_DTYPE = np.dtype([("surface_y", "<f4"), ("depth", "<f4"), ("velocity", "<f4", (3,)), ("wet", "<i4")])
 RAY_HIT_DTYPE = np.dtype([("t", "<f4"), ("point", "<f4", (3,)), ("normal", "<f4", (3,)), ("hit", "<i4")])
@@ -110,6 +123,11 @@ _SIGNATURES = {
     "mr_world_push": (c_int, [_world_p, _f32p, c_float, _f32p, POINTER(c_size_t)]),
     "mr_world_move_source": (c_int, [_world_p, _f32p]),
     "mr_world_set_sink_boxes": (c_int, [_world_p, _f32p, c_size_t]),
+    "mr_body_desc_default": (mr_body_desc, []),
+    "mr_world_add_body": (c_int, [_world_p, POINTER(mr_body_desc), POINTER(c_uint32)]),
+    "mr_world_remove_body": (c_int, [_world_p, c_uint32]),
+    "mr_world_set_body_motion": (c_int, [_world_p, c_uint32, _f32p, _f32p, _f32p, _f32p]),
+    "mr_world_bodies": (c_int, [_world_p, c_void_p, c_size_t, POINTER(c_size_t)]),
     "mr_world_sample_water": (c_int, [_world_p, _f32p, c_size_t, c_void_p]),
     "mr_world_water_velocity": (c_int, [_world_p, _f32p, c_size_t, _f32p]),
     "mr_world_raycast_water": (c_int, [_world_p, _f32p, _f32p, c_size_t, c_float, c_void_p]),

@@ -59,7 +59,7 @@ class ParticlesView:
     """Read-only numpy views of the world's own particle arrays (no copy), every slot.
 
     Valid until the world next changes (step, apply, sculpt, pour, push, move_source,
-    set_sink_boxes, close): reading a property after that raises StaleViewError. Arrays
+    set_sink_boxes, a body's add, remove or motion, close): reading a property after that raises StaleViewError. Arrays
     taken out of the view are not checked; copy them (np.array(view.positions)) to keep them.
     """
 
@@ -142,6 +142,11 @@ def check_heights(heights: Any) -> np.ndarray:
     if lo < 0.0 or hi > 1.0:
         raise ValueError(f"heights: values span [{lo:g}, {hi:g}]; every height must be in [0, 1]")
     return np.ascontiguousarray(h, dtype=np.float32)
+
+
+def _body_id(id: Any) -> None:
+    if not isinstance(id, (int, np.integer)) or not 0 <= id <= 2**32 - 1:
+        raise ValueError(f"id: expected an integer in [0, 4294967295], got {id!r}")
 
 
 def _path_bytes(name: str, value: Any) -> bytes | None:
@@ -400,6 +405,68 @@ class World:
         h = self._h()
         self._changed()
         self._check(_capi.lib().mr_world_set_sink_boxes(h, f32p(b), b.shape[0]))
+
+    # -- bodies (solver "pbf"; docs/bodies.md) ---------------------------------------------
+    def add_body(self, shape: str = "box", size: Any = (2.0, 0.5, 0.5), *, mesh: str | os.PathLike | None = None,
+                 density: float = 500.0, position: Any = (0.0, 0.0, 0.0), rotation: Any = (0.0, 0.0, 0.0),
+                 velocity: Any = (0.0, 0.0, 0.0), angular_velocity: Any = (0.0, 0.0, 0.0),
+                 friction: float = 0.5) -> int:
+        """Adds a rigid body (the scene's [[bodies]] keys) and returns its id. shape: "box"
+        (size: extents x, y, z), "sphere" (radius size[0]), "capsule" (radius size[0], length
+        size[1]), "convex_mesh" or "triangle_mesh" (the OBJ `mesh`, scaled by size[0]);
+        density in kg/m^3 (water 1000); position: the centre of mass (m); rotation: degrees
+        about x, then y, then z; velocity (m/s), angular_velocity (rad/s). A bad value raises
+        metariver.Error naming its key (e.g. "bodies.density")."""
+        if shape not in _capi.BODY_SHAPES:
+            raise ValueError(f"shape: {shape!r} is not one of {', '.join(_capi.BODY_SHAPES)}")
+        d = _capi.lib().mr_body_desc_default()
+        d.shape = _capi.BODY_SHAPES.index(shape)
+        for name, value in (("size", size), ("position", position), ("rotation", rotation),
+                            ("velocity", velocity), ("angular_velocity", angular_velocity)):
+            getattr(d, name)[:] = [float(x) for x in _vec3(name, value)]
+        mesh_bytes = _path_bytes("mesh", mesh)
+        d.mesh = mesh_bytes
+        d.density = float(density)
+        d.friction = float(friction)
+        out = ctypes.c_uint32()
+        h = self._h()
+        self._changed()
+        self._check(_capi.lib().mr_world_add_body(h, ctypes.byref(d), ctypes.byref(out)))
+        return out.value
+
+    def remove_body(self, id: int) -> None:
+        """Removes the body `id`; an unknown id raises metariver.Error naming `id`."""
+        _body_id(id)
+        h = self._h()
+        self._changed()
+        self._check(_capi.lib().mr_world_remove_body(h, int(id)))
+
+    def set_body_motion(self, id: int, position: Any, orientation: Any = (0.0, 0.0, 0.0, 1.0),
+                        velocity: Any = (0.0, 0.0, 0.0), angular_velocity: Any = (0.0, 0.0, 0.0)) -> None:
+        """Moves body `id` (a drag, a throw): its centre of mass to `position`, its orientation
+        (a quaternion x, y, z, w; normalised by the library), velocity (m/s) and angular
+        velocity (rad/s, world axes)."""
+        _body_id(id)
+        q = np.ascontiguousarray(np.asarray(orientation, dtype=np.float32).reshape(-1))
+        if q.shape != (4,):
+            raise ValueError(f"orientation: expected 4 numbers (x, y, z, w), got shape {np.shape(orientation)}")
+        p, v, w = _vec3("position", position), _vec3("velocity", velocity), _vec3("angular_velocity", angular_velocity)
+        h = self._h()
+        self._changed()
+        self._check(_capi.lib().mr_world_set_body_motion(h, int(id), f32p(p), f32p(q), f32p(v), f32p(w)))
+
+    def bodies(self) -> np.ndarray:
+        """The bodies after the latest frame, in the order they were added: a record array with
+        fields id, shape (an index into metariver.BODY_SHAPES), size (3,), position (3,),
+        orientation (4,: x, y, z, w), velocity (3,), angular_velocity (3,), mass (kg) and
+        submerged_fraction ([0, 1])."""
+        h, lib = self._h(), _capi.lib()
+        n = ctypes.c_size_t()
+        self._check(lib.mr_world_bodies(h, None, 0, ctypes.byref(n)))
+        out = np.zeros(n.value, _capi.BODY_STATE_DTYPE)
+        if n.value:
+            self._check(lib.mr_world_bodies(h, out.ctypes.data, out.size, ctypes.byref(n)))
+        return out
 
     # -- queries --------------------------------------------------------------------------
     def sample(self, xz: Any) -> np.ndarray:
