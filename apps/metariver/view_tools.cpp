@@ -14,6 +14,22 @@ namespace mr::view {
 namespace {
 constexpr size_t kMostUndo = 200;       ///< drags kept for undo; the oldest go first
 constexpr float kMostPushSpeed = 10.0f;  ///< m/s a push gives the water at most
+constexpr float kMostThrowSpeed = 20.0f;  ///< m/s a throw gives a body at most
+
+/// The radius of a sphere around the body's centre that holds it (box, sphere, capsule).
+float body_reach(BodyShape shape, const Vec3& size) {
+    if (shape == BodyShape::Box) return 0.5f * glm::length(size);
+    if (shape == BodyShape::Capsule) return size.x + 0.5f * size.y;
+    return size.x;
+}
+
+/// The cursor's velocity over the ground between two hits, times `gain`, at most `most` m/s.
+Vec3 cursor_velocity(const Vec3& from, const Vec3& to, double frame_s, float gain, float most) {
+    Vec3 v = (to - from) * float(gain / frame_s);
+    v.y = 0.0f;
+    const float speed = glm::length(v);
+    return speed > most ? v * (most / speed) : v;
+}
 }  // namespace
 
 bool Tools::frame(Simulation& sim, SceneDef& def, const std::optional<Vec3>& hit, bool left, double frame_s,
@@ -25,9 +41,19 @@ bool Tools::frame(Simulation& sim, SceneDef& def, const std::optional<Vec3>& hit
         if (undo_.size() > kMostUndo) undo_.erase(undo_.begin());
         dragging_ = false;
         last_hit_.reset();
+        grabbed_.reset();  // a carried body goes on with its last velocity
         return false;
     }
     if (!hit) return false;
+    if (tool_ == DropBody) {
+        drag_body(sim, *hit, frame_s, error);
+        return false;
+    }
+    if (tool_ == RemoveBody) {  // once per press
+        if (!dragging_) remove_body(sim, *hit, error);
+        dragging_ = true;
+        return false;
+    }
     if (tool_ >= MoveSource) {  // once per press
         if (dragging_) return false;
         dragging_ = true;
@@ -53,10 +79,7 @@ bool Tools::frame(Simulation& sim, SceneDef& def, const std::optional<Vec3>& hit
     if (tool_ == Push) {
         // The water under the cursor takes the cursor's velocity over the ground.
         if (last_hit_ && frame_s > 0.0) {
-            Vec3 v = (*hit - *last_hit_) * float(push_gain_ / frame_s);
-            v.y = 0.0f;
-            const float speed = glm::length(v);
-            if (speed > kMostPushSpeed) v *= kMostPushSpeed / speed;
+            const Vec3 v = cursor_velocity(*last_hit_, *hit, frame_s, push_gain_, kMostPushSpeed);
             if (auto p = sim.push(*hit, radius_, v); !p) error = p.error().message;
         }
         last_hit_ = hit;
@@ -115,6 +138,44 @@ std::optional<SceneDef> Tools::click_edit(const SceneDef& def, const Vec3& hit, 
     return next;
 }
 
+void Tools::drag_body(Simulation& sim, const Vec3& hit, double frame_s, std::string& error) {
+    const auto shape = static_cast<BodyShape>(body_shape_);
+    const Vec3 at = hit + Vec3(0.0f, body_reach(shape, body_size_) + 1.0f, 0.0f);  // held a metre above the ground
+    if (!dragging_) {
+        dragging_ = true;
+        last_hit_ = hit;
+        auto id = sim.add_body(BodyDef{.shape = shape, .size = body_size_, .density = body_density_, .position = at});
+        if (!id) error = id.error().message;
+        else grabbed_ = id.value();
+        return;
+    }
+    if (!grabbed_) return;
+    const auto bodies = sim.bodies();
+    const auto it = std::find_if(bodies.begin(), bodies.end(), [&](const BodyState& b) { return b.id == *grabbed_; });
+    if (it == bodies.end()) {  // removed meanwhile (the scene was edited)
+        grabbed_.reset();
+        return;
+    }
+    const Vec3 v = last_hit_ && frame_s > 0.0 ? cursor_velocity(*last_hit_, hit, frame_s, throw_gain_, kMostThrowSpeed)
+                                              : Vec3(0.0f);
+    if (auto m = sim.set_body_motion(*grabbed_, at, it->orientation, v, Vec3(0.0f)); !m) error = m.error().message;
+    last_hit_ = hit;
+}
+
+void Tools::remove_body(Simulation& sim, const Vec3& hit, std::string& error) const {
+    const BodyState* nearest = nullptr;
+    float best = 0.0f;
+    for (const BodyState& b : sim.bodies()) {
+        const float d = std::hypot(b.position.x - hit.x, b.position.z - hit.z) - body_reach(b.shape, b.size);
+        if (d <= radius_ && (!nearest || d < best)) nearest = &b, best = d;
+    }
+    if (!nearest) {
+        error = fmt::format("remove body: no body within {:.1f} m of the click", radius_);
+        return;
+    }
+    if (auto r = sim.remove_body(nearest->id); !r) error = r.error().message;
+}
+
 bool Tools::undo(Simulation& sim) {
     if (undo_.empty()) return false;
     changed_ = TerrainEdit{};
@@ -136,14 +197,24 @@ bool Tools::undo(Simulation& sim) {
 void Tools::ui() {
     ImGui::Combo("tool (left button)", &tool_,
                  "pour / orbit\0raise\0lower\0smooth\0flatten\0push water\0move source\0add source\0add sink "
-                 "box\0remove source / sink\0");
+                 "box\0remove source / sink\0drop / throw body\0remove body\0");
     if (!active() || tool_ == MoveSource) return;
+    if (tool_ == DropBody) {
+        ImGui::Combo("body shape", &body_shape_, "box\0sphere\0capsule\0");
+        ImGui::DragFloat3("body size (m)", &body_size_.x, 0.01f, 0.0f, 50.0f, "%.2f", ImGuiSliderFlags_AlwaysClamp);
+        if (ImGui::IsItemHovered())
+            ImGui::SetTooltip("box: extents x, y, z; sphere: radius x; capsule: radius x, length y (bodies.size)");
+        ImGui::DragFloat("body density (kg/m^3)", &body_density_, 5.0f, 1.0f, 100000.0f, "%.0f",
+                         ImGuiSliderFlags_AlwaysClamp);
+        ImGui::DragFloat("throw gain", &throw_gain_, 0.01f, 0.0f, 5.0f, "%.2f", ImGuiSliderFlags_AlwaysClamp);
+        return;
+    }
     if (tool_ == AddSource) {
         ImGui::DragFloat("new source's flow rate", &source_rate_, 0.5f, 0.0f, 1e4f, "%.1f", ImGuiSliderFlags_AlwaysClamp);
         return;
     }
     ImGui::DragFloat("tool radius (m)", &radius_, 0.05f, 0.1f, 200.0f, "%.2f", ImGuiSliderFlags_AlwaysClamp);
-    if (tool_ == AddSink || tool_ == Remove) return;  // the box's half size; how near a click removes
+    if (tool_ == AddSink || tool_ == Remove || tool_ == RemoveBody) return;  // the box's half size; how near a click removes
     if (tool_ == Push) {
         ImGui::DragFloat("push gain", &push_gain_, 0.01f, 0.0f, 5.0f, "%.2f", ImGuiSliderFlags_AlwaysClamp);
         return;

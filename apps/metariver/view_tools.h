@@ -2,8 +2,10 @@
 // lower, smooth, flatten: Simulation::sculpt) with undo per drag, a hand that pushes
 // the water (Simulation::push), or a click that moves the main source
 // (Simulation::move_source), adds a source or a sink box, or removes the added source or
-// sink box nearest to it (live scene edits: [[particles.source]], [[sink.box]]). The window code feeds it the cursor's
-// terrain hit each frame; the panel's controls are its ui().
+// sink box nearest to it (live scene edits: [[particles.source]], [[sink.box]]), drops a
+// body (a box, sphere or capsule: Simulation::add_body) where it is clicked and throws it
+// with the drag (Simulation::set_body_motion), or removes the body nearest the click. The
+// window code feeds it the cursor's terrain hit each frame; the panel's controls are its ui().
 #pragma once
 
 #include <metariver/scene.h>
@@ -16,7 +18,7 @@ namespace mr::view {
 
 class Tools {
 public:
-    enum Tool { Pour = 0, Raise, Lower, Smooth, Flatten, Push, MoveSource, AddSource, AddSink, Remove };
+    enum Tool { Pour = 0, Raise, Lower, Smooth, Flatten, Push, MoveSource, AddSource, AddSink, Remove, DropBody, RemoveBody };
 
     /// True when the left button belongs to a tool (not to pouring and orbiting).
     bool active() const { return tool_ != Pour; }
@@ -45,6 +47,11 @@ private:
     /// The scene after a click of AddSource, AddSink or Remove at `hit` (none, and an
     /// error, when the list is full or nothing is near enough to remove).
     std::optional<SceneDef> click_edit(const SceneDef& def, const Vec3& hit, std::string& error) const;
+    /// DropBody: the press adds the body above `hit`, the drag carries it there with the
+    /// cursor's velocity, the release lets it go with that velocity (a throw).
+    void drag_body(Simulation& sim, const Vec3& hit, double frame_s, std::string& error);
+    /// RemoveBody: the body nearest `hit` (x, z) within the radius plus its size.
+    void remove_body(Simulation& sim, const Vec3& hit, std::string& error) const;
 
     int tool_ = Pour;
     float radius_ = 3.0f;
@@ -52,6 +59,11 @@ private:
     float push_gain_ = 1.0f; ///< push: water velocity per cursor velocity
     float source_rate_ = 20.0f;  ///< add source: its flow rate (particles.flow_rate's unit)
     float target_ = 0.0f;    ///< flatten: the height where the drag began
+    int body_shape_ = 0;     ///< drop body: box, sphere, capsule (BodyShape's first three)
+    Vec3 body_size_{2.0f, 0.5f, 0.5f};  ///< drop body: BodyDef::size
+    float body_density_ = 500.0f;       ///< drop body: kg/m^3
+    float throw_gain_ = 1.0f;           ///< drop body: body velocity per cursor velocity
+    std::optional<uint32_t> grabbed_;   ///< drop body: the body the drag carries
     bool dragging_ = false;
     bool source_moved_ = false;
     std::optional<Vec3> last_hit_;
