@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <span>
 #include <vector>
 
@@ -123,6 +124,49 @@ json stage_ms_json(const Simulation& sim, const Checkpoints& stage_ms) {
     return j;
 }
 
+/// The shallow-water solver's numbers (solver = "swe"); null for other solvers. Volumes in
+/// m^3 since the start; balance_error_relative: (initial + inflow + rain - outflow - stored)
+/// over what came in (initial + inflow + rain).
+json swe_json(const Simulation& sim, const RiverMeter& m, long long frames) {
+    const auto* swe = dynamic_cast<const SweSolver*>(&sim.solver());
+    if (!swe) return nullptr;
+    const HeightfieldWater& w = *swe->water_heightfield();
+    const float dry = swe->def().dry_depth;
+    const auto wet = std::count_if(w.depth.begin(), w.depth.end(), [&](float h) { return h > dry; });
+    const SweBalance b = swe->balance();
+    const double in = b.initial + b.inflow + b.rain;
+    const SolverCounters& c = sim.counters();
+    const double seconds = m.simulate_ms_total() / 1000.0;
+    return {{"grid", {{"rows", w.rows}, {"columns", w.columns}, {"spacing_m", w.spacing}}},
+            {"wet_cells", wet},
+            {"wet_fraction", w.size() ? double(wet) / double(w.size()) : 0.0},
+            {"volume_m3", {{"initial", b.initial}, {"inflow", b.inflow}, {"rain", b.rain},
+                           {"outflow", b.outflow}, {"stored", b.stored}}},
+            {"balance_error_m3", b.error()},
+            {"balance_error_relative", in > 0.0 ? std::abs(b.error()) / in : 0.0},
+            {"substeps", c.substeps},
+            {"substeps_per_frame", {{"mean", frames > 0 ? double(c.substeps) / double(frames) : 0.0},
+                                    {"max", m.max_substeps()}}},
+            {"cell_updates", c.cell_updates},
+            {"cell_updates_per_s", seconds > 0.0 ? double(c.cell_updates) / seconds : 0.0},
+            {"max_speed_m_s", c.max_speed}};
+}
+
+/// run's line for solver = "swe" (from swe_json): empty for other solvers.
+std::string swe_summary(const Simulation& sim, const RiverMeter& m, long long frames) {
+    const json j = swe_json(sim, m, frames);
+    if (j.is_null()) return {};
+    const json& v = j["volume_m3"];
+    return fmt::format("\nswe: {} wet cells ({:.1f} %), stored {:.4g} m^3 of initial {:.4g} + inflow {:.4g} + rain {:.4g} "
+                       "- outflow {:.4g}, balance error {:.2e} of what came in, {:.2f} substeps a frame (max {}), "
+                       "{:.2f} M cell updates/s",
+                       j["wet_cells"].get<long long>(), 100.0 * j["wet_fraction"].get<double>(),
+                       v["stored"].get<double>(), v["initial"].get<double>(), v["inflow"].get<double>(),
+                       v["rain"].get<double>(), v["outflow"].get<double>(), j["balance_error_relative"].get<double>(),
+                       j["substeps_per_frame"]["mean"].get<double>(), j["substeps_per_frame"]["max"].get<uint64_t>(),
+                       j["cell_updates_per_s"].get<double>() / 1e6);
+}
+
 }  // namespace
 
 json bodies_json(std::span<const BodyState> bodies, uint64_t inside) {
@@ -158,6 +202,9 @@ void RiverMeter::record(const Simulation& sim, long long f, double time_s) {
     outlets_.record(time_s, sim.last_exits());
     max_speed_ = std::max(max_speed_, sim.counters().max_speed);
     density_max_ = std::max(density_max_, sim.counters().density_error_max);
+    simulate_ms_total_ += sim.last_timings().simulate_ms;
+    if (const auto* swe = dynamic_cast<const SweSolver*>(&sim.solver()))
+        max_substeps_ = std::max(max_substeps_, swe->last_substeps());
     const bool sampled = 2 * f >= frames_ && f % 10 == 0;
     if (sampled) {
         wet_sum_ += sim.wet_fraction();
@@ -213,6 +260,7 @@ json run_stats_json(const Simulation& sim, const RiverMeter& meter, const Checkp
     j["stage_ms"] = stage_ms_json(sim, stage_ms);
     j["foam"] = foam_json(sim);
     j["bodies"] = bodies_json(sim.view().bodies, c.inside_bodies);
+    j["swe"] = swe_json(sim, meter, frames);
     return j;
 }
 
@@ -239,7 +287,7 @@ std::string run_summary(const Simulation& sim, const RiverMeter& meter, const Ch
                        c.respawned, fs.rate, fs.steady ? "steady" : "not steady", os.main.rate,
                        outflow_over_inflow(sim, os), os.main.first_s, 100.0 * meter.channel_coverage(),
                        100.0 * meter.wet_fraction(), 100.0 * meter.spray_fraction(), final_speed.p95, with_bodies, tot.median,
-                       tot.p95);
+                       tot.p95) + swe_summary(sim, meter, frames);
 }
 
 }  // namespace mr::app

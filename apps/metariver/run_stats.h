@@ -34,6 +34,10 @@ public:
     double channel_coverage() const { return coverage_sum_ / double(std::max(spray_n_, 1LL)); }
     float max_speed() const { return max_speed_; }
     float density_error_max() const { return density_max_; }
+    /// The solver's time over every recorded frame (FrameTimings::simulate_ms), ms.
+    double simulate_ms_total() const { return simulate_ms_total_; }
+    /// Time steps of the busiest frame (a heightfield solver's CFL substeps; 0 for others).
+    uint64_t max_substeps() const { return max_substeps_; }
 
 private:
     long long frames_;
@@ -42,6 +46,8 @@ private:
     double wet_sum_ = 0.0, density_mean_sum_ = 0.0, spray_sum_ = 0.0, coverage_sum_ = 0.0;
     long long wet_n_ = 0, spray_n_ = 0;
     float max_speed_ = 0.0f, density_max_ = 0.0f;
+    double simulate_ms_total_ = 0.0;
+    uint64_t max_substeps_ = 0;
 };
 
 /// The bodies after the last frame (bodies.h, from SceneView::bodies): count, mean

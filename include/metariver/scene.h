@@ -490,6 +490,8 @@ public:
     const HeightfieldWater* heightfield() const;
     /// The registry entry of this scene's solver (a copy, taken at create()).
     const SolverEntry& solver_entry() const;
+    /// The solver itself (read-only: a solver's own measurements, e.g. SweSolver::balance()).
+    const Solver& solver() const;
     const SolverCounters& counters() const;
     /// Non-fatal advice: scene_warnings(def) plus the solver's on this terrain (e.g. a
     /// flow rate its source cannot deliver, and what it was capped to).

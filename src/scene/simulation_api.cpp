@@ -59,6 +59,7 @@ const Bvh& Simulation::bvh() const { return impl_->bvh_; }
 const Particles& Simulation::particles() const { return impl_->particles(); }
 const HeightfieldWater* Simulation::heightfield() const { return impl_->solver_->water_heightfield(); }
 const SolverEntry& Simulation::solver_entry() const { return impl_->solver_entry_; }
+const Solver& Simulation::solver() const { return *impl_->solver_; }
 const SolverCounters& Simulation::counters() const { return impl_->solver_->counters(); }
 std::vector<std::string> Simulation::warnings() const { return impl_->warnings(); }
 const ScalarGrid& Simulation::field() const { return impl_->field_; }
