@@ -365,7 +365,7 @@ ScenarioResult bench_export(int particles, int warmup, int frames) {
     const Simulation& s = d.sim();
     const fs::path dir = fs::temp_directory_path() / fmt::format("metariver-bench-export-{}", ::getpid());
     auto e = Exporter::begin(ExportDef{.dir = dir.string(),
-                                       .formats = {kExportFormats.begin(), kExportFormats.end()},
+                                       .formats = {ExportFormat::Obj, ExportFormat::Ply, ExportFormat::Glb, ExportFormat::Vdb},
                                        .voxel_size = 1.0f / def.field.resolution,
                                        .scene = def.name});
     if (!e) {

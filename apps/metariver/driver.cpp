@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -41,7 +42,8 @@ nlohmann::json stage_json(const std::vector<double>& ms) {
 
 Status write_export_frame(Exporter& exporter, long long frame, double time_s, const Simulation& sim) {
     return exporter.write_frame(frame, time_s, sim.surface(), sim.particles(), sim.frame(),
-                                sim.foam() ? &sim.foam()->particles() : nullptr, sim.view().bodies);
+                                sim.foam() ? &sim.foam()->particles() : nullptr, sim.view().bodies, sim.heightfield(),
+                                &sim.terrain());
 }
 
 // ---- Outputs ----
@@ -158,6 +160,11 @@ bool Driver::check_stats() {
 
 bool Driver::begin_export() {
     if (!export_def_) return true;
+    const auto& formats = export_def_->formats;
+    if (!sim_->heightfield() && std::find(formats.begin(), formats.end(), ExportFormat::Npy) != formats.end())
+        return stop(kExitBadInput, fmt::format("--format npy: solver \"{}\" has no heightfield water (npy writes a "
+                                               "heightfield solver's grid: solver = \"swe\")",
+                                               sim_->def().solver.name));
     std::signal(SIGXFSZ, SIG_IGN);  // a file size limit: an error from write(), not a kill
     auto e = Exporter::begin(*export_def_);
     if (!e) return stop(kExitBadInput, e.error().message);

@@ -25,7 +25,7 @@ void ExportOptions::add_to(CLI::App& cmd) {
     cmd.add_option("--export", dir,
                    "write the water, the particles and the terrain to this folder, one file per frame and format, "
                    "with a manifest export.json (docs/export.md)");
-    cmd.add_option("--format", format, "with --export: obj, ply, glb or vdb, several separated by commas (default obj)");
+    cmd.add_option("--format", format, "with --export: obj, ply, glb, vdb or npy (a heightfield solver's grid), several separated by commas (default obj)");
     cmd.add_option("--every", every, "with --export: write every N-th frame of the range, [1, 1e9] (default 1)");
     cmd.add_option("--range", range,
                    "with --export: frames FIRST:LAST to write, inclusive, 0-based (LAST may be left out: to the end)");

@@ -20,6 +20,7 @@
 #include <metariver/core.h>
 #include <metariver/foam.h>
 #include <metariver/particles.h>
+#include <metariver/solver.h>
 #include <metariver/surface.h>
 #include <metariver/terrain.h>
 
@@ -27,7 +28,9 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -35,10 +38,12 @@
 
 namespace mr {
 
-enum class ExportFormat : uint8_t { Obj, Ply, Glb, Vdb };
-inline constexpr std::array<ExportFormat, 4> kExportFormats{ExportFormat::Obj, ExportFormat::Ply, ExportFormat::Glb,
-                                                            ExportFormat::Vdb};
-/// "obj", "ply", "glb", "vdb": the name on the command line and the file extension.
+/// Npy: the heightfield water's grid (depth, velocity x and z, bed) as NumPy arrays, for a
+/// solver with heightfield water only (solver = "swe"); the others: the water mesh and particles.
+enum class ExportFormat : uint8_t { Obj, Ply, Glb, Vdb, Npy };
+inline constexpr std::array<ExportFormat, 5> kExportFormats{ExportFormat::Obj, ExportFormat::Ply, ExportFormat::Glb,
+                                                            ExportFormat::Vdb, ExportFormat::Npy};
+/// "obj", "ply", "glb", "vdb", "npy": the name on the command line and the file extension.
 std::string_view to_string(ExportFormat f);
 /// A comma-separated list ("ply" or "obj,vdb"), each format at most once, in the
 /// order given. The error names `option` and the allowed values.
@@ -93,6 +98,9 @@ std::string encode_ply_points(const ParticleFrame& p, std::string_view comment);
 /// float vx vy vz, uchar kind (DiffuseKind: 0 spray, 1 foam, 2 bubble), float life
 /// (seconds left).
 std::string encode_ply_foam(const DiffuseParticles& d, std::string_view comment);
+/// NumPy .npy v1.0: a rows x columns array of little-endian float32 ('<f4'), C order (row
+/// r's columns one after another); values past the end of `values` are 0.
+std::string encode_npy_f32(std::span<const float> values, int rows, int columns);
 /// glTF 2.0 binary: one node and mesh named `name`, POSITION (with min/max), NORMAL
 /// (unit length), TEXCOORD_0, UNSIGNED_INT indices, a material (`water` = true: blue,
 /// alpha-blended; else the terrain's matte green-grey). An empty mesh gives a file with
@@ -184,9 +192,13 @@ public:
     /// transforms in the manifest and, with glb, bodies_NNNNN.glb (encode_glb_bodies)
     /// when there are any. On an error this export's files are all removed, and the
     /// error names the file.
+    /// `grid` and `terrain` (format npy only): the heightfield water (Simulation::heightfield())
+    /// and its bed, written as depth_, velocity_x_, velocity_z_ and bed_NNNNN.npy; npy without
+    /// a grid is an error.
     Status write_frame(long long frame, double time_s, const SurfaceMesh& water, const Particles& particles,
                        uint64_t solver_frame, const DiffuseParticles* foam = nullptr,
-                       std::span<const BodyState> bodies = {});
+                       std::span<const BodyState> bodies = {}, const HeightfieldWater* grid = nullptr,
+                       const Terrain* terrain = nullptr);
     /// Writes the manifest (export.json) last; after it the files stay.
     Status finish();
     /// Removes every file this export wrote (and the folder if it created it).
@@ -212,6 +224,11 @@ private:
     std::vector<ExportFormatStats> stats_;
     std::vector<ExportedFrame> frames_;
     ParticleFrame scratch_;
+    std::optional<HeightfieldWater> grid_shape_;  ///< npy: the grid's rows, columns, origin, spacing (no values)
+    std::vector<float> grid_scratch_;
+
+    Status write_grid(long long frame, const HeightfieldWater* grid, const Terrain* terrain,
+                      const std::function<Status(std::string_view, Result<std::string>)>& emit);
 };
 
 }  // namespace mr

@@ -21,6 +21,7 @@ std::string_view to_string(ExportFormat f) {
         case ExportFormat::Ply: return "ply";
         case ExportFormat::Glb: return "glb";
         case ExportFormat::Vdb: return "vdb";
+        case ExportFormat::Npy: return "npy";
     }
     return "?";
 }

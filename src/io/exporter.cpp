@@ -23,7 +23,7 @@ using json = nlohmann::json;
 
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
-bool is_mesh_format(ExportFormat f) { return f != ExportFormat::Vdb; }
+bool is_mesh_format(ExportFormat f) { return f != ExportFormat::Vdb && f != ExportFormat::Npy; }
 
 /// One file's bytes for the water or the particles in format `f`.
 Result<std::string> encode_water(ExportFormat f, const MeshView& m, const ExportDef& def, long long frame,
@@ -34,6 +34,7 @@ Result<std::string> encode_water(ExportFormat f, const MeshView& m, const Export
         case ExportFormat::Ply: return encode_ply_mesh(m, comment);
         case ExportFormat::Glb: return encode_glb_mesh(m, "water", true);
         case ExportFormat::Vdb: return encode_vdb_level_set(m, def.voxel_size, &vdb);
+        case ExportFormat::Npy: break;  // the grid: Exporter::write_grid
     }
     return Error{"unknown export format"};
 }
@@ -46,12 +47,30 @@ Result<std::string> encode_particles(ExportFormat f, const ParticleFrame& p, con
         case ExportFormat::Ply: return encode_ply_points(p, comment);
         case ExportFormat::Glb: return encode_glb_points(p, "particles");
         case ExportFormat::Vdb: return encode_vdb_points(p, def.voxel_size, &vdb);
+        case ExportFormat::Npy: break;
     }
     return Error{"unknown export format"};
 }
 
 std::string frame_file(std::string_view stem, long long frame, int digits, ExportFormat f) {
     return fmt::format("{}_{:0{}}.{}", stem, frame, digits, to_string(f));
+}
+
+/// The npy grid's shape and place: sample (r, c) lies at x = origin[0] + c * spacing,
+/// z = origin[1] + r * spacing (metres).
+json grid_json(const HeightfieldWater& g, int digits) {
+    const std::string hash(static_cast<size_t>(digits), '#');
+    return {{"rows", g.rows},
+            {"columns", g.columns},
+            {"origin", {g.origin.x, g.origin.z}},
+            {"spacing", g.spacing},
+            {"dtype", "<f4"},
+            {"order", "C"},
+            {"shape", "(rows, columns): row r along +z, column c along +x"},
+            {"arrays", {{"depth", "depth_" + hash + ".npy: metres of water above the bed, 0 where dry"},
+                        {"velocity_x", "velocity_x_" + hash + ".npy: depth-averaged velocity along +x, m/s"},
+                        {"velocity_z", "velocity_z_" + hash + ".npy: depth-averaged velocity along +z, m/s"},
+                        {"bed", "bed_" + hash + ".npy: the bed's height (y), metres; the surface is bed + depth"}}}};
 }
 
 /// How to bring the files into other tools (the manifest's "import").
@@ -68,6 +87,7 @@ json import_notes(const ExportDef& d) {
                     ".vdb and tick Sequence (grid 'surface', a level set: add a Volume to Mesh modifier for a surface)"}};
     json houdini;
     for (ExportFormat f : d.formats) {
+        if (f == ExportFormat::Npy) continue;  // arrays, not geometry
         const std::string ext(to_string(f));
         houdini["water_" + ext] = fmt::format("File SOP, File: DIR/water_$F{}.{}", d.digits, ext);
         if (d.particles) houdini["particles_" + ext] = fmt::format("File SOP, File: DIR/particles_$F{}.{}", d.digits, ext);
@@ -99,7 +119,7 @@ Exporter::~Exporter() {
 std::string Exporter::manifest_path() const { return (fs::path(def_.dir) / "export.json").string(); }
 
 Result<std::unique_ptr<Exporter>> Exporter::begin(const ExportDef& def) {
-    if (def.formats.empty()) return Error{"--format: no format given (allowed: obj, ply, glb, vdb)"};
+    if (def.formats.empty()) return Error{"--format: no format given (allowed: obj, ply, glb, vdb, npy)"};
     if (def.every < 1 || def.every > kMaxExportEvery)
         return Error{fmt::format("--every: must be in [1, {}] (got {})", kMaxExportEvery, def.every)};
     if (!(def.voxel_size > 0.0f) || def.voxel_size > 100.0f)
@@ -157,8 +177,34 @@ Status Exporter::write(const std::string& name, const std::string& bytes) {
     return Ok{};
 }
 
+Status Exporter::write_grid(long long frame, const HeightfieldWater* grid, const Terrain* terrain,
+                            const std::function<Status(std::string_view, Result<std::string>)>& emit) {
+    if (!grid || !terrain)
+        return Error{fmt::format("--format npy: frame {}: the solver has no heightfield water (npy holds a "
+                                 "heightfield solver's grid: solver = \"swe\")", frame)};
+    const size_t cells = grid->size();
+    const std::span<const Vec3> bed = terrain->vertices();
+    if (grid->depth.size() != cells || bed.size() != cells)
+        return Error{fmt::format("--format npy: frame {}: the water grid ({} x {}) is not the terrain's ({} x {})", frame,
+                                 grid->rows, grid->columns, terrain->rows(), terrain->columns())};
+    if (!grid_shape_) grid_shape_ = HeightfieldWater{.rows = grid->rows, .columns = grid->columns,
+                                                     .origin = grid->origin, .spacing = grid->spacing};
+    const auto array = [&](auto value) {
+        grid_scratch_.resize(cells);
+        for (size_t k = 0; k < cells; ++k) grid_scratch_[k] = value(k);
+        return encode_npy_f32(grid_scratch_, grid->rows, grid->columns);
+    };
+    const bool moving = grid->velocity.size() == cells;
+    Status s = emit("depth", array([&](size_t k) { return grid->depth[k]; }));
+    if (s) s = emit("velocity_x", array([&](size_t k) { return moving ? grid->velocity[k].x : 0.0f; }));
+    if (s) s = emit("velocity_z", array([&](size_t k) { return moving ? grid->velocity[k].z : 0.0f; }));
+    if (s) s = emit("bed", array([&](size_t k) { return bed[k].y; }));
+    return s;
+}
+
 Status Exporter::write_frame(long long frame, double time_s, const SurfaceMesh& water, const Particles& particles,
-                             uint64_t solver_frame, const DiffuseParticles* foam, std::span<const BodyState> bodies) {
+                             uint64_t solver_frame, const DiffuseParticles* foam, std::span<const BodyState> bodies,
+                             const HeightfieldWater* grid, const Terrain* terrain) {
     ExportedFrame rec{.frame = frame,
                       .time_s = time_s,
                       .vertices = water.vertex_count(),
@@ -182,8 +228,9 @@ Status Exporter::write_frame(long long frame, double time_s, const SurfaceMesh& 
             ++st.files;
             return Ok{};
         };
-        Status s = emit("water", encode_water(st.format, view, def_, frame, vdb));
-        if (s && def_.particles) s = emit("particles", encode_particles(st.format, scratch_, def_, frame, vdb));
+        const bool npy = st.format == ExportFormat::Npy;
+        Status s = npy ? write_grid(frame, grid, terrain, emit) : emit("water", encode_water(st.format, view, def_, frame, vdb));
+        if (s && !npy && def_.particles) s = emit("particles", encode_particles(st.format, scratch_, def_, frame, vdb));
         // The diffuse particles once per frame (PLY whatever the formats), with the first.
         if (s && def_.particles && foam && &st == &stats_.front()) {
             const std::string comment = fmt::format("metariver foam, spray and bubbles, scene {}, frame {}", def_.scene, frame);
@@ -238,6 +285,7 @@ Status Exporter::finish() {
                      {"bodies", has_glb ? json(fmt::format("bodies_{}.glb", std::string(static_cast<size_t>(def_.digits), '#')))
                                         : json(nullptr)}};
     j["terrain"] = terrain_files_;
+    if (grid_shape_) j["grid"] = grid_json(*grid_shape_, def_.digits);
     j["contents"] = {
         {"obj", "water: v, vn, f a//a; particles: v + p (positions only); terrain: v, vt, vn"},
         {"ply", "binary_little_endian 1.0; water: float x y z nx ny nz, faces list uchar uint; particles: float x y z "
@@ -247,6 +295,7 @@ Status Exporter::finish() {
         {"vdb", {{"water", {{"grid", "surface"}, {"class", "level set"}, {"half_width_voxels", kVdbHalfWidth}}},
                  {"particles", {{"grid", "points"}, {"attributes", {"P", "v", "id", "age"}}}},
                  {"voxel_size", std::stod(fmt::format("{}", def_.voxel_size))}}},  // 0.33333334, not the double of the float
+        {"npy", "NumPy .npy v1.0, '<f4', C order, shape (rows, columns): the heightfield solver's grid (\"grid\")"},
         {"age", "seconds since the particle's latest emission by the source"},
         {"bodies", "per frame: each body's id, position (centre of mass, m), orientation (quaternion x y z w, body to "
                    "world), velocity (m/s), angular_velocity (rad/s, world axes), submerged_fraction; with glb and "
