@@ -34,6 +34,9 @@ struct SweDef {
     /// Metres: a still lake up to this level at the start (every sample below it wet);
     /// NaN: the map starts dry.
     float initial_level = std::nanf("");
+    /// Metres: with initial_level, the lake only where z >= dam_z (held upstream by a dam
+    /// across the map at z = dam_z that is gone at the start: a dam break); NaN: everywhere.
+    float dam_z = std::nanf("");
 };
 
 /// Volumes in m^3 since the solver was made.

@@ -110,6 +110,10 @@ constexpr KeyWords kCentreWords{kCentres, [](S d) { return d.spawn.auto_center ?
 constexpr KeyWords kSweSourceWords{kAuto, [](S d) { return d.swe.auto_source ? 0 : -1; },
                                    [](SceneDef& d, int i) { d.swe.auto_source = i == 0; }};
 constexpr std::string_view kNone[] = {"none"};
+constexpr KeyWords kDamWords{kNone, [](S d) { return std::isnan(d.swe.dam_z) ? 0 : -1; },
+                             [](SceneDef& d, int i) {
+                                 if (i == 0) d.swe.dam_z = std::nanf("");
+                             }};
 constexpr KeyWords kLevelWords{kNone, [](S d) { return std::isnan(d.swe.initial_level) ? 0 : -1; },
                                [](SceneDef& d, int i) {
                                    if (i == 0) d.swe.initial_level = std::nanf("");
@@ -455,6 +459,10 @@ const SceneKey kKeys[] = {
     {.name = "swe.initial_level", .type = K::Float, .unit = "m", .range = closed(-1e6, 1e6), .words = kLevelWords, .readers = kSwe,
      .edit = E::Rebuild, .help = "A still lake up to this height at the start (every sample below it wet); none: the map starts dry.",
      .field = MR_FIELD(swe.initial_level)},
+    {.name = "swe.dam_z", .type = K::Float, .unit = "m", .range = closed(-1e6, 1e6), .words = kDamWords, .readers = kSwe,
+     .edit = E::Rebuild, .help = "With swe.initial_level: the lake only where z >= dam_z, held by a dam across the map that is "
+                                 "gone at the start (a dam break); none: the lake everywhere below the level.",
+     .field = MR_FIELD(swe.dam_z)},
 };
 #undef MR_FIELD
 

@@ -43,8 +43,10 @@ SweSolver::SweSolver(const Terrain& terrain, const SweDef& def, Vec3 resolved_so
     water_.velocity.assign(water_.size(), Vec3(0.0f));
     core_ = std::make_unique<swe::ShallowWater>(nx, ny, water_.spacing, bed, core_def(def_, gravity > 0.0f && std::isfinite(gravity) ? gravity : 9.81));
     if (std::isfinite(def_.initial_level))
-        for (int j = 0; j < ny; ++j)
+        for (int j = 0; j < ny; ++j) {
+            if (std::isfinite(def_.dam_z) && water_.origin.z + static_cast<float>(j) * water_.spacing < def_.dam_z) continue;
             for (int i = 0; i < nx; ++i) core_->set_state(i, j, std::max(def_.initial_level - bed[static_cast<size_t>(j) * nx + i], 0.0));
+        }
     core_->balance_reset();
     apply_def();
     publish();
@@ -66,7 +68,8 @@ void SweSolver::apply_def() {
 
 bool SweSolver::set_params(const SweDef& def, Vec3 resolved_source) {
     const bool same_lake = std::isnan(def.initial_level) ? std::isnan(def_.initial_level) : def.initial_level == def_.initial_level;
-    if (!same_lake) return false;
+    const bool same_dam = std::isnan(def.dam_z) ? std::isnan(def_.dam_z) : def.dam_z == def_.dam_z;
+    if (!same_lake || !same_dam) return false;
     def_ = def;
     source_ = resolved_source;
     apply_def();

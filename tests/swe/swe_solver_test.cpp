@@ -99,6 +99,39 @@ TEST(SweSolver, ALakeAtRestOnTheBowlStaysAtRest) {
     EXPECT_LT(std::abs(solver.balance().error()), 1e-9 * solver.balance().initial);
 }
 
+// swe.dam_z: the lake only upstream of the dam line (z >= dam_z) at the start; released, the
+// water crosses the line (a dam break) and the volume balances.
+TEST(SweSolver, DamZHoldsTheLakeUpstreamAndTheDamBreaks) {
+    auto d = parse_scene_toml("solver = \"swe\"\n[swe]\ninitial_level = 13.0\ndam_z = 50.0\n", "dam.toml", default_scene());
+    ASSERT_TRUE(d.ok()) << d.error().message;
+    EXPECT_FLOAT_EQ(d.value().swe.dam_z, 50.0f);
+    auto sim = Simulation::create(d.value());
+    ASSERT_TRUE(sim.ok()) << sim.error().message;
+    Simulation& s = *sim.value();
+    const auto wet_below_dam = [&] {
+        const HeightfieldWater& w = *s.heightfield();
+        size_t n = 0, wet = 0;
+        for (int r = 0; r < w.rows; ++r)
+            for (int c = 0; c < w.columns; ++c) {
+                const float h = w.depth[static_cast<size_t>(r) * w.columns + c];
+                wet += h > 1e-3f;
+                n += h > 1e-3f && w.origin.z + static_cast<float>(r) * w.spacing < 50.0f;
+            }
+        return std::pair{n, wet};
+    };
+    const auto [below0, wet0] = wet_below_dam();
+    EXPECT_EQ(below0, 0u);
+    EXPECT_GT(wet0, 100u);
+    for (int f = 0; f < 180; ++f) s.step(1.0f / 60.0f);
+    EXPECT_GT(wet_below_dam().first, 100u);  // 3 s later the flood is past the line
+    const auto* swe = dynamic_cast<const SweSolver*>(&s.solver());
+    ASSERT_NE(swe, nullptr);
+    EXPECT_LT(std::abs(swe->balance().error()), 1e-9 * swe->balance().initial);
+    auto none = parse_scene_toml("solver = \"swe\"\n[swe]\ndam_z = \"none\"\n", "n.toml", default_scene());
+    ASSERT_TRUE(none.ok()) << none.error().message;
+    EXPECT_TRUE(std::isnan(none.value().swe.dam_z));
+}
+
 TEST(SweSolver, SweKeysAreReadByTheSweSolverOnlyAndRangeChecked) {
     const std::string ok = "solver = \"swe\"\n[swe]\nmanning = 0.05\ndischarge = 3.5\nrain = 20\ninitial_level = \"none\"\n";
     auto d = parse_scene_toml(ok, "ok.toml", default_scene());
