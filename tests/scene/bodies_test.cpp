@@ -187,7 +187,10 @@ TEST(Bodies, ErrorsNameTheKey) {
     springs.bodies.push_back(BodyDef{});
     auto no = Simulation::create(springs, pool.map);
     ASSERT_FALSE(no.ok());
-    EXPECT_NE(no.error().message.find("bodies: solver = \"springs\""), std::string::npos) << no.error().message;
+    const std::string& m = no.error().message;
+    EXPECT_EQ(m.rfind("bodies: ", 0), 0u) << m;
+    EXPECT_NE(m.find("solver = \"springs\""), std::string::npos) << m;
+    EXPECT_NE(m.find("\"pbf\""), std::string::npos) << m;
 }
 
 // Shapes: the mass and volume of each primitive, and of an OBJ (a unit cube with a vertex
