@@ -183,6 +183,10 @@ Made<std::unique_ptr<mr_world>> create_world(const mr_world_desc& d) {
     auto sim = world->arena.execute([&] { return Simulation::create(def.value, map.value); });
     if (!sim) return {{}, refuse(MR_ERROR_SCENE, sim.error().message)};
     world->sim = std::move(sim.value());
+    // The Simulation runs its work in an arena of its own (set_threads), which a call
+    // entering it from the world's arena does not inherit: without this its steps and
+    // edits would run on every core whatever desc.threads says.
+    if (auto t = world->sim->set_threads(d.threads); !t) return {{}, refuse(MR_ERROR_INVALID_ARGUMENT, t.error().message)};
     return {std::move(world), {}};
 }
 

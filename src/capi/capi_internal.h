@@ -21,7 +21,9 @@
 /// latest frame and the message of the latest failed call (mutable: the header's const
 /// reads, stats and views, record their refusals too).
 struct mr_world {
-    /// At most mr_world_desc.threads threads; every call that does work runs inside it.
+    /// At most mr_world_desc.threads threads; every call that does work runs inside it:
+    /// Simulation::create and the water queries use it, the Simulation's own work (step,
+    /// edits) its arena of the same count (Simulation::set_threads, set at creation).
     mutable tbb::task_arena arena;
     std::unique_ptr<mr::Simulation> sim;
     /// The preset the scene TOML starts from (`preset = "<base>"`): the world's preset

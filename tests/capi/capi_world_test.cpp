@@ -328,6 +328,9 @@ TEST(CApi, ThreadsBoundTheWorldsArena) {
         ASSERT_EQ(world.status, MR_OK) << world.error.message;
         const int expected = threads > 0 ? threads : tbb::info::default_concurrency();
         EXPECT_EQ(world.w->arena.max_concurrency(), expected) << "threads " << threads;
+        // The Simulation's own arena, where its steps run (SimulationThreads.* bound it), has
+        // the same count: the world's arena alone does not reach into it.
+        EXPECT_EQ(world.w->sim->threads(), threads) << "threads " << threads;
         ArenaThreads seen(world.w->arena);
         world.step(20);
         EXPECT_LE(seen.count(), static_cast<size_t>(expected)) << "threads " << threads;
