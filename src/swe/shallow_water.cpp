@@ -48,6 +48,7 @@ ShallowWater::ShallowWater(int nx, int ny, double dx, std::span<const double> be
     row_out_.assign(ny_ + 1, 0.0);
     row_in_.assign(ny_ + 1, 0.0);
     row_speed_.assign(ny_, 0.0);
+    row_rain_.assign(ny_, 0.0);
     row_clip_.assign(ny_, 0);
     for (int j = 0; j < ny_; ++j)
         for (int i = 0; i < nx_; ++i) {
@@ -64,10 +65,53 @@ void ShallowWater::set_state(int i, int j, double depth, double qx, double qy) {
     hu_[k] = h_[k] > 0.0 && std::isfinite(qx) ? qx : 0.0;
     hv_[k] = h_[k] > 0.0 && std::isfinite(qy) ? qy : 0.0;
     refresh(k);
-    if (h_[k] > 0.0) {
-        wet_lo_[j] = std::min(wet_lo_[j], i);
-        wet_hi_[j] = std::max(wet_hi_[j], i);
+    if (h_[k] > 0.0) mark_wet(i, j);
+}
+
+void ShallowWater::mark_wet(int i, int j) {
+    wet_lo_[j] = std::min(wet_lo_[j], i);
+    wet_hi_[j] = std::max(wet_hi_[j], i);
+}
+
+void ShallowWater::set_rain_mask(std::vector<double> rate) {
+    rain_mask_.clear();
+    rain_lo_.assign(ny_, nx_);
+    rain_hi_.assign(ny_, -1);
+    if (rate.empty()) return;
+    rain_mask_.assign(h_.size(), 0.0);
+    for (int j = 0; j < ny_; ++j)
+        for (int i = 0; i < nx_; ++i) {
+            const size_t k = static_cast<size_t>(j) * nx_ + i;
+            const double r = k < rate.size() && std::isfinite(rate[k]) ? std::max(rate[k], 0.0) : 0.0;
+            rain_mask_[at(i, j)] = r;
+            if (r > 0.0) {
+                rain_lo_[j] = std::min(rain_lo_[j], i);
+                rain_hi_[j] = std::max(rain_hi_[j], i);
+            }
+        }
+}
+
+double ShallowWater::exchange(int i, int j, double volume, double momentum_x, double momentum_y) {
+    if (i < 0 || j < 0 || i >= nx_ || j >= ny_ || !std::isfinite(volume) || volume == 0.0) return 0.0;
+    if (!std::isfinite(momentum_x) || !std::isfinite(momentum_y)) momentum_x = momentum_y = 0.0;
+    const size_t k = at(i, j);
+    const double area = dx_ * dx_, h0 = h_[k];
+    double moved = volume;
+    if (volume > 0.0) {
+        h_[k] = h0 + volume / area;
+    } else {
+        const double take = std::min(-volume, h0 * area);
+        h_[k] = take >= h0 * area ? 0.0 : std::max(h0 - take / area, 0.0);
+        moved = (h_[k] - h0) * area;
     }
+    const double share = moved / volume;  // 1 unless the cell held less than asked
+    hu_[k] += share * momentum_x / area;
+    hv_[k] += share * momentum_y / area;
+    if (h_[k] <= def_.dry_depth) hu_[k] = hv_[k] = 0.0;
+    refresh(k);
+    if (h_[k] > 0.0) mark_wet(i, j);
+    balance_.exchanged += moved;
+    return moved;
 }
 
 void ShallowWater::refresh(size_t k) {
@@ -149,7 +193,8 @@ void ShallowWater::fill_ghosts() {
 }
 
 void ShallowWater::update_spans() {
-    const bool everywhere = rain_ > 0.0 || def_.west.kind >= EdgeKind::Discharge || def_.east.kind >= EdgeKind::Discharge ||
+    const bool masked = !rain_mask_.empty();
+    const bool everywhere = (rain_ > 0.0 && !masked) || def_.west.kind >= EdgeKind::Discharge || def_.east.kind >= EdgeKind::Discharge ||
                             def_.south.kind >= EdgeKind::Discharge || def_.north.kind >= EdgeKind::Discharge;
     for (int j = 0; j < ny_; ++j) {
         if (everywhere) {
@@ -162,8 +207,16 @@ void ShallowWater::update_spans() {
             lo = std::min(lo, wet_lo_[r]);
             hi = std::max(hi, wet_hi_[r]);
         }
-        lo_[j] = hi < lo ? 0 : std::max(lo - kDilate, 0);
-        hi_[j] = hi < lo ? -1 : std::min(hi + kDilate, nx_ - 1);
+        if (hi >= lo) {
+            lo = std::max(lo - kDilate, 0);
+            hi = std::min(hi + kDilate, nx_ - 1);
+        }
+        if (masked && rain_hi_[j] >= rain_lo_[j]) {  // raining cells take their rain in finish_step
+            lo = std::min(lo, rain_lo_[j]);
+            hi = std::max(hi, rain_hi_[j]);
+        }
+        lo_[j] = hi < lo ? 0 : lo;
+        hi_[j] = hi;
     }
 }
 
@@ -317,12 +370,20 @@ void ShallowWater::euler_stage(double dt, std::vector<double>& h, std::vector<do
 
 void ShallowWater::finish_step(double dt) {
     const double g = def_.gravity, n2 = def_.manning * def_.manning, dry = def_.dry_depth;
-    const double rain = rain_ > 0.0 ? rain_ * dt : 0.0;
+    const bool masked = !rain_mask_.empty();
+    const double rain = rain_ > 0.0 && !masked ? rain_ * dt : 0.0;
     for_rows(ny_, [&](int j) {
         int wlo = nx_, whi = -1;
+        double row_rain = 0.0;
         for (int i = lo_[j]; i <= hi_[j]; ++i) {
             const size_t k = at(i, j);
-            h_[k] += rain;
+            if (masked) {
+                const double r = rain_mask_[k] * dt;
+                h_[k] += r;
+                row_rain += r;
+            } else {
+                h_[k] += rain;
+            }
             if (h_[k] <= dry) {
                 hu_[k] = hv_[k] = 0.0;
             } else if (n2 > 0.0) {
@@ -340,19 +401,41 @@ void ShallowWater::finish_step(double dt) {
         }
         wet_lo_[j] = wlo;
         wet_hi_[j] = whi;
+        row_rain_[j] = row_rain;
     });
-    balance_.rain += rain * dx_ * dx_ * static_cast<double>(nx_) * ny_;
-    for (const PointSource& s : sources_) {
-        if (s.i < 0 || s.j < 0 || s.i >= nx_ || s.j >= ny_ || !(s.discharge > 0.0)) continue;
-        h_[at(s.i, s.j)] += s.discharge * dt / (dx_ * dx_);
-        refresh(at(s.i, s.j));
-        balance_.inflow += s.discharge * dt;
-        wet_lo_[s.j] = std::min(wet_lo_[s.j], s.i);
-        wet_hi_[s.j] = std::max(wet_hi_[s.j], s.i);
+    if (masked) {
+        double sum = 0.0;
+        for (int j = 0; j < ny_; ++j) sum += row_rain_[j];  // row order: any thread count
+        balance_.rain += sum * dx_ * dx_;
+    } else {
+        balance_.rain += rain * dx_ * dx_ * static_cast<double>(nx_) * ny_;
     }
+    apply_sources(dt);
     for (int j = 0; j < ny_; ++j) {
         stats_.clipped += row_clip_[j];
         row_clip_[j] = 0;
+    }
+}
+
+void ShallowWater::apply_sources(double dt) {
+    const double area = dx_ * dx_;
+    for (const PointSource& s : sources_) {
+        if (s.i < 0 || s.j < 0 || s.i >= nx_ || s.j >= ny_ || !std::isfinite(s.discharge) || s.discharge == 0.0) continue;
+        const size_t k = at(s.i, s.j);
+        if (s.discharge > 0.0) {
+            h_[k] += s.discharge * dt / area;
+            balance_.inflow += s.discharge * dt;
+            mark_wet(s.i, s.j);
+        } else if (h_[k] > 0.0) {
+            // A sink: at most what the cell holds; the velocity kept (discharges scaled).
+            const double h0 = h_[k], take = -s.discharge * dt;
+            h_[k] = take >= h0 * area ? 0.0 : std::max(h0 - take / area, 0.0);
+            balance_.sunk += (h0 - h_[k]) * area;
+            const double keep = h_[k] > def_.dry_depth ? h_[k] / h0 : 0.0;
+            hu_[k] *= keep;
+            hv_[k] *= keep;
+        }
+        refresh(k);
     }
 }
 

@@ -45,7 +45,9 @@ struct ShallowWaterDef {
     Edge west, east, south, north;  ///< x = 0, x = max, y = 0, y = max
 };
 
-/// A point source: `discharge` m^3/s into cell (i, j).
+/// A point source: `discharge` m^3/s into cell (i, j); negative: a sink taking up to
+/// |discharge| m^3/s out of the cell, never more than it holds. A line source is a list of
+/// point sources (each costs a few operations per substep).
 struct PointSource {
     int i = 0, j = 0;
     double discharge = 0.0;
@@ -56,10 +58,12 @@ struct MassBalance {
     double initial = 0.0;   ///< stored at the start
     double inflow = 0.0;    ///< point sources and inflow edges
     double rain = 0.0;
+    double exchanged = 0.0; ///< net volume added by exchange() (negative: taken)
     double outflow = 0.0;   ///< left through the edges
+    double sunk = 0.0;      ///< taken by sinks (negative point sources)
     double stored = 0.0;    ///< now
-    /// initial + inflow + rain - outflow - stored: zero up to round-off.
-    double error() const { return initial + inflow + rain - outflow - stored; }
+    /// initial + inflow + rain + exchanged - outflow - sunk - stored: zero up to round-off.
+    double error() const { return initial + inflow + rain + exchanged - outflow - sunk - stored; }
 };
 
 struct StepStats {
@@ -91,8 +95,19 @@ public:
     void set_bed(int i, int j, double bed);
 
     void set_sources(std::vector<PointSource> sources) { sources_ = std::move(sources); }
-    /// Rain over every cell, metres per second.
+    /// Rain over every cell, metres per second (ignored while a rain mask is set).
     void set_rain(double rate) { rain_ = rate; }
+    /// Rain per cell, metres per second (nx * ny, row-major, i fastest; negative or
+    /// non-finite rates read as 0, missing ones as 0); an empty vector: set_rain()'s rate
+    /// everywhere again.
+    void set_rain_mask(std::vector<double> rate);
+    /// Adds `volume` m^3 to cell (i, j) with momentum (momentum_x, momentum_y) in m^4/s
+    /// (volume times velocity); a negative volume takes water out, never more than the cell
+    /// holds, and the momentum is scaled by the share actually moved (pass the cell's
+    /// velocity times the volume to take water without changing the cell's velocity).
+    /// Returns the volume moved (signed), counted in balance().exchanged. Between substeps
+    /// (not during advance()); a cell outside the grid moves nothing.
+    double exchange(int i, int j, double volume, double momentum_x, double momentum_y);
 
     /// Advances by `duration` seconds in CFL-limited substeps (the last one shortened).
     void advance(double duration);
@@ -118,6 +133,10 @@ private:
     void euler_stage(double dt, std::vector<double>& h, std::vector<double>& hu, std::vector<double>& hv);
     void flux_rows(double dt);
     void finish_step(double dt);
+    /// The point sources and sinks over dt seconds (after the step's fluxes).
+    void apply_sources(double dt);
+    /// Marks column i of row j wet (its span grows).
+    void mark_wet(int i, int j);
     /// Cell k's velocity cache from its state (0 at or below the dry depth).
     void refresh(size_t k);
 
@@ -142,6 +161,9 @@ private:
     std::vector<uint64_t> row_clip_;
     std::vector<PointSource> sources_;
     double rain_ = 0.0;
+    std::vector<double> rain_mask_;     // per cell (at()), empty: rain_ everywhere
+    std::vector<int> rain_lo_, rain_hi_;  // columns with rain > 0 per row under the mask
+    std::vector<double> row_rain_;        // the mask's volume per row of the latest finish_step
     MassBalance balance_;
     StepStats stats_;
 };
