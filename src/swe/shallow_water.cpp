@@ -3,6 +3,7 @@
 #include "shallow_water.h"
 
 #include "swe_flux.h"
+#include "swe_stage.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -35,12 +36,9 @@ ShallowWater::ShallowWater(int nx, int ny, double dx, std::span<const double> be
     h_.assign(n, 0.0);
     hu_.assign(n, 0.0);
     hv_.assign(n, 0.0);
-    u_.assign(n, 0.0);
-    v_.assign(n, 0.0);
-    for (auto& s : sx_) s.assign(n, 0.0);
-    for (auto& s : sy_) s.assign(n, 0.0);
-    fx_.assign((static_cast<size_t>(nx_) + 1) * ny_ * 4, 0.0);
-    fy_.assign(static_cast<size_t>(nx_) * (ny_ + 1) * 4, 0.0);
+    for (auto& t : t_) t.assign(n, 0.0);
+    t_lo_.assign(ny_, 0);
+    t_hi_.assign(ny_, -1);
     lo_.assign(ny_, 0);
     hi_.assign(ny_, -1);
     wet_lo_.assign(ny_, nx_);
@@ -64,7 +62,6 @@ void ShallowWater::set_state(int i, int j, double depth, double qx, double qy) {
     h_[k] = std::isfinite(depth) ? std::max(depth, 0.0) : 0.0;
     hu_[k] = h_[k] > 0.0 && std::isfinite(qx) ? qx : 0.0;
     hv_[k] = h_[k] > 0.0 && std::isfinite(qy) ? qy : 0.0;
-    refresh(k);
     if (h_[k] > 0.0) mark_wet(i, j);
 }
 
@@ -108,15 +105,9 @@ double ShallowWater::exchange(int i, int j, double volume, double momentum_x, do
     hu_[k] += share * momentum_x / area;
     hv_[k] += share * momentum_y / area;
     if (h_[k] <= def_.dry_depth) hu_[k] = hv_[k] = 0.0;
-    refresh(k);
     if (h_[k] > 0.0) mark_wet(i, j);
     balance_.exchanged += moved;
     return moved;
-}
-
-void ShallowWater::refresh(size_t k) {
-    u_[k] = velocity(h_[k], hu_[k], def_.dry_depth);
-    v_[k] = velocity(h_[k], hv_[k], def_.dry_depth);
 }
 
 void ShallowWater::set_bed(int i, int j, double bed) {
@@ -157,38 +148,37 @@ double ShallowWater::max_wave_speed() const {
     return s;
 }
 
-void ShallowWater::fill_ghosts() {
+void ShallowWater::fill_ghosts(std::vector<double>& h, std::vector<double>& hu, std::vector<double>& hv) {
     // One ghost per edge cell from its neighbour inside; `n` is the normal discharge's
     // array, `t` the transverse one, `sign` the inward direction.
     auto ghost = [&](size_t g, size_t in, const Edge& e, std::vector<double>& n, std::vector<double>& t, double sign) {
         z_[g] = z_[in];
-        h_[g] = h_[in];
+        h[g] = h[in];
         n[g] = n[in];
         t[g] = t[in];
         switch (e.kind) {
         case EdgeKind::Wall: n[g] = -n[in]; break;
         case EdgeKind::Open: break;
         case EdgeKind::Discharge:
-            n[g] = h_[in] > def_.dry_depth ? sign * e.value : 0.0;
+            n[g] = h[in] > def_.dry_depth ? sign * e.value : 0.0;
             t[g] = 0.0;
             break;
         case EdgeKind::Depth: {
             const double hd = std::max(e.value, 0.0);
-            n[g] = hd * velocity(h_[in], n[in], def_.dry_depth);
-            t[g] = hd * velocity(h_[in], t[in], def_.dry_depth);
-            h_[g] = hd;
+            n[g] = hd * velocity(h[in], n[in], def_.dry_depth);
+            t[g] = hd * velocity(h[in], t[in], def_.dry_depth);
+            h[g] = hd;
             break;
         }
         }
-        refresh(g);
     };
     for (int j = 0; j < ny_; ++j) {
-        ghost(at(-1, j), at(0, j), def_.west, hu_, hv_, 1.0);
-        ghost(at(nx_, j), at(nx_ - 1, j), def_.east, hu_, hv_, -1.0);
+        ghost(at(-1, j), at(0, j), def_.west, hu, hv, 1.0);
+        ghost(at(nx_, j), at(nx_ - 1, j), def_.east, hu, hv, -1.0);
     }
     for (int i = 0; i < nx_; ++i) {
-        ghost(at(i, -1), at(i, 0), def_.south, hv_, hu_, 1.0);
-        ghost(at(i, ny_), at(i, ny_ - 1), def_.north, hv_, hu_, -1.0);
+        ghost(at(i, -1), at(i, 0), def_.south, hv, hu, 1.0);
+        ghost(at(i, ny_), at(i, ny_ - 1), def_.north, hv, hu, -1.0);
     }
 }
 
@@ -220,28 +210,6 @@ void ShallowWater::update_spans() {
     }
 }
 
-void ShallowWater::compute_slopes() {
-    // Limited slopes of h, eta = h + z, u and v along x (neighbours k -/+ 1) and y (k -/+ stride).
-    const size_t sn = stride_;
-    const double *h = h_.data(), *z = z_.data(), *u = u_.data(), *v = v_.data();
-    auto slope = [](double l, double c, double r) { return minmod(c - l, r - c); };
-    for_rows(ny_, [&](int j) {
-        if (hi_[j] < lo_[j]) return;
-        const int i1 = std::min(hi_[j] + 1, nx_ - 1);
-        for (int i = std::max(lo_[j] - 1, 0); i <= i1; ++i) {
-            const size_t k = at(i, j);
-            for (int axis = 0; axis < 2; ++axis) {
-                const size_t d = axis ? sn : 1;
-                std::vector<double>* out = axis ? sy_ : sx_;
-                out[0][k] = slope(h[k - d], h[k], h[k + d]);
-                out[1][k] = slope(h[k - d] + z[k - d], h[k] + z[k], h[k + d] + z[k + d]);
-                out[2][k] = slope(u[k - d], u[k], u[k + d]);
-                out[3][k] = slope(v[k - d], v[k], v[k + d]);
-            }
-        }
-    });
-}
-
 double ShallowWater::stable_dt() {
     for_rows(ny_, [&](int j) {
         double s = 0.0;
@@ -257,118 +225,43 @@ double ShallowWater::stable_dt() {
     return s > 0.0 ? def_.cfl * dx_ / s : std::numeric_limits<double>::infinity();
 }
 
-namespace {
-
-/// Cell k's reconstructed state on its side `side` (+1: towards +x or +y) along the axis
-/// whose slopes are `s` (h, eta, u, v) and whose normal velocity is u (x) or v (y).
-FaceState face_state(const std::vector<double>& z, const std::vector<double>& h, const std::vector<double>& uc,
-                     const std::vector<double>& vc, const std::vector<double> (&s)[4], size_t k, double side, bool y_axis) {
-    const double hf = h[k] + 0.5 * side * s[0][k];
-    const double etaf = h[k] + z[k] + 0.5 * side * s[1][k];
-    const double u = uc[k] + 0.5 * side * s[2][k];
-    const double v = vc[k] + 0.5 * side * s[3][k];
-    return y_axis ? FaceState{hf, v, u, etaf - hf} : FaceState{hf, u, v, etaf - hf};
-}
-
-void put(std::vector<double>& faces, size_t f, const FaceFlux& flux) {
-    faces[4 * f + 0] = flux.mass;
-    faces[4 * f + 1] = flux.mom_minus;
-    faces[4 * f + 2] = flux.mom_plus;
-    faces[4 * f + 3] = flux.trans;
-}
-
-}  // namespace
-
-void ShallowWater::flux_rows(double weight) {
-    const double g = def_.gravity;
-    const size_t nfx = static_cast<size_t>(nx_) + 1;
-    auto y_faces = [&](int j, int lo, int hi, int both_lo, int both_hi) {
-        // Face row j (between rows j-1 and j) over [lo, hi]; only [both_lo, both_hi] can
-        // hold water on either side, the rest is dry on both and carries nothing.
-        for (int i = lo; i <= hi; ++i) {
-            const size_t f = static_cast<size_t>(j) * nx_ + i;
-            if (i < both_lo || i > both_hi) {
-                put(fy_, f, {});
-                continue;
-            }
-            const FaceState a = face_state(z_, h_, u_, v_, sy_, at(i, j - 1), 1.0, true);
-            const FaceState b = face_state(z_, h_, u_, v_, sy_, at(i, j), -1.0, true);
-            put(fy_, f, hydrostatic_flux(a, b, g));
-        }
-    };
-    for_rows(ny_, [&](int j) {
-        row_out_[j] = row_in_[j] = 0.0;
-        if (hi_[j] >= lo_[j]) {
-            for (int i = lo_[j]; i <= hi_[j] + 1; ++i) {
-                const FaceState a = face_state(z_, h_, u_, v_, sx_, at(i - 1, j), 1.0, false);
-                const FaceState b = face_state(z_, h_, u_, v_, sx_, at(i, j), -1.0, false);
-                put(fx_, static_cast<size_t>(j) * nfx + i, hydrostatic_flux(a, b, g));
-            }
-        }
-        // Face row j: the union of rows j-1 and j's spans, computed where both hold them.
-        const int plo = j > 0 ? lo_[j - 1] : lo_[j], phi = j > 0 ? hi_[j - 1] : hi_[j];
-        const bool pe = phi < plo, ce = hi_[j] < lo_[j];
-        if (!pe || !ce) {
-            const int ulo = pe ? lo_[j] : ce ? plo : std::min(plo, lo_[j]);
-            const int uhi = pe ? hi_[j] : ce ? phi : std::max(phi, hi_[j]);
-            y_faces(j, ulo, uhi, std::max(plo, lo_[j]), std::min(phi, hi_[j]));
-        }
-        if (j == ny_ - 1 && !ce) y_faces(ny_, lo_[j], hi_[j], lo_[j], hi_[j]);
-        // The edges' mass, outward positive.
-        double out = 0.0, in = 0.0;
-        auto tally = [&](double outward) { (outward > 0.0 ? out : in) += std::abs(outward); };
-        if (!ce && lo_[j] == 0) tally(-fx_[4 * (static_cast<size_t>(j) * nfx)]);
-        if (!ce && hi_[j] == nx_ - 1) tally(fx_[4 * (static_cast<size_t>(j) * nfx + nx_)]);
-        if (j == 0 && !ce)
-            for (int i = lo_[j]; i <= hi_[j]; ++i) tally(-fy_[4 * static_cast<size_t>(i)]);
-        if (j == ny_ - 1 && !ce)
-            for (int i = lo_[j]; i <= hi_[j]; ++i) tally(fy_[4 * (static_cast<size_t>(ny_) * nx_ + i)]);
-        row_out_[j] = out * weight;
-        row_in_[j] = in * weight;
-    });
-}
-
-void ShallowWater::euler_stage(double dt, std::vector<double>& h, std::vector<double>& hu, std::vector<double>& hv) {
-    fill_ghosts();
-    if (def_.second_order) compute_slopes();
-    flux_rows(dt * dx_);
-    double out = 0.0, in = 0.0;
-    for (int j = 0; j < ny_; ++j) {
-        out += row_out_[j];
-        in += row_in_[j];
+void ShallowWater::stage(int kind, std::vector<double>* const* in, std::vector<double>* const* out, double dt, double w) {
+    fill_ghosts(*in[0], *in[1], *in[2]);
+    StageIn si;
+    si.nx = nx_;
+    si.ny = ny_;
+    si.stride = stride_;
+    si.z = z_.data();
+    si.h = in[0]->data();
+    si.hu = in[1]->data();
+    si.hv = in[2]->data();
+    si.lo = lo_.data();
+    si.hi = hi_.data();
+    si.g = def_.gravity;
+    si.dry = def_.dry_depth;
+    si.r = dt / dx_;
+    si.weight = dt * dx_;
+    si.second = def_.second_order;
+    StageOut so;
+    so.h = out[0]->data();
+    so.hu = out[1]->data();
+    so.hv = out[2]->data();
+    so.dirty_lo = t_lo_.data();
+    so.dirty_hi = t_hi_.data();
+    so.row_out = row_out_.data();
+    so.row_in = row_in_.data();
+    so.row_clip = row_clip_.data();
+    run_stage(si, so, static_cast<StageKind>(kind));
+    double sum_out = 0.0, sum_in = 0.0;
+    for (int j = 0; j < ny_; ++j) {  // row order: the same on any number of threads
+        sum_out += row_out_[j];
+        sum_in += row_in_[j];
     }
-    const double w = def_.second_order ? 0.5 : 1.0;  // Heun averages the two stages
-    balance_.outflow += w * out;
-    balance_.inflow += w * in;
-    const double r = dt / dx_, g = def_.gravity;
-    const size_t nfx = static_cast<size_t>(nx_) + 1;
-    for_rows(ny_, [&](int j) {
-        uint64_t clip = 0;
-        for (int i = lo_[j]; i <= hi_[j]; ++i) {
-            const size_t k = at(i, j);
-            const double* w0 = &fx_[4 * (static_cast<size_t>(j) * nfx + i)];
-            const double* e0 = w0 + 4;
-            const double* s0 = &fy_[4 * (static_cast<size_t>(j) * nx_ + i)];
-            const double* n0 = &fy_[4 * (static_cast<size_t>(j + 1) * nx_ + i)];
-            // Audusse's centred bed-slope term of the second order (0 at first order).
-            const double scx = -g * h_[k] * (sx_[1][k] - sx_[0][k]);
-            const double scy = -g * h_[k] * (sy_[1][k] - sy_[0][k]);
-            double hn = h_[k] - r * (e0[0] - w0[0] + n0[0] - s0[0]);
-            const double qx = hu_[k] - r * (e0[1] - w0[2] + n0[3] - s0[3]) + r * scx;
-            const double qy = hv_[k] - r * (n0[1] - s0[2] + e0[3] - w0[3]) + r * scy;
-            if (hn < 0.0) {
-                hn = 0.0;
-                ++clip;
-            }
-            h[k] = hn;
-            hu[k] = qx;
-            hv[k] = qy;  // velocities refreshed by the caller's next pass (Heun's or finish_step)
-        }
-        row_clip_[j] += clip;
-    });
+    balance_.outflow += w * sum_out;
+    balance_.inflow += w * sum_in;
 }
 
-void ShallowWater::finish_step(double dt) {
+void ShallowWater::finish_step(double dt, const std::vector<double>* from) {
     const double g = def_.gravity, n2 = def_.manning * def_.manning, dry = def_.dry_depth;
     const bool masked = !rain_mask_.empty();
     const double rain = rain_ > 0.0 && !masked ? rain_ * dt : 0.0;
@@ -377,6 +270,11 @@ void ShallowWater::finish_step(double dt) {
         double row_rain = 0.0;
         for (int i = lo_[j]; i <= hi_[j]; ++i) {
             const size_t k = at(i, j);
+            if (from) {
+                h_[k] = from[0][k];
+                hu_[k] = from[1][k];
+                hv_[k] = from[2][k];
+            }
             if (masked) {
                 const double r = rain_mask_[k] * dt;
                 h_[k] += r;
@@ -393,7 +291,6 @@ void ShallowWater::finish_step(double dt) {
                 hu_[k] /= f;
                 hv_[k] /= f;
             }
-            refresh(k);
             if (h_[k] > 0.0) {
                 wlo = std::min(wlo, i);
                 whi = std::max(whi, i);
@@ -435,7 +332,6 @@ void ShallowWater::apply_sources(double dt) {
             hu_[k] *= keep;
             hv_[k] *= keep;
         }
-        refresh(k);
     }
 }
 
@@ -445,41 +341,18 @@ double ShallowWater::step(double max_dt) {
     if (!(dt > 0.0) || !std::isfinite(dt)) return 0.0;
     uint64_t cells = 0;
     for (int j = 0; j < ny_; ++j) cells += static_cast<uint64_t>(std::max(hi_[j] - lo_[j] + 1, 0));
+    std::vector<double>* const state[3] = {&h_, &hu_, &hv_};
+    std::vector<double>* const scratch[3] = {&t_[0], &t_[1], &t_[2]};
     if (!def_.second_order) {
-        euler_stage(dt, h_, hu_, hv_);
+        stage(static_cast<int>(StageKind::Euler), state, scratch, dt, 1.0);
+        finish_step(dt, t_);
     } else {
         // Heun (SSP-RK2): U1 = U + dt L(U), U2 = U1 + dt L(U1), U = (U + U2) / 2.
-        h0_.resize(h_.size());
-        hu0_.resize(h_.size());
-        hv0_.resize(h_.size());
-        for_rows(ny_, [&](int j) {
-            for (int i = lo_[j]; i <= hi_[j]; ++i) {
-                const size_t k = at(i, j);
-                h0_[k] = h_[k];
-                hu0_[k] = hu_[k];
-                hv0_[k] = hv_[k];
-            }
-        });
-        euler_stage(dt, h_, hu_, hv_);
-        for_rows(ny_, [&](int j) {
-            for (int i = lo_[j]; i <= hi_[j]; ++i) {
-                const size_t k = at(i, j);
-                if (h_[k] <= def_.dry_depth) hu_[k] = hv_[k] = 0.0;
-                refresh(k);
-            }
-        });
-        euler_stage(dt, h_, hu_, hv_);
-        for_rows(ny_, [&](int j) {
-            for (int i = lo_[j]; i <= hi_[j]; ++i) {
-                const size_t k = at(i, j);
-                h_[k] = 0.5 * (h0_[k] + h_[k]);
-                hu_[k] = 0.5 * (hu0_[k] + hu_[k]);
-                hv_[k] = 0.5 * (hv0_[k] + hv_[k]);  // finish_step refreshes the velocities
-            }
-        });
+        stage(static_cast<int>(StageKind::HeunFirst), state, scratch, dt, 0.5);
+        stage(static_cast<int>(StageKind::HeunSecond), scratch, state, dt, 0.5);
         cells *= 2;
+        finish_step(dt);
     }
-    finish_step(dt);
     time_ += dt;
     ++stats_.substeps;
     stats_.cell_updates += cells;

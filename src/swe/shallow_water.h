@@ -10,7 +10,9 @@
 // semi-implicit; the time step is adaptive under the CFL limit.
 //
 // Layout: structure of arrays (bed, depth, two discharges) of doubles on a grid with one ghost
-// cell on each side (the edges' conditions), row-major, row j along y (the terrain's z).
+// cell on each side (the edges' conditions), row-major, row j along y (the terrain's z), and
+// a second state for the stages' outputs. A stage is one sweep over the rows (swe_stage.h):
+// velocities, slopes and faces live in a few rolling rows, not in arrays.
 // Dry cells are skipped: each row keeps the span of columns that are wet or near wet cells of
 // its own or its neighbouring rows, so a step costs the wet spans, not the grid. Rows run in
 // parallel (TBB); each face is computed by one row and every sum runs in row order, so the
@@ -126,19 +128,19 @@ public:
 
 private:
     size_t at(int i, int j) const { return static_cast<size_t>(j + 1) * stride_ + static_cast<size_t>(i + 1); }
-    void fill_ghosts();
+    void fill_ghosts(std::vector<double>& h, std::vector<double>& hu, std::vector<double>& hv);
     void update_spans();
-    void compute_slopes();
     double stable_dt();
-    void euler_stage(double dt, std::vector<double>& h, std::vector<double>& hu, std::vector<double>& hv);
-    void flux_rows(double dt);
-    void finish_step(double dt);
+    /// One stage from state (h, hu, hv) into `out` (see swe_stage.h); `w` weighs its edge
+    /// volumes in the balance.
+    void stage(int kind, std::vector<double>* const* in, std::vector<double>* const* out, double dt, double w);
+    /// Rain, friction and the wet spans over the active spans, the state taken from `from`
+    /// (nullptr: the state itself); then the sources.
+    void finish_step(double dt, const std::vector<double>* from = nullptr);
     /// The point sources and sinks over dt seconds (after the step's fluxes).
     void apply_sources(double dt);
     /// Marks column i of row j wet (its span grows).
     void mark_wet(int i, int j);
-    /// Cell k's velocity cache from its state (0 at or below the dry depth).
-    void refresh(size_t k);
 
     int nx_, ny_;
     double dx_;
@@ -146,15 +148,10 @@ private:
     ShallowWaterDef def_;
     double time_ = 0.0;
     std::vector<double> z_, h_, hu_, hv_;
-    // The velocity of every cell's current state (one division per change, not per read):
-    // refreshed wherever a state changes (the spans' updates, the ghosts, sources, set_state).
-    std::vector<double> u_, v_;
-    // Second order: the state before the step (Heun) and the limited slopes per cell.
-    std::vector<double> h0_, hu0_, hv0_;
-    std::vector<double> sx_[4], sy_[4];  // h, eta, u, v
-    // Faces: fx_ (nx+1 per row) and fy_ (nx per face row, ny+1 rows); 4 doubles each:
-    // mass, normal momentum seen by the minus cell, by the plus cell, transverse momentum.
-    std::vector<double> fx_, fy_;
+    // A second state (h, hu, hv): a stage's output (Euler, Heun's first stage), zero outside
+    // the columns each row wrote last (t_lo_, t_hi_), as the state is zero outside its spans.
+    std::vector<double> t_[3];
+    std::vector<int> t_lo_, t_hi_;
     std::vector<int> lo_, hi_;          // active span per row (lo > hi: none)
     std::vector<int> wet_lo_, wet_hi_;  // wet columns per row after the latest step
     std::vector<double> row_out_, row_in_, row_speed_;

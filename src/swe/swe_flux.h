@@ -20,37 +20,24 @@ struct FaceFlux {
 };
 
 /// HLL flux of two depth-positive states (Einfeldt's speeds; a dry side takes the
-/// rarefaction's front u -/+ 2c of the wet one).
+/// rarefaction's front u -/+ 2c of the wet one). Branch-free (selects), so that a loop of
+/// faces vectorises; both sides dry: no flux.
 inline void hll(double hl, double ul, double vl, double hr, double ur, double vr, double g, double out[3]) {
-    if (hl <= 0.0 && hr <= 0.0) {
-        out[0] = out[1] = out[2] = 0.0;
-        return;
-    }
     const double cl = std::sqrt(g * hl), cr = std::sqrt(g * hr);
-    double sl, sr;
-    if (hl <= 0.0) {
-        sl = ur - 2.0 * cr;
-        sr = ur + cr;
-    } else if (hr <= 0.0) {
-        sl = ul - cl;
-        sr = ul + 2.0 * cl;
-    } else {
-        sl = std::min(ul - cl, ur - cr);
-        sr = std::max(ul + cl, ur + cr);
-    }
+    const double sl_wet = std::min(ul - cl, ur - cr), sr_wet = std::max(ul + cl, ur + cr);
+    const double sl_rdry = hr <= 0.0 ? ul - cl : sl_wet, sr_rdry = hr <= 0.0 ? ul + 2.0 * cl : sr_wet;
+    const double sl = hl <= 0.0 ? ur - 2.0 * cr : sl_rdry, sr = hl <= 0.0 ? ur + cr : sr_rdry;
     const double fl[3] = {hl * ul, hl * ul * ul + 0.5 * g * hl * hl, hl * ul * vl};
     const double fr[3] = {hr * ur, hr * ur * ur + 0.5 * g * hr * hr, hr * ur * vr};
-    if (sl >= 0.0) {
-        for (int k = 0; k < 3; ++k) out[k] = fl[k];
-        return;
-    }
-    if (sr <= 0.0) {
-        for (int k = 0; k < 3; ++k) out[k] = fr[k];
-        return;
-    }
     const double ul3[3] = {hl, hl * ul, hl * vl}, ur3[3] = {hr, hr * ur, hr * vr};
-    const double inv = 1.0 / (sr - sl);
-    for (int k = 0; k < 3; ++k) out[k] = (sr * fl[k] - sl * fr[k] + sl * sr * (ur3[k] - ul3[k])) * inv;
+    const double inv = 1.0 / (sr - sl);  // sr == sl only where a select below drops it
+    const double wet = hl + hr;          // depths are >= 0: 0 when both sides are dry
+    for (int k = 0; k < 3; ++k) {
+        const double mid = (sr * fl[k] - sl * fr[k] + sl * sr * (ur3[k] - ul3[k])) * inv;
+        const double right = sr <= 0.0 ? fr[k] : mid;
+        const double f = sl >= 0.0 ? fl[k] : right;
+        out[k] = wet <= 0.0 ? 0.0 : f;
+    }
 }
 
 /// Audusse et al. 2004: both sides' depths cut at the higher bed, the HLL flux of the cut

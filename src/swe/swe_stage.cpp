@@ -1,0 +1,364 @@
+// One stage of the shallow-water core as one sweep over the rows (swe_stage.h).
+#include "swe_stage.h"
+
+#include "swe_flux.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/partitioner.h>
+
+#include <algorithm>
+#include <climits>
+#include <cmath>
+#include <utility>
+#include <vector>
+
+namespace mr::swe {
+
+namespace {
+
+#define MR_RESTRICT __restrict__
+// The column loops read rolling row buffers and write others (or the state rows): never the
+// same memory, which the compiler cannot prove; ivdep lets it vectorise them.
+#if defined(__GNUC__) && !defined(__clang__)
+#define MR_IVDEP _Pragma("GCC ivdep")
+#elif defined(__clang__)
+#define MR_IVDEP _Pragma("clang loop vectorize(assume_safety)")
+#else
+#define MR_IVDEP
+#endif
+
+/// Row buffers of one chunk, indexed by column + 1 (ghost columns at 0 and nx + 1).
+struct Scratch {
+    size_t width = 0;
+    std::vector<double> mem;
+    double* prim[3][3];  // ring by row: u, v, eta
+    double* sx[4];       // this row's x slopes: h, eta, u, v
+    double* sy[2][4];    // ring by row: y slopes
+    double* fx[4];       // this row's x faces: mass, momentum minus / plus, transverse
+    double* fy[2][4];    // ring by face row
+    double* neg;         // this row's clipped depths
+
+    void resize(int nx) {
+        const size_t w = static_cast<size_t>(nx) + 2;
+        if (w == width) return;
+        width = w;
+        mem.assign(w * 34, 0.0);  // zero: ghost columns' slopes stay 0
+        double* p = mem.data();
+        auto take = [&] { return std::exchange(p, p + w) + 1; };
+        for (auto& row : prim)
+            for (auto& b : row) b = take();
+        for (auto& b : sx) b = take();
+        for (auto& row : sy)
+            for (auto& b : row) b = take();
+        for (auto& b : fx) b = take();
+        for (auto& row : fy)
+            for (auto& b : row) b = take();
+        neg = take();
+    }
+};
+
+/// Restrict views of the row buffers, so that the loops over columns vectorise.
+struct Prims {
+    explicit Prims(double* const* p) : u(p[0]), v(p[1]), eta(p[2]) {}
+    const double *MR_RESTRICT u, *MR_RESTRICT v, *MR_RESTRICT eta;
+};
+struct Slopes {
+    explicit Slopes(double* const* s) : h(s[0]), eta(s[1]), u(s[2]), v(s[3]) {}
+    const double *MR_RESTRICT h, *MR_RESTRICT eta, *MR_RESTRICT u, *MR_RESTRICT v;
+};
+struct Faces {
+    explicit Faces(double* const* f) : mass(f[0]), minus(f[1]), plus(f[2]), trans(f[3]) {}
+    double *MR_RESTRICT mass, *MR_RESTRICT minus, *MR_RESTRICT plus, *MR_RESTRICT trans;
+    void put(int i, const FaceFlux& f) {
+        mass[i] = f.mass;
+        minus[i] = f.mom_minus;
+        plus[i] = f.mom_plus;
+        trans[i] = f.trans;
+    }
+};
+
+int ring3(int r) { return ((r % 3) + 3) % 3; }
+int ring2(int r) { return ((r % 2) + 2) % 2; }
+
+template <bool Second, StageKind Kind>
+class Sweep {
+public:
+    Sweep(const StageIn& in, const StageOut& out, Scratch& s) : in_(in), out_(out), s_(s) {}
+
+    void rows(int j0, int j1) {
+        if (Second) {
+            for (int r = j0 - 2; r <= j0; ++r) prims(r);
+            slopes_y(j0 - 1);
+            prims(j0 + 1);
+            slopes_y(j0);
+        } else {
+            prims(j0 - 1);
+            prims(j0);
+        }
+        faces_y(j0);
+        for (int j = j0; j < j1; ++j) {
+            if (Second) {
+                prims(j + 2);
+                slopes_y(j + 1);
+            } else {
+                prims(j + 1);
+            }
+            faces_y(j + 1);
+            row(j);
+        }
+    }
+
+private:
+    bool empty(int j) const { return j < 0 || j >= in_.ny || in_.hi[j] < in_.lo[j]; }
+    size_t at(int i, int r) const { return static_cast<size_t>(r + 1) * in_.stride + static_cast<size_t>(i + 1); }
+
+    /// Row r's velocities and surface over the columns its own and its neighbours' spans read.
+    void prims(int r) {
+        if (r < -1 || r > in_.ny) return;
+        int a = INT_MAX, b = INT_MIN;
+        for (int s = r - 1; s <= r + 1; ++s)
+            if (!empty(s)) {
+                a = std::min(a, in_.lo[s]);
+                b = std::max(b, in_.hi[s]);
+            }
+        if (a > b) return;
+        a = std::max(a - 2, -1);
+        b = std::min(b + 2, in_.nx);
+        const size_t k0 = at(0, r);
+        const double *MR_RESTRICT h = in_.h + k0, *MR_RESTRICT hu = in_.hu + k0, *MR_RESTRICT hv = in_.hv + k0,
+                     *MR_RESTRICT z = in_.z + k0;
+        double *MR_RESTRICT u = s_.prim[ring3(r)][0], *MR_RESTRICT v = s_.prim[ring3(r)][1], *MR_RESTRICT eta = s_.prim[ring3(r)][2];
+        const double dry = in_.dry;
+        MR_IVDEP
+        for (int i = a; i <= b; ++i) {
+            const double hh = h[i];
+            const double d = std::max(hh, dry);  // divide always (vectorises), keep where wet
+            const double uu = hu[i] / d, vv = hv[i] / d;
+            u[i] = hh > dry ? uu : 0.0;
+            v[i] = hh > dry ? vv : 0.0;
+            eta[i] = hh + z[i];
+        }
+    }
+
+    /// Row r's limited y slopes over its span and one column beyond (zero on ghost rows).
+    void slopes_y(int r) {
+        double* const* out = s_.sy[ring2(r)];
+        if (r < 0 || r >= in_.ny) {
+            for (int q = 0; q < 4; ++q) std::fill_n(out[q] - 1, s_.width, 0.0);
+            return;
+        }
+        if (empty(r)) return;
+        const int a = std::max(in_.lo[r] - 1, 0), b = std::min(in_.hi[r] + 1, in_.nx - 1);
+        const double *MR_RESTRICT hs = in_.h + at(0, r - 1), *MR_RESTRICT hc = in_.h + at(0, r), *MR_RESTRICT hn = in_.h + at(0, r + 1);
+        const Prims ps(s_.prim[ring3(r - 1)]), pc(s_.prim[ring3(r)]), pn(s_.prim[ring3(r + 1)]);
+        double *MR_RESTRICT o0 = out[0], *MR_RESTRICT o1 = out[1], *MR_RESTRICT o2 = out[2], *MR_RESTRICT o3 = out[3];
+        MR_IVDEP
+        for (int i = a; i <= b; ++i) {
+            o0[i] = minmod(hc[i] - hs[i], hn[i] - hc[i]);
+            o1[i] = minmod(pc.eta[i] - ps.eta[i], pn.eta[i] - pc.eta[i]);
+            o2[i] = minmod(pc.u[i] - ps.u[i], pn.u[i] - pc.u[i]);
+            o3[i] = minmod(pc.v[i] - ps.v[i], pn.v[i] - pc.v[i]);
+        }
+    }
+
+    /// Face row f (between rows f - 1 and f): computed where both rows are active (the edge
+    /// rows: where the row inside is), zero over the rest of either row's span.
+    void faces_y(int f) {
+        if (f < 0 || f > in_.ny) return;
+        const bool below = !empty(f - 1), above = !empty(f);
+        if (!below && !above) return;
+        double* const* out = s_.fy[f % 2];
+        int ulo = INT_MAX, uhi = INT_MIN;
+        for (int r : {f - 1, f})
+            if (!empty(r)) {
+                ulo = std::min(ulo, in_.lo[r]);
+                uhi = std::max(uhi, in_.hi[r]);
+            }
+        int ylo, yhi;
+        if (f == 0 || f == in_.ny) {
+            const int r = f == 0 ? 0 : in_.ny - 1;
+            ylo = in_.lo[r];
+            yhi = in_.hi[r];
+        } else {
+            ylo = below && above ? std::max(in_.lo[f - 1], in_.lo[f]) : 1;
+            yhi = below && above ? std::min(in_.hi[f - 1], in_.hi[f]) : 0;
+        }
+        auto zero = [&](int a, int b) {
+            for (int q = 0; q < 4 && a <= b; ++q) std::fill(out[q] + a, out[q] + b + 1, 0.0);
+        };
+        if (yhi < ylo) {
+            zero(ulo, uhi);
+            return;
+        }
+        zero(ulo, ylo - 1);
+        zero(yhi + 1, uhi);
+        const size_t ks = at(0, f - 1), kn = at(0, f);
+        const double *MR_RESTRICT hs = in_.h + ks, *MR_RESTRICT hn = in_.h + kn, *MR_RESTRICT zs = in_.z + ks,
+                     *MR_RESTRICT zn = in_.z + kn;
+        const Prims ps(s_.prim[ring3(f - 1)]), pn(s_.prim[ring3(f)]);
+        const Slopes ss(s_.sy[ring2(f - 1)]), sn(s_.sy[ring2(f)]);
+        Faces o(out);
+        const double g = in_.g;
+        MR_IVDEP
+        for (int i = ylo; i <= yhi; ++i) {
+            // The cell below seen from its top (+0.5 slope), the cell above from its bottom;
+            // normal velocity v, transverse u.
+            FaceState a{hs[i], ps.v[i], ps.u[i], 0.0}, b{hn[i], pn.v[i], pn.u[i], 0.0};
+            double ea = hs[i] + zs[i], eb = hn[i] + zn[i];
+            if (Second) {
+                a = {hs[i] + 0.5 * ss.h[i], ps.v[i] + 0.5 * ss.v[i], ps.u[i] + 0.5 * ss.u[i], 0.0};
+                b = {hn[i] - 0.5 * sn.h[i], pn.v[i] - 0.5 * sn.v[i], pn.u[i] - 0.5 * sn.u[i], 0.0};
+                ea += 0.5 * ss.eta[i];
+                eb -= 0.5 * sn.eta[i];
+            }
+            a.z = ea - a.h;
+            b.z = eb - b.h;
+            o.put(i, hydrostatic_flux(a, b, g));
+        }
+    }
+
+    void slopes_x(int j, const double* MR_RESTRICT h, const Prims& p) {
+        const int a = std::max(in_.lo[j] - 1, 0), b = std::min(in_.hi[j] + 1, in_.nx - 1);
+        double *MR_RESTRICT o0 = s_.sx[0], *MR_RESTRICT o1 = s_.sx[1], *MR_RESTRICT o2 = s_.sx[2], *MR_RESTRICT o3 = s_.sx[3];
+        MR_IVDEP
+        for (int i = a; i <= b; ++i) {
+            o0[i] = minmod(h[i] - h[i - 1], h[i + 1] - h[i]);
+            o1[i] = minmod(p.eta[i] - p.eta[i - 1], p.eta[i + 1] - p.eta[i]);
+            o2[i] = minmod(p.u[i] - p.u[i - 1], p.u[i + 1] - p.u[i]);
+            o3[i] = minmod(p.v[i] - p.v[i - 1], p.v[i + 1] - p.v[i]);
+        }
+    }
+
+    void faces_x(int j, const double* MR_RESTRICT h, const double* MR_RESTRICT z, const Prims& p) {
+        const Slopes sx(s_.sx);
+        Faces o(s_.fx);
+        const double g = in_.g;
+        const int a0 = in_.lo[j], a1 = in_.hi[j] + 1;
+        MR_IVDEP
+        for (int i = a0; i <= a1; ++i) {
+            FaceState a{h[i - 1], p.u[i - 1], p.v[i - 1], 0.0}, b{h[i], p.u[i], p.v[i], 0.0};
+            double ea = h[i - 1] + z[i - 1], eb = h[i] + z[i];
+            if (Second) {
+                a = {h[i - 1] + 0.5 * sx.h[i - 1], p.u[i - 1] + 0.5 * sx.u[i - 1], p.v[i - 1] + 0.5 * sx.v[i - 1], 0.0};
+                b = {h[i] - 0.5 * sx.h[i], p.u[i] - 0.5 * sx.u[i], p.v[i] - 0.5 * sx.v[i], 0.0};
+                ea += 0.5 * sx.eta[i - 1];
+                eb -= 0.5 * sx.eta[i];
+            }
+            a.z = ea - a.h;
+            b.z = eb - b.h;
+            o.put(i, hydrostatic_flux(a, b, g));
+        }
+    }
+
+    /// The edges' volume through row j's faces, outward positive.
+    void tally(int j, double* const* fs, double* const* fn) {
+        double o = 0.0, n = 0.0;
+        auto add = [&](double outward) { (outward > 0.0 ? o : n) += std::abs(outward); };
+        const int lo = in_.lo[j], hi = in_.hi[j];
+        if (lo == 0) add(-s_.fx[0][0]);
+        if (hi == in_.nx - 1) add(s_.fx[0][in_.nx]);
+        if (j == 0)
+            for (int i = lo; i <= hi; ++i) add(-fs[0][i]);
+        if (j == in_.ny - 1)
+            for (int i = lo; i <= hi; ++i) add(fn[0][i]);
+        out_.row_out[j] = o * in_.weight;
+        out_.row_in[j] = n * in_.weight;
+    }
+
+    /// Clears the scratch state's columns of row j that the last write left outside [lo, hi].
+    void clear_stale(int j, int lo, int hi) {
+        const int dlo = out_.dirty_lo[j], dhi = out_.dirty_hi[j];
+        const size_t k0 = at(0, j);
+        for (int i = dlo; i <= dhi; ++i)
+            if (i < lo || i > hi) out_.h[k0 + i] = out_.hu[k0 + i] = out_.hv[k0 + i] = 0.0;
+        out_.dirty_lo[j] = lo;
+        out_.dirty_hi[j] = hi;
+    }
+
+    void row(int j) {
+        constexpr bool scratch = Kind != StageKind::HeunSecond;
+        if (empty(j)) {
+            if (scratch) clear_stale(j, 0, -1);
+            out_.row_out[j] = out_.row_in[j] = 0.0;
+            return;
+        }
+        const int lo = in_.lo[j], hi = in_.hi[j];
+        const size_t k0 = at(0, j);
+        const double *MR_RESTRICT h = in_.h + k0, *MR_RESTRICT hu = in_.hu + k0, *MR_RESTRICT hv = in_.hv + k0,
+                     *MR_RESTRICT z = in_.z + k0;
+        const Prims p(s_.prim[ring3(j)]);
+        if (Second) slopes_x(j, h, p);
+        faces_x(j, h, z, p);
+        double* const* fs_rows = s_.fy[j % 2];
+        double* const* fn_rows = s_.fy[(j + 1) % 2];
+        tally(j, fs_rows, fn_rows);
+        if (scratch) clear_stale(j, lo, hi);
+        const Faces fx(s_.fx), fs(fs_rows), fn(fn_rows);
+        const Slopes sx(s_.sx), sy(s_.sy[ring2(j)]);
+        double *MR_RESTRICT oh = out_.h + k0, *MR_RESTRICT ou = out_.hu + k0, *MR_RESTRICT ov = out_.hv + k0;
+        const double r = in_.r, g = in_.g, dry = in_.dry;
+        double* MR_RESTRICT neg = s_.neg;  // 1 where a depth was clipped (counted after)
+        MR_IVDEP
+        for (int i = lo; i <= hi; ++i) {
+            double hn = h[i] - r * (fx.mass[i + 1] - fx.mass[i] + fn.mass[i] - fs.mass[i]);
+            double qx = hu[i] - r * (fx.minus[i + 1] - fx.plus[i] + fn.trans[i] - fs.trans[i]);
+            double qy = hv[i] - r * (fn.minus[i] - fs.plus[i] + fx.trans[i + 1] - fx.trans[i]);
+            if (Second) {
+                // Audusse's centred bed-slope term of the second order.
+                qx += r * (-g * h[i] * (sx.eta[i] - sx.h[i]));
+                qy += r * (-g * h[i] * (sy.eta[i] - sy.h[i]));
+            }
+            neg[i] = hn < 0.0 ? 1.0 : 0.0;
+            hn = hn < 0.0 ? 0.0 : hn;
+            if (Kind == StageKind::HeunFirst) {
+                qx = hn <= dry ? 0.0 : qx;
+                qy = hn <= dry ? 0.0 : qy;
+            }
+            if (Kind == StageKind::HeunSecond) {
+                oh[i] = 0.5 * (oh[i] + hn);
+                ou[i] = 0.5 * (ou[i] + qx);
+                ov[i] = 0.5 * (ov[i] + qy);
+            } else {
+                oh[i] = hn;
+                ou[i] = qx;
+                ov[i] = qy;
+            }
+        }
+        uint64_t clip = 0;
+        for (int i = lo; i <= hi; ++i) clip += neg[i] != 0.0;
+        out_.row_clip[j] += clip;
+    }
+
+    const StageIn& in_;
+    const StageOut& out_;
+    Scratch& s_;
+};
+
+}  // namespace
+
+void run_stage(const StageIn& in, const StageOut& out, StageKind kind) {
+    // Chunks of rows large enough that the rows a chunk recomputes at its ends (a face row,
+    // two rows of slopes) cost little, small enough to balance two to four threads.
+    const int grain = std::max(8, in.ny / 32);
+    tbb::parallel_for(
+        tbb::blocked_range<int>(0, in.ny, grain),
+        [&](const tbb::blocked_range<int>& rows) {
+            thread_local Scratch scratch;
+            scratch.resize(in.nx);
+            const int j0 = rows.begin(), j1 = rows.end();
+            switch (kind) {
+            case StageKind::Euler:
+                if (in.second)
+                    Sweep<true, StageKind::Euler>(in, out, scratch).rows(j0, j1);
+                else
+                    Sweep<false, StageKind::Euler>(in, out, scratch).rows(j0, j1);
+                break;
+            case StageKind::HeunFirst: Sweep<true, StageKind::HeunFirst>(in, out, scratch).rows(j0, j1); break;
+            case StageKind::HeunSecond: Sweep<true, StageKind::HeunSecond>(in, out, scratch).rows(j0, j1); break;
+            }
+        },
+        tbb::simple_partitioner());
+}
+
+}  // namespace mr::swe
