@@ -266,39 +266,28 @@ void ShallowWater::finish_step(double dt, const std::vector<double>* from) {
     const bool masked = !rain_mask_.empty();
     const double rain = rain_ > 0.0 && !masked ? rain_ * dt : 0.0;
     for_rows(ny_, [&](int j) {
-        int wlo = nx_, whi = -1;
-        double row_rain = 0.0;
-        for (int i = lo_[j]; i <= hi_[j]; ++i) {
-            const size_t k = at(i, j);
-            if (from) {
-                h_[k] = from[0][k];
-                hu_[k] = from[1][k];
-                hv_[k] = from[2][k];
-            }
-            if (masked) {
-                const double r = rain_mask_[k] * dt;
-                h_[k] += r;
-                row_rain += r;
-            } else {
-                h_[k] += rain;
-            }
-            if (h_[k] <= dry) {
-                hu_[k] = hv_[k] = 0.0;
-            } else if (n2 > 0.0) {
-                // Semi-implicit Manning: q / (1 + dt g n^2 |u| / h^(4/3)).
-                const double speed = std::hypot(hu_[k], hv_[k]) / h_[k];
-                const double f = 1.0 + dt * g * n2 * speed / (h_[k] * std::cbrt(h_[k]));
-                hu_[k] /= f;
-                hv_[k] /= f;
-            }
-            if (h_[k] > 0.0) {
-                wlo = std::min(wlo, i);
-                whi = std::max(whi, i);
-            }
+        const size_t k0 = at(0, j);
+        if (from && hi_[j] >= lo_[j]) {
+            const size_t a = k0 + lo_[j], b = k0 + hi_[j] + 1;
+            std::copy(from[0].begin() + a, from[0].begin() + b, h_.begin() + a);
+            std::copy(from[1].begin() + a, from[1].begin() + b, hu_.begin() + a);
+            std::copy(from[2].begin() + a, from[2].begin() + b, hv_.begin() + a);
         }
-        wet_lo_[j] = wlo;
+        FinishRow row;
+        row.h = h_.data() + k0;
+        row.hu = hu_.data() + k0;
+        row.hv = hv_.data() + k0;
+        row.rain_rate = masked ? rain_mask_.data() + k0 : nullptr;
+        row.rain = rain;
+        row.dt = dt;
+        row.c = dt * g * n2;  // semi-implicit Manning: q / (1 + dt g n^2 |u| / h^(4/3))
+        row.dry = dry;
+        row.lo = lo_[j];
+        row.hi = hi_[j];
+        int wlo, whi;
+        row_rain_[j] = finish_row(row, wlo, whi);
+        wet_lo_[j] = std::min(wlo, nx_);
         wet_hi_[j] = whi;
-        row_rain_[j] = row_rain;
     });
     if (masked) {
         double sum = 0.0;

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <climits>
+#include <cstring>
 #include <cmath>
 #include <utility>
 #include <vector>
@@ -335,13 +336,44 @@ private:
     Scratch& s_;
 };
 
+inline double cbrt_estimate(double x) {
+    uint64_t b;
+    std::memcpy(&b, &x, sizeof b);
+    const uint32_t hi = static_cast<uint32_t>(b >> 32) / 3u + 715094163u;  // fdlibm's cbrt B1
+    const uint64_t yb = static_cast<uint64_t>(hi) << 32;
+    double y;
+    std::memcpy(&y, &yb, sizeof y);
+    for (int k = 0; k < 3; ++k) {  // Halley: 5 -> 15 -> 45 -> 53 bits
+        const double y3 = y * y * y;
+        y = y * (y3 + 2.0 * x) / (2.0 * y3 + x);
+    }
+    return y;
+}
+
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
+#define MR_CLONES [[gnu::flatten, gnu::target_clones("avx2", "default")]]
+#else
+#define MR_CLONES
+#endif
+
+MR_CLONES void finish_columns(double* MR_RESTRICT h, double* MR_RESTRICT hu, double* MR_RESTRICT hv, int lo, int hi, double c,
+                              double dry) {
+    const double floor = std::max(dry, 1e-12);  // a depth the friction can divide by
+    MR_IVDEP
+    for (int i = lo; i <= hi; ++i) {
+        const double hh = h[i], qx = hu[i], qy = hv[i];
+        const double hs = std::max(hh, floor);
+        const double speed = std::sqrt(qx * qx + qy * qy) / hs;
+        const double f = 1.0 + c * speed / (hs * cbrt_estimate(hs));
+        hu[i] = hh > dry ? qx / f : 0.0;
+        hv[i] = hh > dry ? qy / f : 0.0;
+    }
+}
+
 /// One chunk of rows, everything it calls inlined (flatten) and compiled twice: for AVX2
 /// (4 doubles a vector) where the CPU has it, for the baseline (SSE2) elsewhere. No FMA in
 /// either: the results are the same on every x86-64.
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
-[[gnu::flatten, gnu::target_clones("avx2", "default")]]
-#endif
-void sweep_chunk(const StageIn& in, const StageOut& out, StageKind kind, Scratch& scratch, int j0, int j1) {
+MR_CLONES void sweep_chunk(const StageIn& in, const StageOut& out, StageKind kind, Scratch& scratch, int j0, int j1) {
     switch (kind) {
     case StageKind::Euler:
         if (in.second)
@@ -368,6 +400,29 @@ void run_stage(const StageIn& in, const StageOut& out, StageKind kind) {
             sweep_chunk(in, out, kind, scratch, rows.begin(), rows.end());
         },
         tbb::simple_partitioner());
+}
+
+double cbrt_positive(double x) { return cbrt_estimate(x); }
+
+double finish_row(const FinishRow& row, int& wet_lo, int& wet_hi) {
+    double* h = row.h;
+    double added = 0.0;
+    if (row.rain_rate) {
+        for (int i = row.lo; i <= row.hi; ++i) {
+            const double r = row.rain_rate[i] * row.dt;
+            h[i] += r;
+            added += r;
+        }
+    } else if (row.rain != 0.0) {
+        for (int i = row.lo; i <= row.hi; ++i) h[i] += row.rain;
+    }
+    finish_columns(h, row.hu, row.hv, row.lo, row.hi, row.c, row.dry);
+    int lo = row.lo, hi = row.hi;
+    while (lo <= hi && !(h[lo] > 0.0)) ++lo;
+    while (hi >= lo && !(h[hi] > 0.0)) --hi;
+    wet_lo = lo <= hi ? lo : INT_MAX;
+    wet_hi = lo <= hi ? hi : -1;
+    return added;
 }
 
 }  // namespace mr::swe

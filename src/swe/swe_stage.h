@@ -40,4 +40,20 @@ struct StageOut {
 
 void run_stage(const StageIn& in, const StageOut& out, StageKind kind);
 
+/// The end of a step on one row's columns [lo, hi]: rain (a rate per cell, or `rain` metres
+/// everywhere), discharges zeroed at or below the dry depth, semi-implicit Manning friction
+/// q / (1 + c |u| / h^(4/3)) with c = dt g n^2 (0: none).
+struct FinishRow {
+    double *h = nullptr, *hu = nullptr, *hv = nullptr;
+    const double* rain_rate = nullptr;  ///< m/s per cell of the row, or nullptr: `rain`
+    double rain = 0.0, dt = 0.0, c = 0.0, dry = 1e-6;
+    int lo = 0, hi = -1;
+};
+/// Returns the rain added (metres summed over the row's cells) and the row's wet columns.
+double finish_row(const FinishRow& row, int& wet_lo, int& wet_hi);
+
+/// x^(1/3) for x > 0 (a bit estimate and three Halley steps, within 1e-15 of std::cbrt):
+/// unlike std::cbrt it vectorises.
+double cbrt_positive(double x);
+
 }  // namespace mr::swe

@@ -1,10 +1,12 @@
 // Properties of the shallow-water core beyond SWASHES: the mass balance with sources, rain
 // and open edges; the same result on any number of threads; dry cells left alone.
 #include "shallow_water.h"
+#include "swe_stage.h"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -188,4 +190,11 @@ TEST(ShallowWater, ALineOfManySourcesFeedsItsSum) {
     // The spans follow the line: a few rows of 300-odd columns, not the 400^2 grid.
     const double per_step = static_cast<double>(w.stats().cell_updates) / w.stats().substeps;
     EXPECT_LT(per_step, 0.1 * 400 * 400);
+}
+
+TEST(ShallowWater, FrictionsCubeRootMatchesTheLibrary) {
+    // The friction's vectorisable cube root against std::cbrt over 1e-12 m .. 1e4 m.
+    double worst = 0.0;
+    for (double x = 1e-12; x < 1e4; x *= 1.003) worst = std::max(worst, std::abs(mr::swe::cbrt_positive(x) / std::cbrt(x) - 1.0));
+    EXPECT_LT(worst, 2e-15);
 }
