@@ -212,14 +212,8 @@ void ShallowWater::update_spans() {
 
 double ShallowWater::stable_dt() {
     for_rows(ny_, [&](int j) {
-        double s = 0.0;
-        for (int i = lo_[j]; i <= hi_[j]; ++i) {
-            const size_t k = at(i, j);
-            if (h_[k] <= def_.dry_depth) continue;
-            const double c = std::sqrt(def_.gravity * h_[k]);
-            s = std::max({s, std::abs(hu_[k] / h_[k]) + c, std::abs(hv_[k] / h_[k]) + c});
-        }
-        row_speed_[j] = s;
+        const size_t k0 = at(0, j);
+        row_speed_[j] = row_wave_speed(h_.data() + k0, hu_.data() + k0, hv_.data() + k0, lo_[j], hi_[j], def_.gravity, def_.dry_depth);
     });
     const double s = *std::max_element(row_speed_.begin(), row_speed_.end());
     return s > 0.0 ? def_.cfl * dx_ / s : std::numeric_limits<double>::infinity();

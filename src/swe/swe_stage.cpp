@@ -370,6 +370,22 @@ MR_CLONES void finish_columns(double* MR_RESTRICT h, double* MR_RESTRICT hu, dou
     }
 }
 
+MR_CLONES double wave_speed_columns(const double* MR_RESTRICT h, const double* MR_RESTRICT hu, const double* MR_RESTRICT hv, int lo,
+                                   int hi, double g, double dry) {
+    double s = 0.0, block[64];
+    for (int i0 = lo; i0 <= hi; i0 += 64) {
+        const int n = std::min(64, hi - i0 + 1);
+        MR_IVDEP
+        for (int t = 0; t < n; ++t) {  // vectorised; the maximum below is not (no fast-math)
+            const double hh = h[i0 + t], hs = std::max(hh, dry);
+            const double a = std::max(std::abs(hu[i0 + t] / hs), std::abs(hv[i0 + t] / hs)) + std::sqrt(g * hh);
+            block[t] = hh > dry ? a : 0.0;
+        }
+        for (int t = 0; t < n; ++t) s = std::max(s, block[t]);
+    }
+    return s;
+}
+
 /// One chunk of rows, everything it calls inlined (flatten) and compiled twice: for AVX2
 /// (4 doubles a vector) where the CPU has it, for the baseline (SSE2) elsewhere. No FMA in
 /// either: the results are the same on every x86-64.
@@ -403,6 +419,10 @@ void run_stage(const StageIn& in, const StageOut& out, StageKind kind) {
 }
 
 double cbrt_positive(double x) { return cbrt_estimate(x); }
+
+double row_wave_speed(const double* h, const double* hu, const double* hv, int lo, int hi, double g, double dry) {
+    return wave_speed_columns(h, hu, hv, lo, hi, g, dry);
+}
 
 double finish_row(const FinishRow& row, int& wet_lo, int& wet_hi) {
     double* h = row.h;

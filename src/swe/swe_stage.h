@@ -52,6 +52,10 @@ struct FinishRow {
 /// Returns the rain added (metres summed over the row's cells) and the row's wet columns.
 double finish_row(const FinishRow& row, int& wet_lo, int& wet_hi);
 
+/// The fastest wave max(|u|, |v|) + sqrt(g h) over the wet columns [lo, hi] of a row
+/// (0 if none is wet), vectorised.
+double row_wave_speed(const double* h, const double* hu, const double* hv, int lo, int hi, double g, double dry);
+
 /// x^(1/3) for x > 0 (a bit estimate and three Halley steps, within 1e-15 of std::cbrt):
 /// unlike std::cbrt it vectorises.
 double cbrt_positive(double x);
