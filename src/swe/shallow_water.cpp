@@ -219,7 +219,8 @@ double ShallowWater::stable_dt() {
     return s > 0.0 ? def_.cfl * dx_ / s : std::numeric_limits<double>::infinity();
 }
 
-void ShallowWater::stage(int kind, std::vector<double>* const* in, std::vector<double>* const* out, double dt, double w) {
+void ShallowWater::stage(int kind, std::vector<double>* const* in, std::vector<double>* const* out, double dt, double w,
+                         const FinishRow* finish) {
     fill_ghosts(*in[0], *in[1], *in[2]);
     StageIn si;
     si.nx = nx_;
@@ -245,6 +246,10 @@ void ShallowWater::stage(int kind, std::vector<double>* const* in, std::vector<d
     so.row_out = row_out_.data();
     so.row_in = row_in_.data();
     so.row_clip = row_clip_.data();
+    so.finish = finish;
+    so.row_rain = row_rain_.data();
+    so.wet_lo = wet_lo_.data();
+    so.wet_hi = wet_hi_.data();
     run_stage(si, so, static_cast<StageKind>(kind));
     double sum_out = 0.0, sum_in = 0.0;
     for (int j = 0; j < ny_; ++j) {  // row order: the same on any number of threads
@@ -255,10 +260,19 @@ void ShallowWater::stage(int kind, std::vector<double>* const* in, std::vector<d
     balance_.inflow += w * sum_in;
 }
 
-void ShallowWater::finish_step(double dt, const std::vector<double>* from) {
-    const double g = def_.gravity, n2 = def_.manning * def_.manning, dry = def_.dry_depth;
+FinishRow ShallowWater::finish_template(double dt) const {
+    FinishRow row;
     const bool masked = !rain_mask_.empty();
-    const double rain = rain_ > 0.0 && !masked ? rain_ * dt : 0.0;
+    row.rain_rate = masked ? rain_mask_.data() : nullptr;
+    row.rain = rain_ > 0.0 && !masked ? rain_ * dt : 0.0;
+    row.dt = dt;
+    row.c = dt * def_.gravity * (def_.manning * def_.manning);  // Manning: q / (1 + dt g n^2 |u| / h^(4/3))
+    row.dry = def_.dry_depth;
+    return row;
+}
+
+void ShallowWater::finish_step(double dt, const std::vector<double>* from) {
+    const FinishRow base = finish_template(dt);
     for_rows(ny_, [&](int j) {
         const size_t k0 = at(0, j);
         if (from && hi_[j] >= lo_[j]) {
@@ -267,15 +281,11 @@ void ShallowWater::finish_step(double dt, const std::vector<double>* from) {
             std::copy(from[1].begin() + a, from[1].begin() + b, hu_.begin() + a);
             std::copy(from[2].begin() + a, from[2].begin() + b, hv_.begin() + a);
         }
-        FinishRow row;
+        FinishRow row = base;
         row.h = h_.data() + k0;
         row.hu = hu_.data() + k0;
         row.hv = hv_.data() + k0;
-        row.rain_rate = masked ? rain_mask_.data() + k0 : nullptr;
-        row.rain = rain;
-        row.dt = dt;
-        row.c = dt * g * n2;  // semi-implicit Manning: q / (1 + dt g n^2 |u| / h^(4/3))
-        row.dry = dry;
+        row.rain_rate = base.rain_rate ? base.rain_rate + k0 : nullptr;
         row.lo = lo_[j];
         row.hi = hi_[j];
         int wlo, whi;
@@ -283,12 +293,16 @@ void ShallowWater::finish_step(double dt, const std::vector<double>* from) {
         wet_lo_[j] = std::min(wlo, nx_);
         wet_hi_[j] = whi;
     });
-    if (masked) {
+    finish_tail(dt);
+}
+
+void ShallowWater::finish_tail(double dt) {
+    if (!rain_mask_.empty()) {
         double sum = 0.0;
         for (int j = 0; j < ny_; ++j) sum += row_rain_[j];  // row order: any thread count
         balance_.rain += sum * dx_ * dx_;
     } else {
-        balance_.rain += rain * dx_ * dx_ * static_cast<double>(nx_) * ny_;
+        balance_.rain += finish_template(dt).rain * dx_ * dx_ * static_cast<double>(nx_) * ny_;
     }
     apply_sources(dt);
     for (int j = 0; j < ny_; ++j) {
@@ -332,9 +346,10 @@ double ShallowWater::step(double max_dt) {
     } else {
         // Heun (SSP-RK2): U1 = U + dt L(U), U2 = U1 + dt L(U1), U = (U + U2) / 2.
         stage(static_cast<int>(StageKind::HeunFirst), state, scratch, dt, 0.5);
-        stage(static_cast<int>(StageKind::HeunSecond), scratch, state, dt, 0.5);
+        const FinishRow finish = finish_template(dt);  // done on each row as it is written
+        stage(static_cast<int>(StageKind::HeunSecond), scratch, state, dt, 0.5, &finish);
         cells *= 2;
-        finish_step(dt);
+        finish_tail(dt);
     }
     time_ += dt;
     ++stats_.substeps;

@@ -25,6 +25,8 @@
 
 namespace mr::swe {
 
+struct FinishRow;
+
 /// What happens at one edge of the grid.
 enum class EdgeKind {
     Wall,       ///< reflective: nothing crosses
@@ -133,10 +135,14 @@ private:
     double stable_dt();
     /// One stage from state (h, hu, hv) into `out` (see swe_stage.h); `w` weighs its edge
     /// volumes in the balance.
-    void stage(int kind, std::vector<double>* const* in, std::vector<double>* const* out, double dt, double w);
+    void stage(int kind, std::vector<double>* const* in, std::vector<double>* const* out, double dt, double w,
+               const FinishRow* finish = nullptr);
     /// Rain, friction and the wet spans over the active spans, the state taken from `from`
-    /// (nullptr: the state itself); then the sources.
+    /// (nullptr: the state itself); then finish_tail().
     void finish_step(double dt, const std::vector<double>* from = nullptr);
+    /// The rain's and the clipped depths' sums, then the sources.
+    void finish_tail(double dt);
+    FinishRow finish_template(double dt) const;
     /// The point sources and sinks over dt seconds (after the step's fluxes).
     void apply_sources(double dt);
     /// Marks column i of row j wet (its span grows).

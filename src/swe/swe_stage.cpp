@@ -282,6 +282,7 @@ private:
         if (empty(j)) {
             if (scratch) clear_stale(j, 0, -1);
             out_.row_out[j] = out_.row_in[j] = 0.0;
+            if (!scratch && out_.finish) finish(j, 0, -1);
             return;
         }
         const int lo = in_.lo[j], hi = in_.hi[j];
@@ -329,6 +330,23 @@ private:
         uint64_t clip = 0;
         for (int i = lo; i <= hi; ++i) clip += neg[i] != 0.0;
         out_.row_clip[j] += clip;
+        if (!scratch && out_.finish) finish(j, lo, hi);
+    }
+
+    /// The end of the step on row j while it is in the cache (HeunSecond).
+    void finish(int j, int lo, int hi) {
+        const size_t k0 = at(0, j);
+        FinishRow f = *out_.finish;
+        f.h = out_.h + k0;
+        f.hu = out_.hu + k0;
+        f.hv = out_.hv + k0;
+        f.rain_rate = f.rain_rate ? f.rain_rate + k0 : nullptr;
+        f.lo = lo;
+        f.hi = hi;
+        int wlo, whi;
+        out_.row_rain[j] = finish_row(f, wlo, whi);
+        out_.wet_lo[j] = std::min(wlo, in_.nx);
+        out_.wet_hi[j] = whi;
     }
 
     const StageIn& in_;

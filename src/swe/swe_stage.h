@@ -29,17 +29,6 @@ struct StageIn {
     bool second = false;         ///< MUSCL slopes (minmod of h, eta, u, v)
 };
 
-struct StageOut {
-    double *h = nullptr, *hu = nullptr, *hv = nullptr;
-    /// Euler and HeunFirst write a scratch state: the columns each row wrote last time, so
-    /// that the ones now outside the span are cleared (the scratch is zero where U is dry).
-    int *dirty_lo = nullptr, *dirty_hi = nullptr;
-    double *row_out = nullptr, *row_in = nullptr;  ///< per row: volume out of / into the edges
-    uint64_t* row_clip = nullptr;                  ///< per row: negative depths clipped (added)
-};
-
-void run_stage(const StageIn& in, const StageOut& out, StageKind kind);
-
 /// The end of a step on one row's columns [lo, hi]: rain (a rate per cell, or `rain` metres
 /// everywhere), discharges zeroed at or below the dry depth, semi-implicit Manning friction
 /// q / (1 + c |u| / h^(4/3)) with c = dt g n^2 (0: none).
@@ -49,6 +38,23 @@ struct FinishRow {
     double rain = 0.0, dt = 0.0, c = 0.0, dry = 1e-6;
     int lo = 0, hi = -1;
 };
+struct StageOut {
+    double *h = nullptr, *hu = nullptr, *hv = nullptr;
+    /// Euler and HeunFirst write a scratch state: the columns each row wrote last time, so
+    /// that the ones now outside the span are cleared (the scratch is zero where U is dry).
+    int *dirty_lo = nullptr, *dirty_hi = nullptr;
+    double *row_out = nullptr, *row_in = nullptr;  ///< per row: volume out of / into the edges
+    uint64_t* row_clip = nullptr;                  ///< per row: negative depths clipped (added)
+    /// HeunSecond: the end of the step done on each row as soon as it is written (its
+    /// state, columns and rain rows filled in per row; rain_rate indexed like the state),
+    /// with the rain added and the wet columns per row; nullptr: not done.
+    const FinishRow* finish = nullptr;
+    double* row_rain = nullptr;
+    int *wet_lo = nullptr, *wet_hi = nullptr;
+};
+
+void run_stage(const StageIn& in, const StageOut& out, StageKind kind);
+
 /// Returns the rain added (metres summed over the row's cells) and the row's wet columns.
 double finish_row(const FinishRow& row, int& wet_lo, int& wet_hi);
 
