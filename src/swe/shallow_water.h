@@ -14,9 +14,9 @@
 // a second state for the stages' outputs. A stage is one sweep over the rows (swe_stage.h):
 // velocities, slopes and faces live in a few rolling rows, not in arrays.
 // Dry cells are skipped: each row keeps the span of columns that are wet or near wet cells of
-// its own or its neighbouring rows, so a step costs the wet spans, not the grid. Rows run in
-// parallel (TBB); each face is computed by one row and every sum runs in row order, so the
-// result is the same on any number of threads.
+// its own or its neighbouring rows, so a step costs the wet spans, not the grid. Chunks of rows
+// run in parallel (TBB); a face row between two chunks is computed by both from the same
+// inputs and every sum runs in row order, so the result is the same on any number of threads.
 #pragma once
 
 #include <cstdint>
