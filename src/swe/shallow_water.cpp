@@ -237,6 +237,10 @@ void ShallowWater::stage(int kind, std::vector<double>* const* in, std::vector<d
     si.r = dt / dx_;
     si.weight = dt * dx_;
     si.second = def_.second_order;
+    si.wall_west = def_.west.kind == EdgeKind::Wall;
+    si.wall_east = def_.east.kind == EdgeKind::Wall;
+    si.wall_south = def_.south.kind == EdgeKind::Wall;
+    si.wall_north = def_.north.kind == EdgeKind::Wall;
     StageOut so;
     so.h = out[0]->data();
     so.hu = out[1]->data();

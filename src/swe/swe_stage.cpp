@@ -79,6 +79,9 @@ struct Faces {
     }
 };
 
+/// A reflective wall's outside state: the same depth and bed, the normal velocity reversed.
+FaceState mirror(const FaceState& s) { return {s.h, -s.un, s.ut, s.z}; }
+
 int ring3(int r) { return ((r % 3) + 3) % 3; }
 int ring2(int r) { return ((r % 2) + 2) % 2; }
 
@@ -217,6 +220,20 @@ private:
             b.z = eb - b.h;
             o.put(i, hydrostatic_flux(a, b, g));
         }
+        const bool south = f == 0 && in_.wall_south, north = f == in_.ny && in_.wall_north;
+        if (!Second || !(south || north)) return;  // first order: the ghosts are the mirrors already
+        // The inner row's state at the edge face (normal velocity v), against its mirror.
+        const double* hr = south ? hn : hs;
+        const double* zr = south ? zn : zs;
+        const Prims& pr = south ? pn : ps;
+        const Slopes& sr = south ? sn : ss;
+        const double side = south ? -1.0 : 1.0;
+        for (int i = ylo; i <= yhi; ++i) {
+            const double hf = hr[i] + 0.5 * side * sr.h[i];
+            const double etaf = hr[i] + zr[i] + 0.5 * side * sr.eta[i];
+            const FaceState in{hf, pr.v[i] + 0.5 * side * sr.v[i], pr.u[i] + 0.5 * side * sr.u[i], etaf - hf};
+            o.put(i, south ? hydrostatic_flux(mirror(in), in, g) : hydrostatic_flux(in, mirror(in), g));
+        }
     }
 
     void slopes_x(int j, const double* MR_RESTRICT h, const Prims& p) {
@@ -249,6 +266,21 @@ private:
             a.z = ea - a.h;
             b.z = eb - b.h;
             o.put(i, hydrostatic_flux(a, b, g));
+        }
+        if (!Second) return;  // first order: the ghosts are the mirrors already
+        // Column i's state at its face on `side` (+1: towards +x).
+        auto state = [&](int i, double side) {
+            const double hf = h[i] + 0.5 * side * sx.h[i];
+            const double etaf = h[i] + z[i] + 0.5 * side * sx.eta[i];
+            return FaceState{hf, p.u[i] + 0.5 * side * sx.u[i], p.v[i] + 0.5 * side * sx.v[i], etaf - hf};
+        };
+        if (in_.wall_west && a0 == 0) {
+            const FaceState b = state(0, -1.0);
+            o.put(0, hydrostatic_flux(mirror(b), b, g));
+        }
+        if (in_.wall_east && a1 == in_.nx) {
+            const FaceState a = state(in_.nx - 1, 1.0);
+            o.put(in_.nx, hydrostatic_flux(a, mirror(a), g));
         }
     }
 

@@ -27,6 +27,10 @@ struct StageIn {
     double r = 0.0;              ///< dt / dx
     double weight = 0.0;         ///< dt * dx: an edge face's flux to a volume
     bool second = false;         ///< MUSCL slopes (minmod of h, eta, u, v)
+    /// Reflective edges (x = 0, x = max, y = 0, y = max): at second order their faces see the
+    /// mirror of the inner cell's reconstructed state, so that no water crosses them (the
+    /// ghost cells, mirrors of the cells' centres, hold no slopes).
+    bool wall_west = false, wall_east = false, wall_south = false, wall_north = false;
 };
 
 /// The end of a step on one row's columns [lo, hi]: rain (a rate per cell, or `rain` metres
