@@ -366,14 +366,16 @@ void PbfSolver::sleep(const Stage& s) {
     const float alpha = rule.drift_alpha;
     std::vector<uint16_t>& slow = st.sleep_.slow_steps;
     std::vector<Vec3>& mean = st.sleep_.mean_velocity;
-    const int32_t* const near_body = s.bodies ? st.body_of_.data() : nullptr;
+    const bool near_bodies = s.bodies && !st.body_of_.empty();
+    const auto covered = [&](int32_t b, const Vec3& x) {  // a body took its place
+        Vec3 n;
+        return b >= 0 && st.bodies_.all()[size_t(b)].sdf(x, n) < 0.0f;
+    };
     for_each_slot(p.size(), 1024, [&](size_t i) {
         if (!p.active[i]) return;
         bool asleep = slow[i] >= after;
-        if (asleep && near_body && near_body[i] >= 0) {  // a body took its place: awake
-            Vec3 n;
-            if (st.bodies_.all()[size_t(near_body[i])].sdf(p.last_position[i], n) < 0.0f) slow[i] = 0, asleep = false;
-        }
+        if (asleep && near_bodies && (covered(st.body_of_[i], p.last_position[i]) || covered(st.body2_of_[i], p.last_position[i])))
+            slow[i] = 0, asleep = false;  // awake
         bool drifting = false;
         if (pbf_.sleep_drift > 0.0f && !asleep) {
             mean[i] += alpha * (Vec3(p.velocity[i].x, 0.0f, p.velocity[i].z) - mean[i]);

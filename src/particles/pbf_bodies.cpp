@@ -103,21 +103,24 @@ Status PbfSolver::set_body_motion(uint32_t id, const Vec3& position, const glm::
 }
 std::span<const BodyState> PbfSolver::bodies() const { return st_->bodies_.states(); }
 
-// Per particle of the step: the nearest body within reach (its signed distance), or -1.
+// Per particle of the step: the nearest body within reach (its signed distance), or -1,
+// and the second nearest (water between two bodies that touch meets both).
 void PbfSolver::assign_bodies(const Stage& s) {
     State& st = *st_;
     const Particles& p = water_.pool.particles;
     const std::vector<RigidBody>& bodies = st.bodies_.all();
     const size_t n = p.size();
     st.body_of_.assign(n, -1);
+    st.body2_of_.assign(n, -1);
     st.body_grad_.assign(n, Vec3(0.0f));
     st.body_dx_.assign(n, Vec3(0.0f));
+    st.body2_dx_.assign(n, Vec3(0.0f));
     if (!st.body_coupling_on_) return;
     const float reach = s.k.h + pbf_.spacing;  // the iterations move a particle at most 1.5 spacings
     for_each_slot(n, 256, [&](size_t i) {
         if (!p.active[i]) return;
         const Vec3 x = p.position[i];
-        float best = reach;
+        float best = reach, second = reach;
         for (size_t b = 0; b < bodies.size(); ++b) {
             const RigidBody& body = bodies[b];
             const Vec3 d = x - body.x;
@@ -125,7 +128,12 @@ void PbfSolver::assign_bodies(const Stage& s) {
             if (glm::dot(d, d) > r * r) continue;
             Vec3 nrm;
             const float sd = body.sdf(x, nrm);
-            if (sd < best) best = sd, st.body_of_[i] = int32_t(b);
+            if (sd < best) {
+                second = best, st.body2_of_[i] = st.body_of_[i];
+                best = sd, st.body_of_[i] = int32_t(b);
+            } else if (sd < second) {
+                second = sd, st.body2_of_[i] = int32_t(b);
+            }
         }
     });
 }
@@ -139,9 +147,54 @@ float pbf_body_share(const RigidBody& body, float h, const Vec3& x, Vec3& grad) 
     return bs.share(d);
 }
 
-// After an iteration's corrections: a particle inside its body goes to the surface. At the
-// step's end (`into_velocity`, after the bodies' contacts and velocities) the reaction goes
-// into the bodies' velocities, not their poses: a body moved then would cover other water.
+namespace {
+
+/// Out of the nearest body and the second (`a`, `b`: indices or -1) to just off their
+/// surfaces: alternately, for water between two bodies that touch; what is still inside
+/// both after that (a gap narrower than the skin) leaves along the touching surfaces
+/// (the normals' sum, or up the contact plane). The moves into `dxa`, `dxb` (the
+/// bodies' reactions); true when it ends outside both.
+bool leave_bodies(const std::vector<RigidBody>& bodies, int32_t a, int32_t b, float skin, Vec3& x, Vec3& dxa, Vec3& dxb) {
+    const auto out_of = [&](int32_t k, Vec3& dx) {
+        if (k < 0) return false;
+        Vec3 n;
+        const float d = bodies[size_t(k)].sdf(x, n);
+        if (d >= 0.0f) return false;
+        const Vec3 out = (skin - d) * n;  // to just off the surface: rounding keeps it outside
+        x += out;
+        dx += out;
+        return true;
+    };
+    for (int round = 0; round < 4; ++round) {
+        const bool moved_a = out_of(a, dxa);
+        const bool moved_b = out_of(b, dxb);
+        if (!moved_a && !moved_b) return true;
+        if (b < 0) return !out_of(a, dxa);
+    }
+    // Squeezed: along the two surfaces, out of the gap, in steps of a skin's doubling.
+    Vec3 na, nb;
+    bodies[size_t(a)].sdf(x, na);
+    bodies[size_t(b)].sdf(x, nb);
+    Vec3 e = na + nb;
+    if (glm::dot(e, e) < 0.01f) e = Vec3(0.0f, 1.0f, 0.0f) - na.y * na;
+    if (glm::dot(e, e) < 1e-6f) e = glm::cross(na, Vec3(1.0f, 0.0f, 0.0f));
+    e = glm::normalize(e);
+    for (float step = skin; step < 1e3f * skin; step *= 2.0f) {
+        Vec3 n;
+        if (bodies[size_t(a)].sdf(x, n) >= 0.0f && bodies[size_t(b)].sdf(x, n) >= 0.0f) return true;
+        x += step * e;
+        dxa += 0.5f * step * e;
+        dxb += 0.5f * step * e;
+    }
+    return false;
+}
+
+}  // namespace
+
+// After an iteration's corrections: a particle inside its body (or the second nearest)
+// goes to the surface. At the step's end (`into_velocity`, after the bodies' contacts and
+// velocities) the reaction goes into the bodies' velocities, not their poses: a body moved
+// then would cover other water.
 void PbfSolver::push_out_of_bodies(const Stage& s, bool into_velocity) {
     State& st = *st_;
     Particles& p = water_.pool.particles;
@@ -150,12 +203,7 @@ void PbfSolver::push_out_of_bodies(const Stage& s, bool into_velocity) {
     for_each_slot(p.size(), 256, [&](size_t i) {
         const int32_t b = st.body_of_[i];
         if (b < 0) return;
-        Vec3 n;
-        const float d = bodies[size_t(b)].sdf(p.position[i], n);
-        if (d >= 0.0f) return;
-        const Vec3 out = (skin - d) * n;  // to just off the surface: rounding keeps it outside
-        p.position[i] += out;
-        st.body_dx_[i] += out;
+        leave_bodies(bodies, b, st.body2_of_[i], skin, p.position[i], st.body_dx_[i], st.body2_dx_[i]);
     });
     react_on_bodies(s.dt, into_velocity);
 }
@@ -168,13 +216,16 @@ void PbfSolver::react_on_bodies(float dt, bool into_velocity) {
     const Particles& p = water_.pool.particles;
     const float m = 1000.0f * pbf_.spacing * pbf_.spacing * pbf_.spacing;
     std::vector<Vec3> impulse(bodies.size(), Vec3(0.0f)), torque(bodies.size(), Vec3(0.0f));
-    for (size_t i = 0; i < p.size(); ++i) {
-        const int32_t b = st.body_of_[i];
-        if (b < 0 || st.body_dx_[i] == Vec3(0.0f)) continue;
-        const Vec3 P = -m * st.body_dx_[i];
+    const auto react = [&](int32_t b, const Vec3& at, Vec3& dx) {
+        if (b < 0 || dx == Vec3(0.0f)) return;
+        const Vec3 P = -m * dx;
         impulse[size_t(b)] += P;
-        torque[size_t(b)] += glm::cross(p.position[i] - bodies[size_t(b)].x, P);
-        st.body_dx_[i] = Vec3(0.0f);
+        torque[size_t(b)] += glm::cross(at - bodies[size_t(b)].x, P);
+        dx = Vec3(0.0f);
+    };
+    for (size_t i = 0; i < p.size(); ++i) {  // serial, in slot order: deterministic
+        react(st.body_of_[i], p.position[i], st.body_dx_[i]);
+        react(st.body2_of_[i], p.position[i], st.body2_dx_[i]);
     }
     const float max_move = kBodyMaxAccel * water_.integrator.gravity * dt * dt;
     const float max_turn = kBodyMaxTurnAccel * dt * dt;

@@ -49,10 +49,12 @@ struct PbfSolver::State {
     std::array<std::vector<int16_t>, 3> pair_fixed_;
 
     /// Rigid bodies (pbf_bodies.cpp): per particle of the step, the body it meets (-1:
-    /// none) and the position corrections the body's terms gave it this iteration.
+    /// none) and the position corrections the body's terms gave it this iteration; the
+    /// second nearest body within reach (-1: none) and the corrections its push-out gave
+    /// (water between two bodies that touch).
     RigidBodies bodies_;
-    std::vector<int32_t> body_of_;
-    std::vector<Vec3> body_grad_, body_dx_;
+    std::vector<int32_t> body_of_, body2_of_;
+    std::vector<Vec3> body_grad_, body_dx_, body2_dx_;
     bool body_coupling_on_ = true;  ///< off (test probe): the water does not see the bodies
 
     /// A solver's state (for the test probe, pbf_probe.h: a member type reaches the
