@@ -68,6 +68,15 @@ struct BodyShare {
     }
 };
 
+/// Per body its centre and (bound + margin)^2: a particle farther cannot meet it.
+void bounding_spheres(const std::vector<RigidBody>& bodies, float margin, std::vector<glm::vec4>& out) {
+    out.resize(bodies.size());
+    for (size_t b = 0; b < bodies.size(); ++b) {
+        const float r = bodies[b].shape.bound + margin;
+        out[b] = glm::vec4(bodies[b].x, r * r);
+    }
+}
+
 }  // namespace
 
 // A body placed (added, or moved by set_body_motion) takes its volume from the water at
@@ -115,19 +124,20 @@ void PbfSolver::assign_bodies(const Stage& s) {
     st.body_grad_.assign(n, Vec3(0.0f));
     st.body_dx_.assign(n, Vec3(0.0f));
     st.body2_dx_.assign(n, Vec3(0.0f));
+    st.body_near_.clear();
     if (!st.body_coupling_on_) return;
     const float reach = s.k.h + pbf_.spacing;  // the iterations move a particle at most 1.5 spacings
+    bounding_spheres(bodies, reach, st.body_reach_);
+    const glm::vec4* const spheres = st.body_reach_.data();
     for_each_slot(n, 256, [&](size_t i) {
         if (!p.active[i]) return;
         const Vec3 x = p.position[i];
         float best = reach, second = reach;
         for (size_t b = 0; b < bodies.size(); ++b) {
-            const RigidBody& body = bodies[b];
-            const Vec3 d = x - body.x;
-            const float r = body.shape.bound + reach;
-            if (glm::dot(d, d) > r * r) continue;
+            const Vec3 d = x - Vec3(spheres[b]);
+            if (glm::dot(d, d) > spheres[b].w) continue;  // the broad phase: compact spheres, not the bodies
             Vec3 nrm;
-            const float sd = body.sdf(x, nrm);
+            const float sd = bodies[b].sdf(x, nrm);
             if (sd < best) {
                 second = best, st.body2_of_[i] = st.body_of_[i];
                 best = sd, st.body_of_[i] = int32_t(b);
@@ -136,6 +146,9 @@ void PbfSolver::assign_bodies(const Stage& s) {
             }
         }
     });
+    st.body_near_.clear();  // the later passes walk these only (serial: slot order)
+    for (size_t i = 0; i < n; ++i)
+        if (st.body_of_[i] >= 0) st.body_near_.push_back(uint32_t(i));
 }
 
 // The bodies' share of the kernels (the density pass's C and grad C), body_grad_.
@@ -200,10 +213,10 @@ void PbfSolver::push_out_of_bodies(const Stage& s, bool into_velocity) {
     Particles& p = water_.pool.particles;
     const std::vector<RigidBody>& bodies = st.bodies_.all();
     const float skin = kBodySkin * pbf_.spacing;
-    for_each_slot(p.size(), 256, [&](size_t i) {
-        const int32_t b = st.body_of_[i];
-        if (b < 0) return;
-        leave_bodies(bodies, b, st.body2_of_[i], skin, p.position[i], st.body_dx_[i], st.body2_dx_[i]);
+    const std::vector<uint32_t>& near = st.body_near_;
+    for_each_slot(near.size(), 64, [&](size_t k) {
+        const uint32_t i = near[k];
+        leave_bodies(bodies, st.body_of_[i], st.body2_of_[i], skin, p.position[i], st.body_dx_[i], st.body2_dx_[i]);
     });
     react_on_bodies(s.dt, into_velocity);
 }
@@ -223,7 +236,7 @@ void PbfSolver::react_on_bodies(float dt, bool into_velocity) {
         torque[size_t(b)] += glm::cross(at - bodies[size_t(b)].x, P);
         dx = Vec3(0.0f);
     };
-    for (size_t i = 0; i < p.size(); ++i) {  // serial, in slot order: deterministic
+    for (const uint32_t i : st.body_near_) {  // serial, in slot order: deterministic
         react(st.body_of_[i], p.position[i], st.body_dx_[i]);
         react(st.body2_of_[i], p.position[i], st.body2_dx_[i]);
     }
@@ -259,28 +272,27 @@ void PbfSolver::drag_bodies(const Stage& s) {
     std::vector<RigidBody>& bodies = st.bodies_.all();
     const BodyShare bs(s.k.h);
     const float relax = 1.0f - std::exp(-kBodyDragRate * s.dt);
-    std::vector<float>& share = st.lambda_;  // free after the iterations
-    for_each_slot(p.size(), 256, [&](size_t i) {
-        const int32_t b = st.body_of_[i];
-        share[i] = 0.0f;
-        if (b < 0) return;
+    std::vector<float>& share = st.lambda_;  // free after the iterations; read at body_near_ only
+    const std::vector<uint32_t>& near = st.body_near_;
+    for_each_slot(near.size(), 64, [&](size_t k) {
+        const uint32_t i = near[k];
         Vec3 n;
-        share[i] = relax * bs.share(bodies[size_t(b)].sdf(p.position[i], n));
+        share[i] = relax * bs.share(bodies[size_t(st.body_of_[i])].sdf(p.position[i], n));
     });
     std::vector<Vec3> momentum(bodies.size(), Vec3(0.0f));
     std::vector<float> weight(bodies.size(), 0.0f);
-    for (size_t i = 0; i < p.size(); ++i) {  // serial, in slot order: deterministic
-        const int32_t b = st.body_of_[i];
-        if (b < 0 || share[i] <= 0.0f) continue;
-        momentum[size_t(b)] += (s.body_mass * share[i]) * p.velocity[i];
-        weight[size_t(b)] += s.body_mass * share[i];
+    for (const uint32_t i : near) {  // serial, in slot order: deterministic
+        if (share[i] <= 0.0f) continue;
+        const size_t b = size_t(st.body_of_[i]);
+        momentum[b] += (s.body_mass * share[i]) * p.velocity[i];
+        weight[b] += s.body_mass * share[i];
     }
     for (size_t b = 0; b < bodies.size(); ++b)
         bodies[b].v = (bodies[b].mass * bodies[b].v + momentum[b]) / (bodies[b].mass + weight[b]);
-    for_each_slot(p.size(), 256, [&](size_t i) {
-        const int32_t b = st.body_of_[i];
-        if (b < 0 || share[i] <= 0.0f) return;
-        const RigidBody& body = bodies[size_t(b)];
+    for_each_slot(near.size(), 64, [&](size_t k) {
+        const uint32_t i = near[k];
+        if (share[i] <= 0.0f) return;
+        const RigidBody& body = bodies[size_t(st.body_of_[i])];
         const Vec3 vb = body.v + glm::cross(body.w, p.position[i] - body.x);
         p.velocity[i] += share[i] * (vb - p.velocity[i]);
     });
@@ -293,12 +305,15 @@ void PbfSolver::count_inside_bodies(const Stage&) {
     Particles& p = water_.pool.particles;
     const std::vector<RigidBody>& bodies = st.bodies_.all();
     std::vector<uint8_t> inside(p.size(), 0);
+    bounding_spheres(bodies, 0.0f, st.body_reach_);  // every particle against every body: honest
+    const glm::vec4* const spheres = st.body_reach_.data();
     for_each_slot(p.size(), 256, [&](size_t i) {
         if (!p.active[i]) return;
         const Vec3 x = p.position[i];
-        for (const RigidBody& body : bodies) {
-            const Vec3 d = x - body.x;
-            if (glm::dot(d, d) > body.shape.bound * body.shape.bound) continue;
+        for (size_t b = 0; b < bodies.size(); ++b) {
+            const Vec3 d = x - Vec3(spheres[b]);
+            if (glm::dot(d, d) > spheres[b].w) continue;
+            const RigidBody& body = bodies[b];
             Vec3 n;
             const float sd = body.sdf(x, n);
             if (sd >= 0.0f) continue;

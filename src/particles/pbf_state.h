@@ -55,6 +55,8 @@ struct PbfSolver::State {
     RigidBodies bodies_;
     std::vector<int32_t> body_of_, body2_of_;
     std::vector<Vec3> body_grad_, body_dx_, body2_dx_;
+    std::vector<uint32_t> body_near_;  ///< the particles with a body (body_of_ >= 0), in slot order
+    std::vector<glm::vec4> body_reach_;  ///< per body: its centre and (bound + reach)^2, for the broad phase
     bool body_coupling_on_ = true;  ///< off (test probe): the water does not see the bodies
 
     /// A solver's state (for the test probe, pbf_probe.h: a member type reaches the
