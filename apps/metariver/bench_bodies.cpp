@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <ctime>
+#include <memory>
 
 namespace mr::app {
 
@@ -34,43 +36,84 @@ void drop_logs(Simulation& s, int n) {
     }
 }
 
+/// CPU seconds of the whole process so far (every thread): the work a frame does, which
+/// the other processes of a shared machine do not inflate as they do the wall clock.
+double process_cpu_ms() {
+    timespec t{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    return double(t.tv_sec) * 1e3 + double(t.tv_nsec) * 1e-6;
+}
+
+/// One row's frames: wall ("simulate", "total") and process CPU ("cpu") per frame.
+void measure(Simulation& s, int frames, ScenarioResult& r, std::vector<double>& total, std::vector<double>& cpu) {
+    total.clear();
+    cpu.clear();
+    for (int f = 0; f < frames; ++f) {
+        const double c0 = process_cpu_ms();
+        s.step(1.0f / 60.0f);
+        cpu.push_back(process_cpu_ms() - c0);
+        const FrameTimings& t = s.last_timings();
+        total.push_back(t.simulate_ms + t.foam_ms + t.field_ms + t.surface_ms);
+        r.sample("simulate", t.simulate_ms);
+        r.sample("total", total.back());
+        r.sample("cpu", cpu.back());
+    }
+}
+
 }  // namespace
 
+// The two rivers are warmed up alike, then measured in kRepetitions alternating blocks
+// (without, with): both meet the same load of a shared machine, and each block gives a
+// ratio of the medians; the row reports the median of the blocks' ratios and their range.
 void bench_river_bodies(int warmup, int frames, std::vector<ScenarioResult>& out) {
-    double without = 0.0;
-    for (int logs : {0, 20}) {
-        ScenarioResult r;
-        r.name = logs ? fmt::format("default + {} logs", logs) : "default (no bodies)";
-        SceneDef def = default_scene();
+    constexpr int kRepetitions = 5;
+    constexpr int kLogs = 20;
+    ScenarioResult rows[2];
+    std::unique_ptr<Simulation> sims[2];
+    const SceneDef def = default_scene();
+    for (int k = 0; k < 2; ++k) {
+        rows[k].name = k ? fmt::format("default + {} logs", kLogs) : "default (no bodies)";
         auto sim = Simulation::create(def);
         if (!sim) {
-            r.note = "skipped: " + sim.error().message;
-            out.push_back(std::move(r));
-            continue;
+            rows[k].note = "skipped: " + sim.error().message;
+            out.push_back(std::move(rows[k]));
+            return;
         }
-        Simulation& s = *sim.value();
-        for (int f = 0; f < warmup; ++f) s.step(1.0f / 60.0f);
-        if (logs) drop_logs(s, logs);
-        for (int f = 0; f < 60; ++f) s.step(1.0f / 60.0f);  // the drop's splash (both rows alike)
-        const uint64_t inside0 = s.counters().inside_bodies;
-        for (int f = 0; f < frames; ++f) {
-            s.step(1.0f / 60.0f);
-            const FrameTimings& t = s.last_timings();
-            r.sample("simulate", t.simulate_ms);
-            r.sample("total", t.simulate_ms + t.foam_ms + t.field_ms + t.surface_ms);
-        }
+        sims[k] = std::move(sim.value());
+        for (int f = 0; f < warmup; ++f) sims[k]->step(1.0f / 60.0f);
+        if (k) drop_logs(*sims[k], kLogs);
+        for (int f = 0; f < 60; ++f) sims[k]->step(1.0f / 60.0f);  // the drop's splash (both rows alike)
+    }
+    const uint64_t inside0 = sims[1]->counters().inside_bodies;
+    const int block = std::max(1, frames / kRepetitions);
+    std::vector<double> wall_ratio, cpu_ratio, total[2], cpu[2];
+    for (int rep = 0; rep < kRepetitions; ++rep) {
+        for (int k = 0; k < 2; ++k) measure(*sims[k], block, rows[k], total[k], cpu[k]);
+        wall_ratio.push_back(median(total[1]) / std::max(1e-9, median(total[0])));
+        cpu_ratio.push_back(median(cpu[1]) / std::max(1e-9, median(cpu[0])));
+    }
+    for (int k = 0; k < 2; ++k) {
+        Simulation& s = *sims[k];
+        ScenarioResult& r = rows[k];
         r.particles = s.particles().active_count();
         r.triangles = s.surface().triangle_count();
-        r.params = {{"scene", def.name}, {"bodies", s.bodies().size()}, {"warmup", warmup}, {"frames", frames}};
-        r.quality = {{"inside_bodies", s.counters().inside_bodies - inside0}};
-        const double total = median(r.stage_ms["total"]);
-        if (!logs) without = total;
-        else if (without > 0.0) r.quality["frame_ratio"] = total / without;
-        r.note = logs ? fmt::format("{} logs dropped on the water after {} frames; median frame {:.2f}x the river's without them",
-                                    s.bodies().size(), warmup, without > 0.0 ? total / without : 0.0)
-                      : fmt::format("{} warm-up frames", warmup);
-        out.push_back(std::move(r));
+        r.params = {{"scene", def.name}, {"bodies", s.bodies().size()}, {"warmup", warmup}, {"frames", block * kRepetitions},
+                    {"repetitions", kRepetitions}};
+        r.note = fmt::format("{} warm-up frames, {} blocks of {} frames alternating with the other row", warmup, kRepetitions, block);
     }
+    const auto [wlo, whi] = std::minmax_element(wall_ratio.begin(), wall_ratio.end());
+    const auto [clo, chi] = std::minmax_element(cpu_ratio.begin(), cpu_ratio.end());
+    rows[1].quality = {{"inside_bodies", sims[1]->counters().inside_bodies - inside0},
+                       {"frame_ratio", median(wall_ratio)},
+                       {"cpu_ratio", median(cpu_ratio)},
+                       {"frame_ratios", wall_ratio},
+                       {"cpu_ratios", cpu_ratio}};
+    rows[1].note = fmt::format("{} logs dropped on the water after {} frames; median over {} blocks of the median frame's ratio "
+                               "to the river's without them: wall {:.2f}x ({:.2f}-{:.2f}), CPU {:.2f}x ({:.2f}-{:.2f})",
+                               sims[1]->bodies().size(), warmup, kRepetitions, median(wall_ratio), *wlo, *whi, median(cpu_ratio),
+                               *clo, *chi);
+    out.push_back(std::move(rows[0]));
+    out.push_back(std::move(rows[1]));
 }
 
 }  // namespace mr::app

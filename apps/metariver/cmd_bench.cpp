@@ -365,7 +365,7 @@ std::vector<ScenarioResult> run_scenarios(const BenchOptions& o, const BenchPlan
                                            m.map, o.warmup >= 0 ? o.warmup : kMapsWarmupFrames,
                                            o.frames ? o.frames : 120));
     if (plan.want("export")) results.push_back(bench_export(o.particles, 600, o.frames ? o.frames : 30));
-    if (plan.want("bodies")) bench_river_bodies(o.warmup >= 0 ? o.warmup : 600, o.frames ? o.frames : 120, results);
+    if (plan.want("bodies")) bench_river_bodies(o.warmup >= 0 ? o.warmup : 600, o.frames ? o.frames : 300, results);
     return results;
 }
 
