@@ -42,7 +42,9 @@ struct BodyDef {
     bool operator==(const BodyDef&) const = default;
 };
 
-/// Checks a BodyDef's values (not its mesh file): an error naming the key
+/// Checks a BodyDef's values (not its mesh file) against the [[bodies]] key table's
+/// ranges, the scene file's (docs/scene-format.md: one definition), and its shape's needs:
+/// the scene reader's message with `bodies.` for `bodies[i].`
 /// ("bodies.density: must be in (0, 100000] (got -1)"). Simulation::add_body checks the
 /// mesh file too.
 Status validate_body(const BodyDef& def);

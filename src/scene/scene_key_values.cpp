@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <string>
 #include <type_traits>
 #include <variant>
@@ -150,29 +151,54 @@ std::string list_range_error(const SceneDef& d) {
     return {};
 }
 
+namespace {
+
+/// A body's shape against its other values: the size components it reads, its OBJ;
+/// the message names the key after `key` ("bodies[2]" in a scene, "bodies" for one body).
+std::string body_shape_error(const BodyDef& b, std::string_view key) {
+    const bool mesh_shape = b.shape == BodyShape::ConvexMesh || b.shape == BodyShape::TriangleMesh;
+    const int used = b.shape == BodyShape::Box ? 3 : 1;  // a capsule's length .y may be 0 (a sphere)
+    const std::string_view shape = to_string(b.shape);
+    for (int c = 0; c < used; ++c)
+        if (!(b.size[c] > 0.0f))
+            return fmt::format("{}.size: component {} must be in (0, 1000] for shape = \"{}\" (got {})", key, "xyz"[c], shape,
+                               b.size[c]);
+    if (mesh_shape && b.mesh.empty()) return fmt::format("{}.mesh: required for shape = \"{}\" (the OBJ file)", key, shape);
+    if (!mesh_shape && !b.mesh.empty())
+        return fmt::format("{}.mesh: ignored for shape = \"{}\" (only convex_mesh and triangle_mesh read an OBJ): remove it", key,
+                           shape);
+    return {};
+}
+
+const SceneList& bodies_list() {
+    for (const SceneList& l : scene_lists())
+        if (l.name == "bodies") return l;
+    std::abort();  // the table has [[bodies]] (scene_keys.cpp)
+}
+
+}  // namespace
+
 std::string bodies_error(const SceneDef& d) {
     if (d.bodies.empty()) return {};
     if (d.solver != SolverKind::Pbf)
         return fmt::format("bodies: only solver = \"pbf\" moves bodies (their coupling with the water is PBF's; solver = "
                            "\"{}\" has none): remove [[bodies]]",
                            to_string(d.solver));
-    for (size_t i = 0; i < d.bodies.size(); ++i) {
-        const BodyDef& b = d.bodies[i];
-        const bool mesh_shape = b.shape == BodyShape::ConvexMesh || b.shape == BodyShape::TriangleMesh;
-        const int used = b.shape == BodyShape::Box ? 3 : 1;  // a capsule's length .y may be 0 (a sphere)
-        const std::string_view shape = to_string(b.shape);
-        for (int c = 0; c < used; ++c)
-            if (!(b.size[c] > 0.0f))
-                return fmt::format("bodies[{}].size: component {} must be in (0, 1000] for shape = \"{}\" (got {})", i + 1,
-                                   "xyz"[c], shape, b.size[c]);
-        if (mesh_shape && b.mesh.empty())
-            return fmt::format("bodies[{}].mesh: required for shape = \"{}\" (the OBJ file)", i + 1, shape);
-        if (!mesh_shape && !b.mesh.empty())
-            return fmt::format("bodies[{}].mesh: ignored for shape = \"{}\" (only convex_mesh and triangle_mesh read an OBJ): "
-                               "remove it",
-                               i + 1, shape);
-    }
+    for (size_t i = 0; i < d.bodies.size(); ++i)
+        if (std::string e = body_shape_error(d.bodies[i], fmt::format("bodies[{}]", i + 1)); !e.empty()) return e;
     return {};
+}
+
+// One body through the [[bodies]] key table's ranges (the scene file's, one definition)
+// and its shape's needs; the messages name bodies.<key>.
+Status validate_body(const BodyDef& def) {
+    SceneDef one;
+    one.bodies = {def};
+    for (const SceneListKey& k : bodies_list().keys)
+        if (std::string e = field_range_error(k.key, k.item(one, 0)); !e.empty())
+            return Error{fmt::format("bodies.{}: {}", k.key.name, e)};
+    if (std::string e = body_shape_error(def, "bodies"); !e.empty()) return Error{e};
+    return Ok{};
 }
 
 std::string list_toml(const SceneList& l, const SceneDef& d) {

@@ -20,29 +20,52 @@ Error no_bodies(const SolverEntry& e) {
 }  // namespace
 
 Status Simulation::Impl::add_scene_bodies(const std::vector<BodyDef>& bodies) {
+    scene_body_ids_.clear();
     if (bodies.empty()) return Ok{};
     PbfSolver* pbf = pbf_of(solver_.get());
     if (!pbf) return no_bodies(solver_entry_);
     if (bodies.size() > kMaxBodies) return Error{fmt::format("bodies: at most {} bodies (got {})", kMaxBodies, bodies.size())};
-    for (const BodyDef& b : bodies)
-        if (auto r = pbf->add_body(b); !r) return r.error();
+    for (const BodyDef& b : bodies) {
+        auto r = pbf->add_body(b);
+        if (!r) return r.error();
+        scene_body_ids_.push_back(r.value());
+    }
     return Ok{};
 }
 
-// apply() of a scene whose [[bodies]] changed: the bodies are rebuilt in place (the
-// Simulation and its water stay; every body is made again from the new list, with new
-// ids, at the list's positions), after the whole list was checked: on an error nothing
-// changed.
+// apply() of a scene whose [[bodies]] changed (def_.bodies to `bodies`), after the whole
+// list was checked: an entry whose definition is unchanged keeps its body (id, pose,
+// motion), the old entries left over are removed and the new ones added at their
+// positions. Bodies not from the list (add_body: the viewer's drops) stay as they are.
 Status Simulation::Impl::replace_bodies(const std::vector<BodyDef>& bodies) {
     PbfSolver* pbf = pbf_of(solver_.get());
     if (!pbf) return bodies.empty() ? Status(Ok{}) : Status(no_bodies(solver_entry_));
     if (bodies.size() > kMaxBodies) return Error{fmt::format("bodies: at most {} bodies (got {})", kMaxBodies, bodies.size())};
     for (const BodyDef& b : bodies)
         if (auto v = validate_body(b); !v) return v;
-    std::vector<uint32_t> ids;
-    for (const BodyState& s : pbf->bodies()) ids.push_back(s.id);
-    for (uint32_t id : ids) (void)pbf->remove_body(id);
-    return add_scene_bodies(bodies);
+    const std::vector<BodyDef>& old = def_.bodies;
+    std::vector<bool> kept(scene_body_ids_.size(), false);
+    std::vector<int64_t> ids(bodies.size(), -1);  // per new entry: the old body it keeps
+    for (size_t j = 0; j < bodies.size(); ++j)
+        for (size_t i = 0; i < scene_body_ids_.size() && i < old.size(); ++i)
+            if (!kept[i] && old[i] == bodies[j]) {
+                kept[i] = true;
+                ids[j] = scene_body_ids_[i];
+                break;
+            }
+    for (size_t i = 0; i < scene_body_ids_.size(); ++i)
+        if (!kept[i]) (void)pbf->remove_body(scene_body_ids_[i]);  // (a body removed live: already gone)
+    std::vector<uint32_t> now;
+    for (size_t j = 0; j < bodies.size(); ++j) {
+        if (ids[j] < 0) {
+            auto r = pbf->add_body(bodies[j]);
+            if (!r) return r.error();
+            ids[j] = r.value();
+        }
+        now.push_back(uint32_t(ids[j]));
+    }
+    scene_body_ids_ = std::move(now);
+    return Ok{};
 }
 
 std::span<const BodyState> Simulation::Impl::bodies() const {
@@ -53,6 +76,7 @@ std::span<const BodyState> Simulation::Impl::bodies() const {
 Result<uint32_t> Simulation::add_body(const BodyDef& body) {
     PbfSolver* pbf = pbf_of(impl_->solver_.get());
     if (!pbf) return no_bodies(impl_->solver_entry_);
+    if (auto v = validate_body(body); !v) return v.error();  // the scene file's ranges
     return impl_->run([&] { return pbf->add_body(body); });
 }
 

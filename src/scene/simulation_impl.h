@@ -90,6 +90,8 @@ struct Simulation::Impl {
     Status add_scene_bodies(const std::vector<BodyDef>& bodies);
     Status replace_bodies(const std::vector<BodyDef>& bodies);
     std::span<const BodyState> bodies() const;
+    /// The ids of the bodies made from def_.bodies, in the list's order (replace_bodies).
+    std::vector<uint32_t> scene_body_ids_;
 
     void prefill_channel();
     float prefill_share() const;

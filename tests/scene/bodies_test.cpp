@@ -196,6 +196,91 @@ TEST(Bodies, ErrorsNameTheKey) {
     EXPECT_NE(m.find("\"pbf\""), std::string::npos) << m;
 }
 
+// One definition of a body's ranges: validate_body (Simulation::add_body, the C API) says
+// what the scene file's reader says about the same [[bodies]] entry, `bodies.` for
+// `bodies[1].`, for every numeric key and the shape's needs.
+TEST(Bodies, ValidateBodySaysWhatTheSceneReaderSays) {
+    const BodyDef bad[] = {
+        BodyDef{.density = -1.0f},
+        BodyDef{.density = 2e5f},
+        BodyDef{.size = Vec3(2000.0f, 1.0f, 1.0f)},
+        BodyDef{.size = Vec3(0.0f, 1.0f, 1.0f)},
+        BodyDef{.shape = BodyShape::ConvexMesh, .size = Vec3(1.0f)},
+        BodyDef{.shape = BodyShape::Sphere, .size = Vec3(1.0f), .mesh = "a.obj"},
+        BodyDef{.position = Vec3(0.0f, 2e6f, 0.0f)},
+        BodyDef{.rotation = Vec3(400.0f, 0.0f, 0.0f)},
+        BodyDef{.rotation = Vec3(0.0f, NAN, 0.0f)},
+        BodyDef{.velocity = Vec3(0.0f, -200.0f, 0.0f)},
+        BodyDef{.angular_velocity = Vec3(INFINITY, 0.0f, 0.0f)},
+        BodyDef{.friction = 3.0f},
+        BodyDef{.friction = -0.1f},
+    };
+    test::Pool pool = test::still_pool(kSpacing, 2);
+    for (const BodyDef& b : bad) {
+        const Status v = validate_body(b);
+        ASSERT_FALSE(v.ok());
+        SceneDef d = pool.def;
+        d.bodies = {b};
+        const Status scene = validate(d);
+        ASSERT_FALSE(scene.ok()) << v.error().message;
+        std::string want = scene.error().message;
+        ASSERT_EQ(want.rfind("bodies[1].", 0), 0u) << want;
+        want.replace(0, 10, "bodies.");
+        EXPECT_EQ(v.error().message, want);
+    }
+    EXPECT_EQ(validate_body(BodyDef{.rotation = Vec3(400.0f, 0.0f, 0.0f)}).error().message,
+              "bodies.rotation: every component must be in [-360, 360] (got [400, 0, 0])");
+    EXPECT_TRUE(validate_body(BodyDef{.rotation = Vec3(-360.0f, 360.0f, 0.0f), .friction = 2.0f}).ok());
+    EXPECT_TRUE(validate_body(BodyDef{.shape = BodyShape::Capsule, .size = Vec3(0.2f, 0.0f, 0.0f)}).ok());
+}
+
+// apply() with a changed [[bodies]] list keeps the bodies whose entry is unchanged (id,
+// pose and motion go on) and those added live (add_body: the viewer's drops); only the
+// changed entry's body is made again.
+TEST(Bodies, ApplyKeepsTheBodiesItDoesNotChange) {
+    test::Pool pool = test::still_pool(kSpacing, kLayers);
+    pool.def.bodies = {BodyDef{.size = Vec3(0.8f, 0.4f, 0.6f), .density = 500.0f, .position = Vec3(3.0f, 2.5f, 3.0f)},
+                       BodyDef{.size = Vec3(0.6f, 0.4f, 0.6f), .density = 600.0f, .position = Vec3(5.0f, 2.5f, 5.0f)}};
+    auto sim = Simulation::create(pool.def, pool.map);
+    ASSERT_TRUE(sim.ok()) << sim.error().message;
+    Simulation& w = *sim.value();
+    const uint32_t dropped = w.add_body(BodyDef{.shape = BodyShape::Sphere, .size = Vec3(0.3f, 0.0f, 0.0f), .density = 400.0f,
+                                                .position = Vec3(4.0f, 3.0f, 5.0f)})
+                                 .value();
+    for (int f = 0; f < 60; ++f) w.step(1.0f / 60.0f);
+    ASSERT_EQ(w.bodies().size(), 3u);
+    const BodyState a = w.bodies()[0], b = w.bodies()[1], c = w.bodies()[2];
+    ASSERT_GT(std::abs(a.position.y - 2.5f), 0.05f) << "the first body should have fallen onto the water";
+    SceneDef next = w.requested();
+    next.bodies[1].density = 700.0f;  // the second entry changes
+    auto r = w.apply(next);
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    ASSERT_TRUE(r.value().rebuild_key.empty()) << r.value().rebuild_key;
+    ASSERT_EQ(w.bodies().size(), 3u);
+    const auto find = [&](uint32_t id) -> const BodyState* {
+        for (const BodyState& s : w.bodies())
+            if (s.id == id) return &s;
+        return nullptr;
+    };
+    const BodyState* kept = find(a.id);
+    ASSERT_NE(kept, nullptr) << "the unchanged entry's body was made again";
+    EXPECT_EQ(kept->position, a.position);
+    EXPECT_EQ(kept->velocity, a.velocity);
+    const BodyState* drop = find(dropped);
+    ASSERT_NE(drop, nullptr) << "the body added live was lost";
+    EXPECT_EQ(drop->position, c.position);
+    EXPECT_EQ(find(b.id), nullptr) << "the changed entry kept its old body";
+    const BodyState& remade = w.bodies().back();
+    EXPECT_NEAR(remade.mass, 700.0f * 0.6f * 0.4f * 0.6f, 1e-3f);
+    EXPECT_EQ(remade.position, Vec3(5.0f, 2.5f, 5.0f));
+    // The list emptied: its bodies go, the dropped one stays.
+    next.bodies.clear();
+    auto r2 = w.apply(next);
+    ASSERT_TRUE(r2.ok() && r2.value().rebuild_key.empty());
+    ASSERT_EQ(w.bodies().size(), 1u);
+    EXPECT_EQ(w.bodies()[0].id, dropped);
+}
+
 // Shapes: the mass and volume of each primitive, and of an OBJ (a unit cube with a vertex
 // inside it: the convex hull leaves it out; the triangle mesh needs the cube's faces).
 TEST(Bodies, ShapesHaveTheirVolumeAndMass) {
