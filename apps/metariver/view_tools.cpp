@@ -1,5 +1,7 @@
 #include "view_tools.h"
 
+#include "view_drop.h"
+
 #include <imgui.h>
 
 #include <glm/geometric.hpp>
@@ -16,20 +18,6 @@ constexpr size_t kMostUndo = 200;       ///< drags kept for undo; the oldest go 
 constexpr float kMostPushSpeed = 10.0f;  ///< m/s a push gives the water at most
 constexpr float kMostThrowSpeed = 20.0f;  ///< m/s a throw gives a body at most
 
-/// The radius of a sphere around the body's centre that holds it (box, sphere, capsule).
-float body_reach(BodyShape shape, const Vec3& size) {
-    if (shape == BodyShape::Box) return 0.5f * glm::length(size);
-    if (shape == BodyShape::Capsule) return size.x + 0.5f * size.y;
-    return size.x;
-}
-
-/// The cursor's velocity over the ground between two hits, times `gain`, at most `most` m/s.
-Vec3 cursor_velocity(const Vec3& from, const Vec3& to, double frame_s, float gain, float most) {
-    Vec3 v = (to - from) * float(gain / frame_s);
-    v.y = 0.0f;
-    const float speed = glm::length(v);
-    return speed > most ? v * (most / speed) : v;
-}
 }  // namespace
 
 bool Tools::frame(Simulation& sim, SceneDef& def, const std::optional<Vec3>& hit, bool left, double frame_s,
@@ -140,7 +128,8 @@ std::optional<SceneDef> Tools::click_edit(const SceneDef& def, const Vec3& hit, 
 
 void Tools::drag_body(Simulation& sim, const Vec3& hit, double frame_s, std::string& error) {
     const auto shape = static_cast<BodyShape>(body_shape_);
-    const Vec3 at = hit + Vec3(0.0f, body_reach(shape, body_size_) + 1.0f, 0.0f);  // held a metre above the ground
+    // Held a metre over the water where the click's ray met it first, else over the ground.
+    const Vec3 at = held_position(DropPoint{hit, false}, shape, body_size_, 1.0f);
     if (!dragging_) {
         dragging_ = true;
         last_hit_ = hit;

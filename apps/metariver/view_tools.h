@@ -22,8 +22,11 @@ public:
 
     /// True when the left button belongs to a tool (not to pouring and orbiting).
     bool active() const { return tool_ != Pour; }
+    /// True when the left button drops bodies (its hit is then the water's surface where
+    /// the click's ray meets it first: view_drop.h).
+    bool drops_bodies() const { return tool_ == DropBody; }
     /// One display frame: `hit` where the cursor's ray meets the terrain (none: off the
-    /// terrain), `left` whether the button is held, `frame_s` the display frame's
+    /// terrain; the water first for drops_bodies()), `left` whether the button is held, `frame_s` the display frame's
     /// seconds. Returns true when the terrain changed (upload it again); an error goes
     /// to `error`. `def` is the viewer's scene: moving the source writes the new centre
     /// into it; adding or removing a source or sink fills `edit` with the scene to apply.

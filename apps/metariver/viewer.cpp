@@ -6,6 +6,7 @@
 #include "viewer.h"
 
 #include "scene_panel.h"
+#include "view_drop.h"
 
 #include <metariver/io.h>
 
@@ -162,8 +163,17 @@ void Viewer::mouse(double elapsed, int win_w, int win_h) {
         }
         // A tool: every frame the left button is held, where the cursor meets the terrain.
         std::optional<Vec3> hit;
-        if (tools_.active() && left && win_w > 0 && win_h > 0)
+        if (tools_.active() && left && win_w > 0 && win_h > 0) {
             hit = render::pick_terrain(camera_, float(mx), float(my), win_w, win_h, sim_->terrain(), sim_->bvh());
+            if (tools_.drops_bodies()) {  // on the water where the ray meets it before the ground
+                const render::Ray ray = render::pixel_ray(camera_, float(mx), float(my), win_w, win_h);
+                const Aabb& b = sim_->terrain().bounds();
+                water_.update(*sim_);
+                const auto d = view::drop_point(ray.origin, ray.direction, hit, &water_,
+                                                glm::length(camera_.eye() - b.center()) + glm::length(b.extent()));
+                hit = d ? std::optional<Vec3>(d->point) : std::nullopt;
+            }
+        }
         std::optional<SceneDef> tool_edit;
         if (tools_.frame(*sim_, def_, hit, left, elapsed, error_, tool_edit))
             renderer_.update_terrain(sim_->view(), tools_.changed());  // only the rows it touched

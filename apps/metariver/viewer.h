@@ -11,6 +11,7 @@
 #include <metariver/export.h>
 #include <metariver/render.h>
 #include <metariver/scene.h>
+#include <metariver/water_query.h>
 
 #include <deque>
 #include <memory>
@@ -75,6 +76,7 @@ private:
     SceneDef edit_;  ///< the panel's copy
     ExportDef record_def_;
     ViewerSettings settings_;
+    WaterQuery water_;   ///< the drop body tool's water (updated while it drags)
     view::Tools tools_;  ///< the left button as a terrain brush or a hand on the water
     Recording recording_;
 
