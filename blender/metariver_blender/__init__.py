@@ -4,7 +4,9 @@ Sidebar (N) > metariver: pick the terrain (a grid mesh object, or a heightmap PN
 empty that places the water's source, the number of frames, then Bake. Each frame's water
 surface becomes one mesh object in the collection "metariver frames", visible on its frame
 only (keyed visibility: plays in the viewport, renders, and needs no add-on to open the
-.blend). Optionally every frame is also written as a binary PLY file. docs/blender.md.
+.blend). Bodies of the scene's [[bodies]] become one object each, "metariver body <id>",
+their location and rotation keyed on every frame (the logs ride the baked river).
+Optionally every frame is also written as a binary PLY file. docs/blender.md.
 
 Needs the metariver Python package (python/ of the repository: pip install it, or set the
 add-on's preference "Package path" to the folder that holds it).
@@ -142,6 +144,35 @@ def terrain_object(coll, world, to_blender):
     return obj
 
 
+def key_bodies(coll, world, to_blender, frame, objects, metariver):
+    """Each body's pose on `frame`: its object (made at its first frame, in `objects` by
+    id) keyed at the body's location and rotation; a body gone is hidden from then on."""
+    states = world.bodies()
+    seen = set()
+    for b in states:
+        bid = int(b["id"])
+        seen.add(bid)
+        obj = objects.get(bid)
+        if obj is None:
+            mat = bpy.data.materials.get("metariver body") or bpy.data.materials.new("metariver body")
+            mat.diffuse_color = (0.45, 0.3, 0.15, 1.0)
+            mesh = convert.body_mesh(f"metariver body {bid}", metariver.BODY_SHAPES[int(b["shape"])], b["size"])
+            mesh.materials.append(mat)
+            obj = bpy.data.objects.new(f"metariver body {bid}", mesh)
+            obj.rotation_mode = "QUATERNION"
+            coll.objects.link(obj)
+            objects[bid] = obj
+        obj.location = tuple(float(c) for c in to_blender.points(np.asarray(b["position"], np.float32)[None, :])[0])
+        obj.rotation_quaternion = to_blender.quaternion(b["orientation"])
+        obj.keyframe_insert("location", frame=frame)
+        obj.keyframe_insert("rotation_quaternion", frame=frame)
+    for bid, obj in objects.items():
+        if bid not in seen and not obj.hide_render:
+            obj.hide_viewport = obj.hide_render = True
+            obj.keyframe_insert("hide_viewport", frame=frame)
+            obj.keyframe_insert("hide_render", frame=frame)
+
+
 def frames_collection(scene):
     """The collection of baked frames, emptied (a bake replaces the previous one)."""
     coll = bpy.data.collections.get(FRAMES_COLLECTION)
@@ -161,7 +192,8 @@ def bake(context, settings):
     """Steps the world settings.frames frames from the scene's start frame; one mesh object
     per frame (and one of the terrain as built, carved channel included). Returns the frames' objects."""
     scene = context.scene
-    world, to_blender = make_world(settings)
+    metariver = import_metariver()
+    world, to_blender = make_world(settings, metariver)
     coll = frames_collection(scene)
     mat = water_material()
     dt = 1.0 / (scene.render.fps / scene.render.fps_base)
@@ -172,10 +204,12 @@ def bake(context, settings):
     if ply_dir:
         os.makedirs(ply_dir, exist_ok=True)
     objects = []
+    bodies = {}
     with world:
         terrain_object(coll, world, to_blender)
         for k in range(settings.frames):
             world.step(dt)
+            key_bodies(coll, world, to_blender, first + k, bodies, metariver)
             vertices, normals, indices = world.surface()
             frame = first + k
             mesh = convert.surface_mesh(f"metariver.{frame:04d}", to_blender.points(vertices),

@@ -24,6 +24,11 @@ class Transform:
     def directions(self, d: np.ndarray) -> np.ndarray:
         return np.stack([d[:, 0], -d[:, 2], d[:, 1]], axis=1).astype(np.float32)
 
+    def quaternion(self, q) -> tuple[float, float, float, float]:
+        """A metariver rotation (x, y, z, w, body to world) as Blender's (w, x, y, z): the
+        same turn about the axis in Blender's axes."""
+        return (float(q[3]), float(q[0]), -float(q[2]), float(q[1]))
+
     def to_metariver(self, p) -> np.ndarray:
         """A Blender point (X, Y, Z) in metariver's coordinates."""
         o = self.origin
@@ -79,6 +84,31 @@ def surface_mesh(name: str, vertices: np.ndarray, normals: np.ndarray, indices: 
     return mesh
 
 
+def body_mesh(name: str, shape: str, size) -> "bpy.types.Mesh":
+    """A body's shape in its own frame, in Blender's axes (metariver's local (x, y, z) is
+    (x, -z, y)): a box of extents size, a sphere of radius size[0], a capsule of radius
+    size[0] and cylinder length size[1] along x; a mesh shape (its OBJ is not read here)
+    as a cube of side size[0]."""
+    import bmesh
+
+    bm = bmesh.new()
+    if shape in ("sphere", "capsule"):
+        bmesh.ops.create_uvsphere(bm, u_segments=24, v_segments=12, radius=float(size[0]))
+        if shape == "capsule":  # the hemispheres apart by the cylinder's length
+            half = 0.5 * float(size[1])
+            for v in bm.verts:
+                v.co.x += half if v.co.x > 0.0 else -half
+    else:
+        bmesh.ops.create_cube(bm, size=1.0)
+        ext = (size[0], size[2], size[1]) if shape == "box" else (size[0],) * 3  # Blender X, Y, Z
+        for v in bm.verts:
+            v.co.x, v.co.y, v.co.z = v.co.x * ext[0], v.co.y * ext[1], v.co.z * ext[2]
+    mesh = bpy.data.meshes.new(name)
+    bm.to_mesh(mesh)
+    bm.free()
+    return mesh
+
+
 def write_ply(path: str, vertices: np.ndarray, normals: np.ndarray, indices: np.ndarray) -> None:
     """A binary little-endian PLY in metariver's coordinates (y up): x y z nx ny nz, triangles."""
     header = ("ply\nformat binary_little_endian 1.0\ncomment metariver water surface\n"
@@ -108,4 +138,4 @@ def read_ply_counts(path: str) -> tuple[int, int]:
     return counts.get("vertex", 0), counts.get("face", 0)
 
 
-__all__ = ["Transform", "grid_heights", "surface_mesh", "write_ply", "read_ply_counts"]
+__all__ = ["Transform", "grid_heights", "surface_mesh", "body_mesh", "write_ply", "read_ply_counts"]

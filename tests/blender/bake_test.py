@@ -6,8 +6,10 @@ Registers blender/metariver_blender from this checkout (the package from python/
 library from METARIVER_LIBRARY), builds a grid terrain, places the source with an empty,
 bakes 40 frames, and checks that every baked frame's mesh has the vertex and triangle
 counts of the same world stepped directly through the package, that the PLY files say the
-same, that each frame is visible on its own frame only, and that a Cycles render of a
-frame shows the water (blue pixels over a brown ground, not a uniform image).
+same, that each frame is visible on its own frame only, that a log of the scene's
+[[bodies]] arrives as an object keyed on every frame at the twin's body poses and moves,
+and that a Cycles render of a frame shows the water (blue pixels over a brown ground, not a
+uniform image).
 Exits 0 on success, 1 with the failures listed.
 """
 import os
@@ -69,6 +71,30 @@ def setup_render(scene, target):
     scene.render.image_settings.file_format = "PNG"
 
 
+def check_bodies(scene, coll, poses, to_blender):
+    """The log: one object keyed on every frame, at the twin's poses, moving."""
+    logs = [o for o in coll.objects if o.name.startswith("metariver body")]
+    check(len(logs) == 1 and all(p is not None for p in poses), f"one body object ({[o.name for o in logs]})")
+    if len(logs) != 1:
+        return
+    log = logs[0]
+    action = log.animation_data.action if log.animation_data else None
+    keyed = {fc.data_path for fc in action.fcurves} if action else set()
+    check({"location", "rotation_quaternion"} <= keyed, f"its location and rotation are keyed ({sorted(keyed)})")
+    counts = [len(fc.keyframe_points) for fc in action.fcurves] if action else [0]
+    check(min(counts) == FRAMES, f"keyed on every frame ({min(counts)} keys of {FRAMES})")
+    worst = 0.0
+    for k in (0, FRAMES // 2, FRAMES - 1):
+        scene.frame_set(scene.frame_start + k)
+        at, q = poses[k]
+        worst = max(worst, float(np.abs(np.array(log.location) - at[0]).max()),
+                    float(np.abs(np.array(log.rotation_quaternion) - np.array(to_blender.quaternion(q[0]))).max()))
+    check(worst < 1e-4, f"its poses are the simulation's (largest difference {worst:.2g})")
+    moved = float(np.linalg.norm(poses[-1][0][0] - poses[0][0][0]))
+    check(moved > 0.5, f"the log moves ({moved:.2f} m over {FRAMES} frames)")
+    print(f"body: {log.name}, keyed on {min(counts)} frames, moved {moved:.2f} m")
+
+
 def main():
     import metariver_blender
     from metariver_blender import convert
@@ -85,7 +111,10 @@ def main():
     source.location = (25.0, 60.0, h[8, 20] * 12.0 + 1.5)
     s = scene.metariver
     s.terrain, s.source, s.frames, s.threads = terrain, source, FRAMES, 2
-    s.scene_toml = "[particles]\\ncount = 1500"
+    # a log dropped 1 m over the valley's middle, upstream of the source: it slides and floats down
+    log_y = h[12, 20] * 12.0 + 1.0
+    s.scene_toml = ("[particles]\\ncount = 1500\\n[[bodies]]\\nshape = \"box\"\\nsize = [1.2, 0.4, 0.4]\\n"
+                    f"density = 500.0\\nposition = [20.0, {log_y:.3f}, 12.0]")
     s.ply_dir = str(OUT / "ply")
     bpy.context.view_layer.update()
 
@@ -98,12 +127,15 @@ def main():
     check(len(frames) == FRAMES, f"{FRAMES} frame objects ({len(frames)})")
 
     # the twin: the same settings' world stepped directly through the package
-    world, _ = metariver_blender.make_world(s, metariver)
+    world, to_blender = metariver_blender.make_world(s, metariver)
     dt = 1.0 / (scene.render.fps / scene.render.fps_base)
     mismatches = 0
+    poses = []
     with world:
         for k, obj in enumerate(frames):
             world.step(dt)
+            b = world.bodies()
+            poses.append((to_blender.points(b["position"]), b["orientation"].copy()) if len(b) else None)
             st = world.stats
             ply = convert.read_ply_counts(str(OUT / "ply" / f"frame_{k + 1:04d}.ply"))
             got = (len(obj.data.vertices), len(obj.data.polygons))
@@ -113,6 +145,8 @@ def main():
                       f"{(st.surface_vertices, st.surface_triangles)}")
     check(mismatches == 0, f"every frame's vertex and triangle counts equal the simulation's ({mismatches} differ)")
     check(len(frames[-1].data.polygons) > 100, f"the last frame has water ({len(frames[-1].data.polygons)} triangles)")
+
+    check_bodies(scene, coll, poses, to_blender)
 
     scene.frame_set(20)
     visible = [o.name for o in frames if not o.hide_render and not o.hide_viewport]
