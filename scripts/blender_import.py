@@ -10,6 +10,10 @@ export.json says which formats and frames are there. What the script builds:
 - the water as a mesh sequence: one object per exported frame (water_NNNNN.ply / .obj /
   .glb), each shown only from its frame to the next exported one (keyframed visibility),
   so playing the timeline plays the river;
+- the bodies (a scene with [[bodies]] exported with glb): each body's mesh from the
+  bodies_NNNNN.glb of the first exported frame that has it (node body_<id>), its location
+  and rotation keyed on every exported frame from the manifest's transforms (the same as
+  that frame's glb nodes'), shown from its first frame to its last, so the logs ride the river;
 - the water's VDB level set as a volume sequence (water_NNNNN.vdb, grid "surface") with a
   Volume to Mesh modifier on a mesh object, so it renders as a surface too;
 - a camera that frames the terrain, a sun and a sky colour; Cycles on the CPU.
@@ -25,6 +29,7 @@ import argparse
 import json
 import math
 import os
+import struct
 import sys
 
 import bpy
@@ -116,6 +121,82 @@ def show_only_between(obj, start, end):
                 k.interpolation = "CONSTANT"
 
 
+def read_glb_bodies(path):
+    """A bodies_NNNNN.glb's meshes by body id: {id: (vertices, triangles)}, in the body's own
+    frame (y up), read here (nodes body_<id>, float VEC3 positions, 16/32-bit indices):
+    Debian's Blender glTF importer fails on its numpy (np.bool)."""
+    with open(path, "rb") as f:
+        data = f.read()
+    if data[:4] != b"glTF":
+        fail(f"{path}: not a glb file")
+    chunks, at = {}, 12
+    while at + 8 <= len(data):
+        size, kind = struct.unpack_from("<I4s", data, at)
+        chunks[kind] = data[at + 8:at + 8 + size]
+        at += 8 + size
+    gltf, blob = json.loads(chunks[b"JSON"]), chunks.get(b"BIN\0", b"")
+
+    def read(accessor, fmt, width):
+        a = gltf["accessors"][accessor]
+        view = gltf["bufferViews"][a["bufferView"]]
+        start = view.get("byteOffset", 0) + a.get("byteOffset", 0)
+        n = a["count"] * (3 if a["type"] == "VEC3" else 1)  # numbers; `width` of them per item
+        flat = struct.unpack_from(f"<{n}{fmt}", blob, start)
+        return [flat[i:i + width] for i in range(0, len(flat), width)]
+
+    out = {}
+    for node in gltf.get("nodes", []):
+        name = node.get("name", "")
+        if not name.startswith("body_") or "mesh" not in node:
+            continue
+        prim = gltf["meshes"][node["mesh"]]["primitives"][0]
+        verts = read(prim["attributes"]["POSITION"], "f", 3)
+        kind = gltf["accessors"][prim["indices"]]["componentType"]
+        tris = read(prim["indices"], "I" if kind == 5125 else "H", 3)
+        out[int(name.split("_")[1])] = (verts, tris)
+    return out
+
+
+def import_bodies(folder, manifest, frames, digits, mat):
+    """The bodies as keyed objects (see the module's docstring); returns them."""
+    if "bodies" not in manifest.get("patterns", {}):
+        return []
+    entries = [e for e in manifest["frame_files"] if e["frame"] in frames and e.get("bodies")]
+    by_id, seen = {}, {}
+    for e in entries:
+        for b in e["bodies"]:
+            seen.setdefault(b["id"], [e["frame"], e["frame"]])[1] = e["frame"]
+            if b["id"] in by_id:
+                continue
+            path = os.path.join(folder, f"bodies_{e['frame']:0{digits}d}.glb")
+            if not os.path.isfile(path):
+                return []  # exported without glb: no meshes to show
+            for bid, (verts, tris) in read_glb_bodies(path).items():  # the frame's bodies; keep the new ones
+                if bid in by_id:
+                    continue
+                mesh = bpy.data.meshes.new(f"body_{bid}")
+                mesh.from_pydata([(x, -z, y) for x, y, z in verts], [], tris)  # y-up to z-up
+                o = bpy.data.objects.new(f"body_{bid}", mesh)
+                o.rotation_mode = "QUATERNION"
+                bpy.context.scene.collection.objects.link(o)
+                assign([o], mat)
+                by_id[bid] = o
+    for e in entries:
+        for b in e["bodies"]:
+            o = by_id.get(b["id"])
+            if o is None:
+                continue
+            x, y, z = b["position"]
+            qx, qy, qz, qw = b["orientation"]
+            o.location = (x, -z, y)  # y-up to z-up, as the importers turn the meshes
+            o.rotation_quaternion = (qw, qx, -qz, qy)
+            o.keyframe_insert("location", frame=e["frame"])
+            o.keyframe_insert("rotation_quaternion", frame=e["frame"])
+    for bid, o in by_id.items():
+        show_only_between(o, seen[bid][0], seen[bid][1] + 1)
+    return list(by_id.values())
+
+
 def bounds(objs):
     lo = mathutils.Vector((math.inf,) * 3)
     hi = mathutils.Vector((-math.inf,) * 3)
@@ -192,6 +273,8 @@ def main():
             if not scenery:
                 scenery += objs
 
+    bodies = import_bodies(folder, manifest, frames, digits, material("body", (0.45, 0.3, 0.15), 0.8))
+
     if show in ("vdb", "both"):
         vol = bpy.data.volumes.new("water_vdb")
         vol.filepath = os.path.join(folder, f"water_{frames[0]:0{digits}d}.vdb")
@@ -260,6 +343,7 @@ def main():
         if not os.path.isfile(out):
             fail(f"{out}: Blender wrote no image")
         print(f"blender_import.py: {len(frames)} water frames ({show}) from {folder}; rendered frame {frame} to {out}")
+    print(f"blender_import.py: {len(bodies)} bodies keyed on the exported frames")
 
 
 if __name__ == "__main__":
