@@ -115,8 +115,12 @@ TEST(SimulationThreads, AStepRunsOnAtMostTheThreadsSet) {
         ASSERT_TRUE(s.push(s.def().spawn.center, 3.0f, Vec3(1.0f, 0.0f, 0.0f)).ok());
         const int every = tbb::info::default_concurrency();
         EXPECT_EQ(seen->max_concurrency, n == 0 ? every : std::min(n, every)) << "threads " << n;  // no more slots than cores
-        if (n == 1) EXPECT_EQ(seen->threads.size(), 1u) << "threads 1: only the calling thread works";
-        if (n > 0) EXPECT_LE(seen->threads.size(), size_t(n)) << "threads " << n;
+        if (n == 1) {
+            EXPECT_EQ(seen->threads.size(), 1u) << "threads 1: only the calling thread works";
+        }
+        if (n > 0) {
+            EXPECT_LE(seen->threads.size(), size_t(n)) << "threads " << n;
+        }
         EXPECT_GE(seen->threads.size(), 1u);
     }
 }
