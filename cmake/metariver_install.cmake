@@ -19,7 +19,7 @@ include(CMakePackageConfigHelpers)
 # its component cannot see.
 set(METARIVER_CORE_HEADERS
   metariver.h water_query.h bodies.h core.h terrain.h drainage.h particles.h checkpoints.h emitters.h
-  neighbor_grid.h solver.h solver_parts.h solver_registry.h pbf_solver.h spring_solver.h swe_solver.h
+  neighbor_grid.h solver.h solver_parts.h solver_registry.h pbf_solver.h spring_solver.h swe_solver.h hybrid_solver.h
   bullet_solver.h foam.h field.h sparse_field.h surface.h scene.h scene_keys.h scene_view.h io.h)
 set(METARIVER_RENDER_HEADERS render.h gl_context.h gpu_pbf.h gpu_field.h)
 set(METARIVER_EXPORT_HEADERS export.h)

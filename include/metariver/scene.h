@@ -14,6 +14,7 @@
 #include <metariver/scene_view.h>
 #include <metariver/solver_registry.h>
 #include <metariver/surface.h>
+#include <metariver/hybrid_solver.h>
 #include <metariver/swe_solver.h>
 #include <metariver/terrain.h>
 
@@ -35,6 +36,8 @@ enum class TerrainSource {
     Bowl,    ///< procedural equivalent of the paper's bowl.png
     Flat,    ///< all zero
     File,    ///< a PNG heightmap
+    Waterfall,  ///< procedural: a channel over a cliff into a plunge pool (procedural_waterfall)
+    Weir,       ///< procedural: a channel across a weir (procedural_weir)
 };
 std::string_view to_string(TerrainSource s);
 
@@ -105,7 +108,8 @@ struct SceneDef {
                            .friction_speed = 4.0f};
     IntegratorDef integrator{.gravity = 9.82f, .fixed_dt = 0.0f, .substeps = 2};
     BulletDef bullet;  ///< solver = bullet only
-    SweDef swe;        ///< [swe]: solver = swe only
+    SweDef swe;        ///< [swe]: solver = swe, hybrid
+    HybridDef hybrid;  ///< [hybrid]: solver = hybrid only
     /// solver = pbf only. Sleeping, damping, the contact band and the wall density
     /// "auto": off for the river, on for still water; a pool levels out before it sleeps
     /// (a river does not sleep); the spacing sized to the terrain.

@@ -34,17 +34,19 @@ struct SolverKind {
     static const SolverKind Bullet;   ///< the paper's engine physics (2.4) on Bullet: rigid spheres vs the terrain
     static const SolverKind Pbf;      ///< Position Based Fluids (Macklin and Mueller 2013) with the robust terrain collision
     static const SolverKind Swe;      ///< shallow water on the terrain's grid (swe_solver.h)
+    static const SolverKind Hybrid;   ///< the grid and PBF particles where water leaves the ground (hybrid_solver.h)
 
     friend constexpr bool operator==(SolverKind a, SolverKind b) { return a.name == b.name; }
 };
 
 /// The built-in solvers' names, in the order of the `solver` key's choices (the order the
 /// enum had: scene files and the viewer's list keep it).
-inline constexpr std::string_view kBuiltinSolverNames[] = {"springs", "bullet", "pbf", "swe"};
+inline constexpr std::string_view kBuiltinSolverNames[] = {"springs", "bullet", "pbf", "swe", "hybrid"};
 inline constexpr SolverKind SolverKind::Springs{kBuiltinSolverNames[0]};
 inline constexpr SolverKind SolverKind::Bullet{kBuiltinSolverNames[1]};
 inline constexpr SolverKind SolverKind::Pbf{kBuiltinSolverNames[2]};
 inline constexpr SolverKind SolverKind::Swe{kBuiltinSolverNames[3]};
+inline constexpr SolverKind SolverKind::Hybrid{kBuiltinSolverNames[4]};
 
 constexpr std::string_view to_string(SolverKind s) { return s.name; }
 /// The index of `s` in kBuiltinSolverNames, -1 for a solver that is not built in.

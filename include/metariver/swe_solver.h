@@ -73,6 +73,12 @@ public:
     const SweDef& def() const { return def_; }
     /// Time steps of the latest step_frame.
     uint64_t last_substeps() const { return last_substeps_; }
+    /// The core, for a solver that exchanges water with the grid between frames (the
+    /// hybrid solver); call refresh() after changing its state.
+    swe::ShallowWater& core() { return *core_; }
+    const swe::ShallowWater& core() const { return *core_; }
+    /// Shows the core's current state in water_heightfield().
+    void refresh() { publish(); }
 
 private:
     void apply_def();

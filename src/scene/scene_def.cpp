@@ -29,6 +29,8 @@ std::string_view to_string(TerrainSource s) {
         case TerrainSource::Bowl: return "bowl";
         case TerrainSource::Flat: return "flat";
         case TerrainSource::File: return "file";
+        case TerrainSource::Waterfall: return "waterfall";
+        case TerrainSource::Weir: return "weir";
     }
     return "?";
 }
@@ -46,6 +48,7 @@ std::string seed_unused(SolverKind solver) {
     if (solver == SolverKind::Pbf)
         return "solver = \"pbf\" does not use it (its lattice source places every particle it emits: nothing is "
                "random); remove it";
+    if (solver == SolverKind::Hybrid) return "solver = \"hybrid\" does not use it (nothing it does is random); remove it";
     return {};
 }
 
@@ -182,10 +185,61 @@ SceneDef paper_nile_engine() {
     return d;
 }
 
+
+/// The hybrid solver's scenes (docs/waterfalls.md): the grid with PBF particles of 0.2 m
+/// where it falls, on a procedural channel 1 m per sample; the particles move as a river's
+/// (no sleeping or slow-water damping), the field sized to their spacing.
+SceneDef hybrid_base(std::string name, TerrainSource kind, float discharge) {
+    SceneDef d;
+    d.name = std::move(name);
+    d.solver = SolverKind::Hybrid;
+    d.source = {.kind = kind, .heightmap = {}, .width = 40, .height = 80, .seed = 1};
+    d.terrain = {.area_scale = 1.0f, .height_scale = 20.0f, .paper_row_orientation = false,
+                 .condition = TerrainCondition::None};
+    d.spawn.count = 20;  // the particles' budget is hybrid.max_particles
+    d.spawn.flow_rate = 0.0f;
+    d.spawn.prefill = false;
+    d.spawn.auto_center = false;
+    d.spawn.center = Vec3(19.5f, 15.0f, 77.0f);
+    d.sink.kind = SinkKind::None;
+    d.foam.enabled = false;
+    d.swe.discharge = discharge;
+    d.swe.auto_source = false;
+    d.swe.source_center = Vec3(19.5f, 0.0f, 77.0f);
+    d.pbf = PbfDef{.spacing = 0.2f, .kernel_radius = 0.4f};
+    d.pbf.auto_spacing = false;
+    d.field.radius = 0.4f;
+    d.field.resolution = 7.5f;
+    d.field.bounds_offset = 0.4f;
+    return d;
+}
+
+/// A river over a 10 m cliff into a plunge pool (procedural_waterfall), 3 m^3/s poured 13 m
+/// above the lip, the reach above the lip full to 1 m over it at the start (so that it falls
+/// from the first frame).
+SceneDef hybrid_waterfall() {
+    SceneDef d = hybrid_base("waterfall", TerrainSource::Waterfall, 3.0f);
+    d.swe.initial_level = 0.62f * 20.0f + 1.0f;
+    d.swe.source_center = Vec3(19.5f, 0.0f, 68.0f);
+    d.swe.dam_z = 0.7f * 79.0f;  // the lip's row: the pool below starts dry
+    return d;
+}
+
+/// A channel across a weir 2 m above the bed upstream, 4 m above it downstream, 3 m^3/s; the
+/// pond behind it full to 0.3 m over the crest at the start.
+SceneDef hybrid_weir() {
+    SceneDef d = hybrid_base("weir", TerrainSource::Weir, 3.0f);
+    d.hybrid.drop = 0.5f;
+    d.swe.initial_level = 0.6f * 20.0f + 0.3f;
+    d.swe.dam_z = 0.47f * 79.0f;  // the weir's downstream face: dry below it
+    return d;
+}
+
 }  // namespace
 
 std::vector<std::string> preset_names() {
-    return {"default", "springs-valley", "paper-full", "paper-nile", "paper-bowl", "paper-engine", "paper-nile-engine"};
+    return {"default", "springs-valley", "paper-full", "paper-nile", "paper-bowl", "paper-engine", "paper-nile-engine",
+            "waterfall", "weir"};
 }
 
 Result<SceneDef> preset(std::string_view name) {
@@ -200,6 +254,8 @@ Result<SceneDef> preset(std::string_view name) {
     if (name == "paper-bowl") return paper_bowl();
     if (name == "paper-engine") return paper_engine();
     if (name == "paper-nile-engine") return paper_nile_engine();
+    if (name == "waterfall") return hybrid_waterfall();
+    if (name == "weir") return hybrid_weir();
     std::string known;
     for (const auto& n : preset_names()) known += (known.empty() ? "" : ", ") + n;
     return Error{fmt::format("unknown preset '{}' (known: {})", name, known)};
@@ -235,7 +291,7 @@ Status validate(const SceneDef& d) {
           kMaxBulletBodies, d.spawn.count);
     check(!(d.field.bounds == FieldBounds::Terrain && d.field.kernel != FieldKernel::Poly6),
           "field.bounds: \"terrain\" needs a compact kernel (field.kernel = \"poly6\"); the paper's kernels reach every sample");
-    if (d.solver == SolverKind::Pbf)
+    if (d.solver == SolverKind::Pbf || d.solver == SolverKind::Hybrid)
         check(d.pbf.kernel_radius > d.pbf.spacing && d.pbf.kernel_radius <= 4.0f * d.pbf.spacing,
               "pbf.kernel_radius: must be in (pbf.spacing, 4 pbf.spacing] = ({}, {}] (got {})", d.pbf.spacing,
               4.0f * d.pbf.spacing, d.pbf.kernel_radius);

@@ -12,6 +12,8 @@ Result<Heightmap> load_scene_heightmap(const SceneDef& def) {
         case TerrainSource::Strict: return procedural_strict(s.width, s.height);
         case TerrainSource::Bowl: return procedural_bowl(s.width, s.height);
         case TerrainSource::Flat: return flat_heightmap(s.width, s.height);
+        case TerrainSource::Waterfall: return procedural_waterfall(s.width, s.height);
+        case TerrainSource::Weir: return procedural_weir(s.width, s.height);
         case TerrainSource::File:
             if (s.heightmap.empty())
                 return Error{fmt::format("scene '{}' needs a heightmap file (give --heightmap FILE)", def.name)};

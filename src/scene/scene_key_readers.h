@@ -37,14 +37,16 @@ inline bool springs_on(S d) { return d.solver == SolverKind::Springs || (d.solve
 
 /// [pbf]: PBF, and the other solvers' carve (pbf.spacing is the carved channel's depth and width).
 constexpr ReadIf kPbfSection{
-    .holds = [](S d) { return d.solver == SolverKind::Pbf || d.terrain.condition == TerrainCondition::Carve; },
+    .holds = [](S d) {
+        return d.solver == SolverKind::Pbf || d.solver == SolverKind::Hybrid || d.terrain.condition == TerrainCondition::Carve;
+    },
     .refusal = [](F f) {
         return fmt::format("only solver = \"pbf\" reads [pbf] ({} reads pbf.spacing only to carve a channel, "
                            "terrain.condition = \"carve\")",
                            solver_is(f.def));
     },
     .scope = ReadScope::Section};
-constexpr ReadIf kPbfOnly{.holds = [](S d) { return d.solver == SolverKind::Pbf; }, .refusal = [](F f) {
+constexpr ReadIf kPbfOnly{.holds = [](S d) { return d.solver == SolverKind::Pbf || d.solver == SolverKind::Hybrid; }, .refusal = [](F f) {
                               return fmt::format("only solver = \"pbf\" reads it ({} reads pbf.spacing only, the carved "
                                                  "channel's depth)",
                                                  solver_is(f.def));
@@ -55,8 +57,12 @@ constexpr ReadIf kBulletSection{
     .refusal = [](F f) { return fmt::format("only solver = \"bullet\" reads [bullet] (this scene has {})", solver_is(f.def)); },
     .scope = ReadScope::Section};
 constexpr ReadIf kSweSection{
-    .holds = [](S d) { return d.solver == SolverKind::Swe; },
-    .refusal = [](F f) { return fmt::format("only solver = \"swe\" reads [swe] (this scene has {})", solver_is(f.def)); },
+    .holds = [](S d) { return d.solver == SolverKind::Swe || d.solver == SolverKind::Hybrid; },
+    .refusal = [](F f) { return fmt::format("only solver = \"swe\" or \"hybrid\" reads [swe] (this scene has {})", solver_is(f.def)); },
+    .scope = ReadScope::Section};
+constexpr ReadIf kHybridSection{
+    .holds = [](S d) { return d.solver == SolverKind::Hybrid; },
+    .refusal = [](F f) { return fmt::format("only solver = \"hybrid\" reads [hybrid] (this scene has {})", solver_is(f.def)); },
     .scope = ReadScope::Section};
 constexpr ReadIf kSpringsSection{.holds = [](S d) { return d.solver != SolverKind::Pbf; },
                                  .refusal = [](F) -> std::string {
@@ -69,7 +75,7 @@ constexpr ReadIf kCollisionSection{
     .refusal = [](F f) { return collision_mode_unused(f.def.solver, f.def.collision.mode); },
     .scope = ReadScope::Section};
 // PBF draws no random number: its lattice source places every particle it emits.
-constexpr ReadIf kSeedSolver{.holds = [](S d) { return d.solver != SolverKind::Pbf; },
+constexpr ReadIf kSeedSolver{.holds = [](S d) { return d.solver != SolverKind::Pbf && d.solver != SolverKind::Hybrid; },
                              .refusal = [](F f) { return seed_unused(f.def.solver); },
                              .scope = ReadScope::Solver};
 /// Diffuse particles need the fluid's kernel neighbourhoods.
@@ -305,7 +311,8 @@ MR_READERS(kNotBullet, "solver = springs, pbf", kSinkBoxSolver);  // [[sink.box]
 MR_READERS(kBodies, "solver = pbf", kBodiesSolver);                // [[bodies]]
 MR_READERS(kPbf, "solver = pbf", kPbfSection, kPbfOnly);
 MR_READERS(kBullet, "solver = bullet", kBulletSection);
-MR_READERS(kSwe, "solver = swe", kSweSection);
+MR_READERS(kSwe, "solver = swe, hybrid", kSweSection);
+MR_READERS(kHybrid, "solver = hybrid", kHybridSection);
 MR_READERS(kFile, "terrain.source = file", kFileSource);
 MR_READERS(kProcedural, "a procedural terrain.source", kProceduralSource);
 MR_READERS(kValley, "terrain.source = valley", kProceduralSource, kValleySource);

@@ -55,7 +55,7 @@ constexpr KeyRange big_vec(double lo) { return {.lo = lo, .hi = 1e6}; }
 // Who reads a key, and what the reader says to a file that sets it elsewhere.
 using namespace key_readers;
 
-constexpr std::string_view kSources[] = {"valley", "strict", "bowl", "flat", "file"};
+constexpr std::string_view kSources[] = {"valley", "strict", "bowl", "flat", "file", "waterfall", "weir"};
 constexpr std::string_view kConditions[] = {"none", "fill", "breach", "carve", "auto"};
 constexpr std::string_view kShapes[] = {"box", "disc", "point"};
 constexpr std::string_view kSinks[] = {"none", "box", "edges"};
@@ -127,7 +127,8 @@ const SceneKey kKeys[] = {
     {.name = "solver", .type = K::Choice, .choices = kBuiltinSolverNames, .readers = kAll, .edit = E::Rebuild,
      .help = "pbf: Position Based Fluids (the default river, docs/river.md); springs: the paper's own physics; bullet: its "
              "engine physics (rigid spheres on Bullet, [bullet], docs/bullet.md); swe: shallow water on the terrain's grid, depth "
-             "and velocity per sample ([swe], docs/shallow-water.md).",
+             "and velocity per sample ([swe], docs/shallow-water.md); hybrid: that grid, turned into PBF particles where it "
+             "falls over a drop and back ([hybrid], docs/waterfalls.md).",
      .field = MR_FIELD(solver)},
     {.name = "seed", .type = K::Seed, .range = closed(0, 4294967295.0), .readers = kSeed, .edit = E::Rebuild,
      .help = "Particle spawn RNG seed (refused with solver = \"pbf\", as --seed is: its lattice source places every "
@@ -136,7 +137,8 @@ const SceneKey kKeys[] = {
     // [terrain]
     {.name = "terrain.source", .type = K::Choice, .choices = kSources, .readers = kAll, .edit = E::Rebuild,
      .help = "valley: procedural valley with a winding river channel; strict, bowl: procedural equivalents of the paper's "
-             "strict17.png and bowl.png; flat; file: the PNG of terrain.heightmap.",
+             "strict17.png and bowl.png; flat; file: the PNG of terrain.heightmap; waterfall, weir: a straight channel over a "
+             "cliff into a plunge pool, or across a weir (the hybrid solver's scenes, docs/waterfalls.md).",
      .field = MR_FIELD(source.kind)},
     {.name = "terrain.heightmap", .type = K::String, .readers = kFile, .edit = E::Rebuild,
      .help = "PNG (8/16-bit gray, gray+alpha, RGB, RGBA; red channel), relative to the scene file; setting it implies "
@@ -463,6 +465,25 @@ const SceneKey kKeys[] = {
      .edit = E::Rebuild, .help = "With swe.initial_level: the lake only where z >= dam_z, held by a dam across the map that is "
                                  "gone at the start (a dam break); none: the lake everywhere below the level.",
      .field = MR_FIELD(swe.dam_z)},
+    // [hybrid]
+    {.name = "hybrid.drop", .type = K::Float, .unit = "m", .range = above(0, 1e4), .readers = kHybrid, .edit = E::Solver,
+     .help = "A wet cell whose bed lies more than this above its neighbour's, with the flow towards it, sheds the volume "
+             "that flows over that face as particles.", .field = MR_FIELD(hybrid.drop)},
+    {.name = "hybrid.min_depth", .type = K::Float, .unit = "m", .range = closed(0, 100), .readers = kHybrid, .edit = E::Solver,
+     .help = "Shallower cells shed nothing.", .field = MR_FIELD(hybrid.min_depth)},
+    {.name = "hybrid.min_speed", .type = K::Float, .unit = "m/s", .range = closed(0, 100), .readers = kHybrid, .edit = E::Solver,
+     .help = "Slower flow over the edge sheds nothing.", .field = MR_FIELD(hybrid.min_speed)},
+    {.name = "hybrid.absorb_age", .type = K::Float, .unit = "s", .range = closed(0, 100), .readers = kHybrid, .edit = E::Solver,
+     .help = "A particle younger than this is not absorbed by the water it lands on.", .field = MR_FIELD(hybrid.absorb_age)},
+    {.name = "hybrid.absorb_depth", .type = K::Float, .unit = "m", .range = closed(0, 100), .readers = kHybrid, .edit = E::Solver,
+     .help = "A cell at least this deep absorbs the particles at or below its surface.", .field = MR_FIELD(hybrid.absorb_depth)},
+    {.name = "hybrid.rest_speed", .type = K::Float, .unit = "m/s", .range = closed(0, 100), .readers = kHybrid, .edit = E::Solver,
+     .help = "A particle on the ground slower than this is at rest.", .field = MR_FIELD(hybrid.rest_speed)},
+    {.name = "hybrid.rest_time", .type = K::Float, .unit = "s", .range = closed(0, 1e4), .readers = kHybrid, .edit = E::Solver,
+     .help = "Seconds at rest on the ground after which a particle goes into the cell under it, wet or dry.",
+     .field = MR_FIELD(hybrid.rest_time)},
+    {.name = "hybrid.max_particles", .type = K::Int, .range = closed(1, 10000000), .readers = kHybrid, .edit = E::Rebuild,
+     .help = "The particle budget; while it is spent the grid keeps its water.", .field = MR_FIELD(hybrid.max_particles)},
 };
 #undef MR_FIELD
 
@@ -495,8 +516,10 @@ const SceneSection kSections[] = {
                "without bullet.springs (stiffness 0 is fine), integrator.substeps, [collision] (but its "
                "bvh_leaf_triangles), [pbf]; left out, the "
                "flow rate and sink are off and spawn_interval is the paper-engine preset's."},
-    {"swe", "Shallow water on the terrain's grid (docs/shallow-water.md): solver = \"swe\" only; the terrain's edges are "
-            "open (water leaves the map)."},
+    {"swe", "Shallow water on the terrain's grid (docs/shallow-water.md): solver = \"swe\" and the hybrid's grid; the "
+            "terrain's edges are open (water leaves the map)."},
+    {"hybrid", "The grid's water as PBF particles where it falls over a drop, and back where they land (docs/waterfalls.md): "
+               "solver = \"hybrid\" only; its particles take [pbf] and [collision], its grid [swe]."},
 };
 
 // [[particles.source]] and [[sink.box]]: the entries' keys (the name is the leaf).

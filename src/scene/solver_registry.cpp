@@ -7,6 +7,7 @@
 #ifndef METARIVER_NO_BULLET
 #include <metariver/bullet_solver.h>
 #endif
+#include <metariver/hybrid_solver.h>
 #include <metariver/particles.h>
 #include <metariver/pbf_solver.h>
 #include <metariver/scene.h>
@@ -107,6 +108,21 @@ SolverEntry swe_entry() {
     };
 }
 
+SolverEntry hybrid_entry() {
+    return {
+        .kind = SolverKind::Hybrid,
+        .help = "shallow water on the terrain's grid that becomes PBF particles where it falls over a drop, and back "
+                "(docs/waterfalls.md)",
+        .create = [](const SceneDef& d, const Terrain& t, const Bvh& b) -> std::unique_ptr<Solver> {
+            return std::make_unique<HybridSolver>(t, b, d.hybrid, d.swe, d.spawn.center, d.pbf, d.collision, d.integrator);
+        },
+        .apply = edits<HybridSolver>([](HybridSolver& s, const SceneDef& d) { return s.set_params(d.hybrid, d.swe, d.spawn.center); }),
+        .spray_scale = [](const SceneDef& d) { return SprayScale{.spacing = d.pbf.spacing, .kernel_radius = d.pbf.kernel_radius}; },
+        .no_push = "hands its particles to the grid and back; push with pbf or springs",
+        .no_sculpt = "reads the bed once when it is made; sculpt with pbf or springs",
+    };
+}
+
 }  // namespace
 
 const SolverRegistry& SolverRegistry::builtin() {
@@ -114,9 +130,9 @@ const SolverRegistry& SolverRegistry::builtin() {
         SolverRegistry r;
         // kBuiltinSolverNames' order.
 #ifndef METARIVER_NO_BULLET
-        for (SolverEntry e : {springs_entry(), bullet_entry(), pbf_entry(), swe_entry()}) (void)r.add(std::move(e));
+        for (SolverEntry e : {springs_entry(), bullet_entry(), pbf_entry(), swe_entry(), hybrid_entry()}) (void)r.add(std::move(e));
 #else
-        for (SolverEntry e : {springs_entry(), pbf_entry(), swe_entry()}) (void)r.add(std::move(e));
+        for (SolverEntry e : {springs_entry(), pbf_entry(), swe_entry(), hybrid_entry()}) (void)r.add(std::move(e));
 #endif
         return r;
     }();

@@ -145,4 +145,46 @@ Heightmap procedural_bowl(int width, int height) {
     return m;
 }
 
+namespace {
+/// A straight channel along the rows (the hybrid solver's scenes): `bed(t)` at row fraction
+/// t in [0, 1] within `half_width(t)` columns of the centre, 1 (the banks) outside.
+template <class Bed, class Width>
+Heightmap channel_heightmap(int width, int height, Bed bed, Width half_width) {
+    Heightmap m = flat_heightmap(width, height, 1.0f);
+    const float cx = 0.5f * static_cast<float>(m.width - 1);
+    for (int r = 0; r < m.height; ++r) {
+        const float t = m.height > 1 ? static_cast<float>(r) / static_cast<float>(m.height - 1) : 0.0f;
+        for (int c = 0; c < m.width; ++c)
+            if (std::abs(static_cast<float>(c) - cx) <= half_width(t))
+                m.samples[static_cast<size_t>(r) * m.width + c] = std::clamp(bed(t), 0.0f, 1.0f);
+    }
+    return m;
+}
+}  // namespace
+
+Heightmap procedural_waterfall(int width, int height) {
+    // Upper channel 0.72 -> 0.62 at the lip (t = 0.7), a cliff to the plunge pool at 0.10
+    // (t in [0.4, 0.7)), a sill at 0.16 and the outlet channel down to 0.12 at row 0.
+    const float w = 0.5f * static_cast<float>(std::max(width, 2) - 1);
+    const auto bed = [](float t) {
+        if (t >= 0.7f) return 0.62f + 0.10f * (t - 0.7f) / 0.3f;
+        if (t >= 0.4f) return 0.10f;
+        return 0.12f + 0.04f * t / 0.4f;
+    };
+    const auto half = [w](float t) { return (t >= 0.7f ? 0.25f : t >= 0.4f ? 0.45f : 0.25f) * w; };
+    return channel_heightmap(width, height, bed, half);
+}
+
+Heightmap procedural_weir(int width, int height) {
+    // Upstream 0.55 -> 0.50 at the weir, the crest at 0.60 over t in [0.47, 0.53], the bed
+    // downstream 0.40 -> 0.37 at row 0.
+    const float w = 0.5f * static_cast<float>(std::max(width, 2) - 1);
+    const auto bed = [](float t) {
+        if (t >= 0.53f) return 0.50f + 0.05f * (t - 0.53f) / 0.47f;
+        if (t >= 0.47f) return 0.60f;
+        return 0.37f + 0.03f * t / 0.47f;
+    };
+    return channel_heightmap(width, height, bed, [w](float) { return 0.3f * w; });
+}
+
 }  // namespace mr

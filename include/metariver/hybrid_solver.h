@@ -1,0 +1,110 @@
+// metariver hybrid solver (`solver = "hybrid"`): the shallow-water grid (swe_solver.h) and
+// PBF particles (pbf_solver.h) on one terrain, after Chentanez & Mueller 2010. Where the
+// grid's water leaves the ground (the bed drops by more than hybrid.drop between a wet cell
+// and its neighbour in the flow's direction: a cliff or a weir's edge) the volume that flows
+// over the edge becomes PBF particles at the cell's velocity, taken from the cell in the same
+// frame; particles that land on the grid's water, or come to rest on the ground, go back
+// into the cell under them with their horizontal momentum. Both are drawn as one surface:
+// the grid as a heightfield mesh, the particles as metaballs (docs/waterfalls.md).
+#pragma once
+
+#include <metariver/core.h>
+#include <metariver/solver.h>
+#include <metariver/swe_solver.h>
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace mr {
+
+class Terrain;
+class Bvh;
+class PbfSolver;
+struct PbfDef;
+struct CollisionDef;
+struct IntegratorDef;
+
+/// [hybrid]: when grid water becomes particles and back (solver = "hybrid").
+struct HybridDef {
+    float drop = 1.0f;           ///< metres: a bed drop steeper than this at a wet cell's downstream face sheds particles
+    float min_depth = 0.02f;     ///< metres: shallower cells shed nothing
+    float min_speed = 0.05f;     ///< m/s: slower flow over the edge sheds nothing
+    float absorb_age = 0.2f;     ///< seconds: a particle younger than this is not absorbed (it leaves the edge first)
+    float absorb_depth = 0.01f;  ///< metres: a cell this deep or deeper takes a particle at or below its surface
+    float rest_speed = 0.2f;     ///< m/s: a particle slower than this on the ground is at rest
+    float rest_time = 1.0f;      ///< seconds at rest on the ground before it is absorbed wherever it lies
+    int max_particles = 200000;  ///< the particle budget; water that would exceed it stays on the grid
+};
+
+/// Water handed over since the solver was made: volumes in m^3, horizontal momenta in
+/// m^4/s (volume x velocity; x and z), counted on each side of the exchange.
+struct HybridStats {
+    double to_particles = 0.0;  ///< volume taken from cells into particles
+    double to_grid = 0.0;       ///< volume of particles absorbed into cells
+    double lost = 0.0;          ///< volume of particles that left the terrain (PBF's respawns)
+    uint64_t particles_made = 0, particles_absorbed = 0;
+    double cell_momentum_out[2] = {0.0, 0.0};       ///< taken from cells with that volume
+    double particle_momentum_in[2] = {0.0, 0.0};    ///< given to the new particles
+    double particle_momentum_out[2] = {0.0, 0.0};   ///< carried by the absorbed particles
+    double cell_momentum_in[2] = {0.0, 0.0};        ///< added to the cells
+};
+
+class HybridSolver final : public Solver {
+public:
+    /// The grid on the terrain's samples ([swe] keys; its edges open), the particles with
+    /// `pbf` (its spacing^3 is each particle's volume) and no source of their own.
+    HybridSolver(const Terrain& terrain, const Bvh& bvh, const HybridDef& def, const SweDef& swe, Vec3 resolved_source,
+                 const PbfDef& pbf, const CollisionDef& collision, const IntegratorDef& integrator);
+    ~HybridSolver() override;
+    HybridSolver(const HybridSolver&) = delete;
+    HybridSolver& operator=(const HybridSolver&) = delete;
+
+    /// Sheds water over the edges into particles, steps the grid, steps the particles,
+    /// absorbs the particles that landed.
+    void step_frame(float frame_dt) override;
+    const SolverCounters& counters() const override { return counters_; }
+    uint64_t frame() const override { return frame_; }
+    const Particles* water_particles() const override;
+    const HeightfieldWater* water_heightfield() const override;
+    std::vector<std::string> warnings() const override;
+
+    const HybridDef& def() const { return def_; }
+    const HybridStats& stats() const { return stats_; }
+    const SweSolver& grid() const { return *grid_; }
+    const PbfSolver& particles() const { return *pbf_; }
+    /// One particle's volume, m^3 (pbf.spacing^3).
+    double particle_volume() const { return particle_volume_; }
+    /// Grid volume + active particles x particle volume, m^3.
+    double total_volume() const;
+    /// Horizontal momentum of the grid plus that of the particles, m^4/s (x, z).
+    std::array<double, 2> total_momentum() const;
+    /// Live edit of [hybrid] and the grid's [swe] keys (false: a rebuild is needed).
+    bool set_params(const HybridDef& def, const SweDef& swe, Vec3 resolved_source);
+
+private:
+    void shed(float frame_dt);
+    void shed_cell(int i, int j, int dir, double volume, float frame_dt);
+    void absorb(float frame_dt);
+    /// Adds (volume > 0) or takes (volume < 0) water with horizontal momentum (m^4/s) at
+    /// cell (i, j) of the grid; returns the volume moved.
+    double exchange(int i, int j, double volume, double momentum_x, double momentum_z);
+
+    HybridDef def_;
+    std::unique_ptr<SweSolver> grid_;
+    std::unique_ptr<PbfSolver> pbf_;
+    HybridStats stats_;
+    SolverCounters counters_;
+    uint64_t frame_ = 0, respawned_seen_ = 0;
+    double particle_volume_ = 0.0;
+    std::vector<double> owed_;       ///< per cell: volume due over its edges not yet a whole particle
+    std::vector<uint8_t> sheds_;     ///< per cell: shed over an edge this frame (absorbs nothing)
+    std::vector<float> rest_time_;   ///< per particle id: seconds at rest on the ground
+    std::vector<Vec3> new_pos_, new_vel_;
+    uint64_t shed_count_ = 0;        ///< particles made so far (their placement's sequence)
+};
+
+}  // namespace mr

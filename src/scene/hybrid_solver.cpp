@@ -1,0 +1,224 @@
+// The "hybrid" solver (include/metariver/hybrid_solver.h): a SweSolver's grid and a
+// PbfSolver's particles on one terrain, with water handed between them each frame.
+#include <metariver/hybrid_solver.h>
+#include <metariver/pbf_solver.h>
+#include <metariver/terrain.h>
+
+#include "shallow_water.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace mr {
+
+namespace {
+
+// The four faces of a cell: +x, -x, +z, -z (core index i along x, j along z).
+constexpr int kDi[4] = {1, -1, 0, 0};
+constexpr int kDj[4] = {0, 0, 1, -1};
+
+/// The particles' own source: none. A rate of 1e-9 particles/s (one particle in 30
+/// years) keeps PBF's lattice source from emitting the budget (without a rate it owes the
+/// whole pool) and sends a particle that leaves the terrain back to the pool.
+SpawnDef no_source(Vec3 at, int budget) {
+    SpawnDef s;
+    s.count = std::max(budget, 1);
+    s.center = at;
+    s.half_extent = Vec3(0.5f);
+    s.interval = 0;
+    s.initial_velocity = Vec3(0.0f);
+    s.flow_rate = 1e-9f;
+    return s;
+}
+
+/// The fractional part of x (x >= 0): the quasi-random sequences of the placements.
+double frac(double x) { return x - std::floor(x); }
+
+}  // namespace
+
+HybridSolver::HybridSolver(const Terrain& terrain, const Bvh& bvh, const HybridDef& def, const SweDef& swe,
+                           Vec3 resolved_source, const PbfDef& pbf, const CollisionDef& collision,
+                           const IntegratorDef& integrator)
+    : def_(def) {
+    grid_ = std::make_unique<SweSolver>(terrain, swe, resolved_source, integrator.gravity);
+    pbf_ = std::make_unique<PbfSolver>(terrain, bvh, no_source(resolved_source, def.max_particles), pbf, collision,
+                                       integrator, 1u, SinkDef{});
+    particle_volume_ = double(pbf.spacing) * double(pbf.spacing) * double(pbf.spacing);
+    const swe::ShallowWater& core = grid_->core();
+    owed_.assign(static_cast<size_t>(core.nx()) * core.ny(), 0.0);
+    sheds_.assign(owed_.size(), 0);
+    rest_time_.assign(static_cast<size_t>(std::max(def.max_particles, 1)), 0.0f);
+    counters_ = pbf_->counters();
+}
+
+HybridSolver::~HybridSolver() = default;
+
+const Particles* HybridSolver::water_particles() const { return pbf_->water_particles(); }
+const HeightfieldWater* HybridSolver::water_heightfield() const { return grid_->water_heightfield(); }
+
+std::vector<std::string> HybridSolver::warnings() const { return grid_->warnings(); }
+
+bool HybridSolver::set_params(const HybridDef& def, const SweDef& swe, Vec3 resolved_source) {
+    if (def.max_particles != def_.max_particles) return false;
+    if (!grid_->set_params(swe, resolved_source)) return false;
+    def_ = def;
+    return true;
+}
+
+double HybridSolver::exchange(int i, int j, double volume, double momentum_x, double momentum_z) {
+    // Through set_state until the core's own exchange (counted in its balance) lands.
+    swe::ShallowWater& core = grid_->core();
+    const double area = core.dx() * core.dx();
+    const double h = core.depth(i, j);
+    const double moved = volume < 0.0 ? -std::min(-volume, h * area) : volume;
+    const double scale = volume != 0.0 ? moved / volume : 0.0;
+    core.set_state(i, j, h + moved / area, core.discharge_x(i, j) + scale * momentum_x / area,
+                   core.discharge_y(i, j) + scale * momentum_z / area);
+    return moved;
+}
+
+void HybridSolver::shed(float frame_dt) {
+    const swe::ShallowWater& core = grid_->core();
+    const double dx = core.dx(), area = dx * dx;
+    const size_t free = pbf_->water().pool.free();
+    size_t budget = free;
+    for (int j = 0; j < core.ny(); ++j)
+        for (int i = 0; i < core.nx(); ++i) {
+            const size_t c = static_cast<size_t>(j) * core.nx() + i;
+            const double h = core.depth(i, j);
+            if (h < def_.min_depth) {
+                owed_[c] = 0.0;
+                sheds_[c] = 0;
+                continue;
+            }
+            const double vel[2] = {core.discharge_x(i, j) / h, core.discharge_y(i, j) / h};
+            bool edge = false;
+            for (int d = 0; d < 4; ++d) {
+                const int ni = i + kDi[d], nj = j + kDj[d];
+                if (ni < 0 || nj < 0 || ni >= core.nx() || nj >= core.ny()) continue;
+                const double along = kDi[d] != 0 ? kDi[d] * vel[0] : kDj[d] * vel[1];
+                if (along < def_.min_speed || core.bed(i, j) - core.bed(ni, nj) <= def_.drop) continue;
+                edge = true;
+                owed_[c] += along * h * dx * frame_dt;  // what flows over the face this frame
+                const double whole = std::floor(std::min(owed_[c], core.depth(i, j) * area) / particle_volume_);
+                const size_t n = std::min(static_cast<size_t>(std::max(whole, 0.0)), budget);
+                if (n == 0) continue;
+                owed_[c] -= double(n) * particle_volume_;
+                budget -= n;
+                shed_cell(i, j, d, double(n), frame_dt);
+            }
+            if (!edge) owed_[c] = 0.0;
+            sheds_[c] = edge ? 1 : 0;
+        }
+}
+
+void HybridSolver::shed_cell(int i, int j, int dir, double count, float frame_dt) {
+    swe::ShallowWater& core = grid_->core();
+    const HeightfieldWater& w = *grid_->water_heightfield();
+    const double h = core.depth(i, j), dx = core.dx();
+    const double u = core.discharge_x(i, j) / h, v = core.discharge_y(i, j) / h;
+    const double along_speed = kDi[dir] != 0 ? kDi[dir] * u : kDj[dir] * v;
+    const float spacing = static_cast<float>(std::cbrt(particle_volume_));
+    const Vec3 d(float(kDi[dir]), 0.0f, float(kDj[dir])), t(-d.z, 0.0f, d.x);
+    const Vec3 base(w.origin.x + float(i) * w.spacing, float(core.bed(i, j)), w.origin.z + float(j) * w.spacing);
+    const size_t n = static_cast<size_t>(count);
+    new_pos_.clear();
+    new_vel_.clear();
+    double given[2] = {0.0, 0.0};
+    for (size_t k = 0; k < n; ++k) {
+        // Spread over the face (across, R2 sequence) and the water's height, and along the
+        // flow by how far it went in the part of the frame since it was shed.
+        const double s = double(shed_count_++);
+        const double across = (frac(0.5 + s * 0.7548776662) - 0.5) * 0.9 * dx;
+        const double up = frac(0.5 + s * 0.5698402910) * std::max(h - spacing, 0.0);
+        const double ahead = 0.15 * dx + along_speed * frame_dt * (double(k) + 0.5) / double(n);
+        new_pos_.push_back(base + d * float(ahead) + t * float(across) + Vec3(0.0f, 0.5f * spacing + float(up), 0.0f));
+        new_vel_.emplace_back(float(u), 0.0f, float(v));
+        given[0] += particle_volume_ * double(new_vel_.back().x);
+        given[1] += particle_volume_ * double(new_vel_.back().z);
+    }
+    const double volume = count * particle_volume_;
+    const double moved = -exchange(i, j, -volume, -volume * u, -volume * v);
+    pbf_->place(new_pos_, new_vel_);
+    stats_.to_particles += moved;
+    stats_.particles_made += n;
+    stats_.cell_momentum_out[0] += volume * u;
+    stats_.cell_momentum_out[1] += volume * v;
+    stats_.particle_momentum_in[0] += given[0];
+    stats_.particle_momentum_in[1] += given[1];
+}
+
+void HybridSolver::absorb(float frame_dt) {
+    swe::ShallowWater& core = grid_->core();
+    const HeightfieldWater& w = *grid_->water_heightfield();
+    ParticlePool& pool = pbf_->water().pool;
+    Particles& p = pool.particles;
+    const float spacing = static_cast<float>(std::cbrt(particle_volume_));
+    for (size_t k = pool.next_to_activate; k-- > 0;) {
+        const Vec3 x = p.position[k], vel = p.velocity[k];
+        const int i = static_cast<int>(std::lround((x.x - w.origin.x) / w.spacing));
+        const int j = static_cast<int>(std::lround((x.z - w.origin.z) / w.spacing));
+        if (i < 0 || j < 0 || i >= core.nx() || j >= core.ny() || !std::isfinite(x.y)) continue;
+        const double h = core.depth(i, j), ground = core.bed(i, j);
+        const float age = float(pool.frame - p.birth_frame[k]) * frame_dt;
+        float& rest = rest_time_[p.id[k] % rest_time_.size()];
+        const bool on_ground = x.y <= ground + h + 2.0f * spacing;
+        rest = on_ground && glm::length(vel) < def_.rest_speed ? rest + frame_dt : 0.0f;
+        const bool landed = age >= def_.absorb_age && h >= def_.absorb_depth && x.y <= ground + h + 0.5f * spacing &&
+                            !sheds_[static_cast<size_t>(j) * core.nx() + i];
+        if (!landed && rest < def_.rest_time) continue;
+        const double m[2] = {particle_volume_ * double(vel.x), particle_volume_ * double(vel.z)};
+        exchange(i, j, particle_volume_, m[0], m[1]);
+        stats_.to_grid += particle_volume_;
+        ++stats_.particles_absorbed;
+        stats_.particle_momentum_out[0] += m[0];
+        stats_.particle_momentum_out[1] += m[1];
+        stats_.cell_momentum_in[0] += m[0];
+        stats_.cell_momentum_in[1] += m[1];
+        rest = 0.0f;
+        pbf_->deactivate(k);
+    }
+}
+
+void HybridSolver::step_frame(float frame_dt) {
+    const bool ok = frame_dt > 0.0f && std::isfinite(frame_dt);
+    if (ok) shed(frame_dt);
+    grid_->step_frame(frame_dt);
+    pbf_->step_frame(frame_dt);
+    if (ok) absorb(frame_dt);
+    grid_->refresh();
+    const SolverCounters& c = pbf_->counters();
+    stats_.lost += double(c.respawned - respawned_seen_) * particle_volume_;
+    respawned_seen_ = c.respawned;
+    counters_ = c;
+    counters_.substeps = grid_->counters().substeps;
+    counters_.cell_updates = grid_->counters().cell_updates;
+    counters_.max_speed = std::max(c.max_speed, grid_->counters().max_speed);
+    ++frame_;
+}
+
+double HybridSolver::total_volume() const {
+    return grid_->core().volume() + double(pbf_->particles().active_count()) * particle_volume_;
+}
+
+std::array<double, 2> HybridSolver::total_momentum() const {
+    const swe::ShallowWater& core = grid_->core();
+    const double area = core.dx() * core.dx();
+    std::array<double, 2> m{0.0, 0.0};
+    for (int j = 0; j < core.ny(); ++j)
+        for (int i = 0; i < core.nx(); ++i) {
+            m[0] += core.discharge_x(i, j) * area;
+            m[1] += core.discharge_y(i, j) * area;
+        }
+    const Particles& p = pbf_->particles();
+    for (size_t k = 0; k < p.size(); ++k)
+        if (p.active[k]) {
+            m[0] += particle_volume_ * double(p.velocity[k].x);
+            m[1] += particle_volume_ * double(p.velocity[k].z);
+        }
+    return m;
+}
+
+}  // namespace mr
