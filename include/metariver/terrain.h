@@ -64,10 +64,10 @@ Heightmap procedural_strict(int width, int height);
 Heightmap procedural_bowl(int width, int height);
 /// A river over a cliff: a channel from the top rows down to a lip at 70 % of the rows,
 /// a drop of 0.52 of the height range into a plunge pool, and a channel out over row 0;
-/// banks at 1 on both sides (the hybrid solver's waterfall scene).
+/// banks 0.15 above the bed on both sides (the hybrid solver's waterfall scene).
 Heightmap procedural_waterfall(int width, int height);
 /// A channel with a weir across it at half its length: the crest 0.1 of the height range
-/// above the bed upstream, 0.2 above the bed downstream; banks at 1.
+/// above the bed upstream, 0.2 above the bed downstream; banks 0.15 above the bed.
 Heightmap procedural_weir(int width, int height);
 
 /// Drainage conditioning of a terrain before its mesh is built (Barnes et al. 2014,

@@ -208,9 +208,10 @@ SceneDef hybrid_base(std::string name, TerrainSource kind, float discharge) {
     d.swe.source_center = Vec3(19.5f, 0.0f, 77.0f);
     d.pbf = PbfDef{.spacing = 0.2f, .kernel_radius = 0.4f};
     d.pbf.auto_spacing = false;
-    d.field.radius = 0.4f;
+    d.field.radius = 0.7f;  // 3.5 spacings: the falling sheet's particles spread apart and still join
+    d.field.threshold = 0.3f;
     d.field.resolution = 7.5f;
-    d.field.bounds_offset = 0.4f;
+    d.field.bounds_offset = 0.7f;
     return d;
 }
 

@@ -147,16 +147,18 @@ Heightmap procedural_bowl(int width, int height) {
 
 namespace {
 /// A straight channel along the rows (the hybrid solver's scenes): `bed(t)` at row fraction
-/// t in [0, 1] within `half_width(t)` columns of the centre, 1 (the banks) outside.
+/// t in [0, 1] within `half_width(t)` columns of the centre, banks 0.15 higher outside.
 template <class Bed, class Width>
 Heightmap channel_heightmap(int width, int height, Bed bed, Width half_width) {
     Heightmap m = flat_heightmap(width, height, 1.0f);
     const float cx = 0.5f * static_cast<float>(m.width - 1);
     for (int r = 0; r < m.height; ++r) {
         const float t = m.height > 1 ? static_cast<float>(r) / static_cast<float>(m.height - 1) : 0.0f;
-        for (int c = 0; c < m.width; ++c)
-            if (std::abs(static_cast<float>(c) - cx) <= half_width(t))
-                m.samples[static_cast<size_t>(r) * m.width + c] = std::clamp(bed(t), 0.0f, 1.0f);
+        const float b = bed(t);
+        for (int c = 0; c < m.width; ++c) {
+            const bool inside = std::abs(static_cast<float>(c) - cx) <= half_width(t);
+            m.samples[static_cast<size_t>(r) * m.width + c] = std::clamp(inside ? b : b + 0.15f, 0.0f, 1.0f);
+        }
     }
     return m;
 }
