@@ -4,6 +4,7 @@
 #include "driver.h"
 
 #include <metariver/foam.h>
+#include <metariver/hybrid_solver.h>
 #include <metariver/io.h>
 
 #include <fmt/format.h>
@@ -167,6 +168,42 @@ std::string swe_summary(const Simulation& sim, const RiverMeter& m, long long fr
                        j["cell_updates_per_s"].get<double>() / 1e6);
 }
 
+/// The hybrid solver's hand-over (solver = "hybrid"); null for other solvers. Volumes in m^3
+/// since the start and per simulated second; the total is the grid's volume plus the active
+/// particles', the grid's balance error includes what was exchanged.
+json hybrid_json(const Simulation& sim, long long frames, double dt) {
+    const auto* h = dynamic_cast<const HybridSolver*>(&sim.solver());
+    if (!h) return nullptr;
+    const HybridStats& st = h->stats();
+    const double seconds = double(frames) * dt;
+    const auto per_s = [&](double v) { return seconds > 0.0 ? v / seconds : 0.0; };
+    return {{"to_particles_m3", st.to_particles},
+            {"to_grid_m3", st.to_grid},
+            {"to_particles_m3_per_s", per_s(st.to_particles)},
+            {"to_grid_m3_per_s", per_s(st.to_grid)},
+            {"lost_m3", st.lost},
+            {"particles_made", st.particles_made},
+            {"particles_absorbed", st.particles_absorbed},
+            {"particle_volume_m3", h->particle_volume()},
+            {"total_volume_m3", h->total_volume()},
+            {"grid_balance_error_m3", h->grid_balance_error()},
+            {"momentum_m4_s", {{"cells_out", {st.cell_momentum_out[0], st.cell_momentum_out[1]}},
+                               {"particles_in", {st.particle_momentum_in[0], st.particle_momentum_in[1]}},
+                               {"particles_out", {st.particle_momentum_out[0], st.particle_momentum_out[1]}},
+                               {"cells_in", {st.cell_momentum_in[0], st.cell_momentum_in[1]}}}}};
+}
+
+/// run's line for solver = "hybrid" (from hybrid_json): empty for other solvers.
+std::string hybrid_summary(const Simulation& sim, long long frames) {
+    const json j = hybrid_json(sim, frames, 0.0);
+    if (j.is_null()) return {};
+    return fmt::format("\nhybrid: {:.3f} m^3 to particles ({} particles), {:.3f} m^3 to the grid ({} particles), "
+                       "{:.4f} m^3 lost off the terrain; total {:.4g} m^3 (grid balance error {:.2e} m^3)",
+                       j["to_particles_m3"].get<double>(), j["particles_made"].get<uint64_t>(), j["to_grid_m3"].get<double>(),
+                       j["particles_absorbed"].get<uint64_t>(), j["lost_m3"].get<double>(),
+                       j["total_volume_m3"].get<double>(), j["grid_balance_error_m3"].get<double>());
+}
+
 }  // namespace
 
 json bodies_json(std::span<const BodyState> bodies, uint64_t inside) {
@@ -261,6 +298,7 @@ json run_stats_json(const Simulation& sim, const RiverMeter& meter, const Checkp
     j["foam"] = foam_json(sim);
     j["bodies"] = bodies_json(sim.view().bodies, c.inside_bodies);
     j["swe"] = swe_json(sim, meter, frames);
+    j["hybrid"] = hybrid_json(sim, frames, dt);
     return j;
 }
 
@@ -287,7 +325,7 @@ std::string run_summary(const Simulation& sim, const RiverMeter& meter, const Ch
                        c.respawned, fs.rate, fs.steady ? "steady" : "not steady", os.main.rate,
                        outflow_over_inflow(sim, os), os.main.first_s, 100.0 * meter.channel_coverage(),
                        100.0 * meter.wet_fraction(), 100.0 * meter.spray_fraction(), final_speed.p95, with_bodies, tot.median,
-                       tot.p95) + swe_summary(sim, meter, frames);
+                       tot.p95) + swe_summary(sim, meter, frames) + hybrid_summary(sim, frames);
 }
 
 }  // namespace mr::app

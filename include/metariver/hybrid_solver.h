@@ -82,6 +82,11 @@ public:
     double total_volume() const;
     /// Horizontal momentum of the grid plus that of the particles, m^4/s (x, z).
     std::array<double, 2> total_momentum() const;
+    /// The grid's mass balance error, m^3 (initial + inflow + rain + exchanged - outflow -
+    /// sunk - stored: round-off).
+    double grid_balance_error() const;
+    /// Volume that left the grid through the terrain's open edges, m^3.
+    double grid_outflow() const;
     /// Live edit of [hybrid] and the grid's [swe] keys (false: a rebuild is needed).
     bool set_params(const HybridDef& def, const SweDef& swe, Vec3 resolved_source);
 

@@ -68,15 +68,8 @@ bool HybridSolver::set_params(const HybridDef& def, const SweDef& swe, Vec3 reso
 }
 
 double HybridSolver::exchange(int i, int j, double volume, double momentum_x, double momentum_z) {
-    // Through set_state until the core's own exchange (counted in its balance) lands.
-    swe::ShallowWater& core = grid_->core();
-    const double area = core.dx() * core.dx();
-    const double h = core.depth(i, j);
-    const double moved = volume < 0.0 ? -std::min(-volume, h * area) : volume;
-    const double scale = volume != 0.0 ? moved / volume : 0.0;
-    core.set_state(i, j, h + moved / area, core.discharge_x(i, j) + scale * momentum_x / area,
-                   core.discharge_y(i, j) + scale * momentum_z / area);
-    return moved;
+    // The core's own exchange: counted in its balance (MassBalance::exchanged).
+    return grid_->core().exchange(i, j, volume, momentum_x, momentum_z);
 }
 
 void HybridSolver::shed(float frame_dt) {
@@ -144,8 +137,8 @@ void HybridSolver::shed_cell(int i, int j, int dir, double count, float frame_dt
     pbf_->place(new_pos_, new_vel_);
     stats_.to_particles += moved;
     stats_.particles_made += n;
-    stats_.cell_momentum_out[0] += volume * u;
-    stats_.cell_momentum_out[1] += volume * v;
+    stats_.cell_momentum_out[0] += moved * u;
+    stats_.cell_momentum_out[1] += moved * v;
     stats_.particle_momentum_in[0] += given[0];
     stats_.particle_momentum_in[1] += given[1];
 }
@@ -168,7 +161,11 @@ void HybridSolver::absorb(float frame_dt) {
         rest = on_ground && glm::length(vel) < def_.rest_speed ? rest + frame_dt : 0.0f;
         const bool landed = age >= def_.absorb_age && h >= def_.absorb_depth && x.y <= ground + h + 0.5f * spacing &&
                             !sheds_[static_cast<size_t>(j) * core.nx() + i];
-        if (!landed && rest < def_.rest_time) continue;
+        // Particles about to leave the terrain (the outer ring of cells, or under the bed)
+        // go into the cell under them instead of being lost: the grid's open edges count
+        // what leaves as outflow.
+        const bool leaving = i == 0 || j == 0 || i == core.nx() - 1 || j == core.ny() - 1 || x.y < ground - spacing;
+        if (!landed && !leaving && rest < def_.rest_time) continue;
         const double m[2] = {particle_volume_ * double(vel.x), particle_volume_ * double(vel.z)};
         exchange(i, j, particle_volume_, m[0], m[1]);
         stats_.to_grid += particle_volume_;
@@ -198,6 +195,10 @@ void HybridSolver::step_frame(float frame_dt) {
     counters_.max_speed = std::max(c.max_speed, grid_->counters().max_speed);
     ++frame_;
 }
+
+double HybridSolver::grid_balance_error() const { return grid_->core().balance().error(); }
+
+double HybridSolver::grid_outflow() const { return grid_->core().balance().outflow; }
 
 double HybridSolver::total_volume() const {
     return grid_->core().volume() + double(pbf_->particles().active_count()) * particle_volume_;
