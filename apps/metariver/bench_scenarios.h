@@ -68,5 +68,8 @@ ScenarioResult bench_export(int particles, int warmup, int frames);
 /// The default river after `warmup` frames, without bodies and with 20 logs dropped on its
 /// water (bench_bodies.cpp): two rows, the second with its frame time's ratio to the first.
 void bench_river_bodies(int warmup, int frames, std::vector<ScenarioResult>& out);
+/// The waterfall preset with the grid alone and with the hybrid solver, and the default
+/// river's cost per particle (bench_waterfall.cpp): three rows, the hybrid's with its bound.
+void bench_waterfall(int warmup, int frames, std::vector<ScenarioResult>& out);
 
 }  // namespace mr::app

@@ -196,7 +196,7 @@ struct BenchPlan {
 
 /// --scenario into plan.chosen; the one-line error names the known scenarios.
 Status parse_scenarios(const BenchOptions& o, BenchPlan& plan) {
-    const std::vector<std::string> known = {"paper", "river", "pbf", "w1", "w2", "w3", "export", "maps", "bodies"};
+    const std::vector<std::string> known = {"paper", "river", "pbf", "w1", "w2", "w3", "export", "maps", "bodies", "waterfall"};
     if (o.scenario.empty() && !o.heightmaps.empty()) plan.chosen.push_back("maps");  // --heightmap alone: just those
     for (std::string rest = o.scenario; !rest.empty();) {
         const size_t comma = rest.find(',');
@@ -366,6 +366,7 @@ std::vector<ScenarioResult> run_scenarios(const BenchOptions& o, const BenchPlan
                                            o.frames ? o.frames : 120));
     if (plan.want("export")) results.push_back(bench_export(o.particles, 600, o.frames ? o.frames : 30));
     if (plan.want("bodies")) bench_river_bodies(o.warmup >= 0 ? o.warmup : 600, o.frames ? o.frames : 300, results);
+    if (plan.want("waterfall")) bench_waterfall(o.warmup >= 0 ? o.warmup : 300, o.frames ? o.frames : 300, results);
     return results;
 }
 
@@ -437,7 +438,7 @@ void register_bench(CLI::App& app, std::function<int()>& action) {
     auto o = std::make_shared<BenchOptions>();
     CLI::App* cmd = app.add_subcommand("bench", "time every stage on the project's workloads (and peers with --peers)");
     cmd->add_option("--scenario", o->scenario,
-                    "one or more (comma-separated) of paper, river, pbf, w1, w2, w3, export, maps, bodies (default: all but maps; "
+                    "one or more (comma-separated) of paper, river, pbf, w1, w2, w3, export, maps, bodies, waterfall (default: all but maps; "
                     "with --heightmap: maps)");
     cmd->add_option("--balls", o->balls, "W1: number of balls");
     cmd->add_option("--res", o->res, "W1: samples per axis");

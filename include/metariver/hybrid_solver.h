@@ -37,7 +37,9 @@ struct HybridDef {
     float absorb_depth = 0.01f;  ///< metres: a cell this deep or deeper takes a particle at or below its surface
     float rest_speed = 0.2f;     ///< m/s: a particle slower than this on the ground is at rest
     float rest_time = 1.0f;      ///< seconds at rest on the ground before it is absorbed wherever it lies
-    int max_particles = 200000;  ///< the particle budget; water that would exceed it stays on the grid
+    /// The particle budget; water that would exceed it stays on the grid. PBF steps every
+    /// slot of it (sorting, sleeping), active or not: keep it near what the falls hold.
+    int max_particles = 5000;
 };
 
 /// Water handed over since the solver was made: volumes in m^3, horizontal momenta in

@@ -148,6 +148,7 @@ TEST(SceneKeys, EveryKeyInTheTableIsReadIntoItsField) {
         {{"", {{"solver", "\"springs\""}}}},
         {{"", {{"solver", "\"bullet\""}}}},
         {{"", {{"solver", "\"swe\""}}}},
+        {{"", {{"solver", "\"hybrid\""}}}},
         {{"sink", {{"kind", "\"box\""}, {"min", "[-10, -10, -10]"}, {"max", "[10, 10, 10]"}}}},
         {{"terrain", {{"source", "\"file\""}, {"heightmap", "\"map.png\""}}}},
         {{"surface", {{"method", "\"taubin\""}}}},
