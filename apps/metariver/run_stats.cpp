@@ -138,11 +138,30 @@ json swe_json(const Simulation& sim, const RiverMeter& m, long long frames) {
     const double in = b.initial + b.inflow + b.rain;
     const SolverCounters& c = sim.counters();
     const double seconds = m.simulate_ms_total() / 1000.0;
+    // The river's columns: over the second half, what left (edges and sinks) over what came
+    // in; over the last quarter, the storage's change over what came in (steady: <= 1 %).
+    const auto came_in = [&](const SweBalance& from) { return b.inflow - from.inflow + b.rain - from.rain; };
+    const double in_half = came_in(m.swe_half().balance), in_quarter = came_in(m.swe_quarter().balance);
+    const double storage = in_quarter > 0.0 ? std::abs(b.stored - m.swe_quarter().balance.stored) / in_quarter : 0.0;
+    const double minutes = swe->simulated_s() / 60.0;
+    const SweInitReport& init = swe->init_report();
     return {{"grid", {{"rows", w.rows}, {"columns", w.columns}, {"spacing_m", w.spacing}}},
+            {"discharge_m3_s", swe->discharge()},
+            {"time_scale", swe->time_scale()},
+            {"simulated_s", swe->simulated_s()},
+            {"channel_length_m", swe->channel_length()},
+            {"channel_slope", swe->channel_slope()},
+            {"outflow_over_inflow", in_half > 0.0 ? (b.outflow - m.swe_half().balance.outflow + b.sunk - m.swe_half().balance.sunk) / in_half : 0.0},
+            {"storage_change_over_inflow", storage},
+            {"steady", in_quarter > 0.0 && storage <= 0.01},
+            {"balance_error_relative_per_min", in > 0.0 && minutes > 0.0 ? std::abs(b.error()) / in / minutes : 0.0},
+            {"init", {{"mode", std::string(to_string(swe->def().init))}, {"converged", init.converged},
+                      {"simulated_s", init.simulated_s}, {"wall_ms", init.wall_ms}, {"substeps", init.substeps},
+                      {"outflow_over_inflow", init.outflow_over_inflow}}},
             {"wet_cells", wet},
             {"wet_fraction", w.size() ? double(wet) / double(w.size()) : 0.0},
             {"volume_m3", {{"initial", b.initial}, {"inflow", b.inflow}, {"rain", b.rain},
-                           {"outflow", b.outflow}, {"stored", b.stored}}},
+                           {"outflow", b.outflow}, {"sunk", b.sunk}, {"stored", b.stored}}},
             {"balance_error_m3", b.error()},
             {"balance_error_relative", in > 0.0 ? std::abs(b.error()) / in : 0.0},
             {"substeps", c.substeps},
@@ -158,14 +177,20 @@ std::string swe_summary(const Simulation& sim, const RiverMeter& m, long long fr
     const json j = swe_json(sim, m, frames);
     if (j.is_null()) return {};
     const json& v = j["volume_m3"];
+    const json& init = j["init"];
+    const std::string spun = init["mode"] == "steady"
+                                 ? fmt::format(", spun up {:.4g} s before frame 0 in {:.0f} ms ({})", init["simulated_s"].get<double>(),
+                                               init["wall_ms"].get<double>(), init["converged"].get<bool>() ? "steady" : "at its cap")
+                                 : std::string();
     return fmt::format("\nswe: {} wet cells ({:.1f} %), stored {:.4g} m^3 of initial {:.4g} + inflow {:.4g} + rain {:.4g} "
-                       "- outflow {:.4g}, balance error {:.2e} of what came in, {:.2f} substeps a frame (max {}), "
-                       "{:.2f} M cell updates/s",
+                       "- outflow {:.4g} - sunk {:.4g}, balance error {:.2e} of what came in, {:.2f} substeps a frame (max {}), "
+                       "{:.2f} M cell updates/s, {:.3g} m^3/s at the source, time scale {:.4g}, channel coverage {:.0f} %{}",
                        j["wet_cells"].get<long long>(), 100.0 * j["wet_fraction"].get<double>(),
                        v["stored"].get<double>(), v["initial"].get<double>(), v["inflow"].get<double>(),
-                       v["rain"].get<double>(), v["outflow"].get<double>(), j["balance_error_relative"].get<double>(),
+                       v["rain"].get<double>(), v["outflow"].get<double>(), v["sunk"].get<double>(), j["balance_error_relative"].get<double>(),
                        j["substeps_per_frame"]["mean"].get<double>(), j["substeps_per_frame"]["max"].get<uint64_t>(),
-                       j["cell_updates_per_s"].get<double>() / 1e6);
+                       j["cell_updates_per_s"].get<double>() / 1e6, j["discharge_m3_s"].get<double>(),
+                       j["time_scale"].get<double>(), 100.0 * m.channel_coverage(), spun);
 }
 
 /// The hybrid solver's hand-over (solver = "hybrid"); null for other solvers. Volumes in m^3
@@ -240,8 +265,11 @@ void RiverMeter::record(const Simulation& sim, long long f, double time_s) {
     max_speed_ = std::max(max_speed_, sim.counters().max_speed);
     density_max_ = std::max(density_max_, sim.counters().density_error_max);
     simulate_ms_total_ += sim.last_timings().simulate_ms;
-    if (const auto* swe = dynamic_cast<const SweSolver*>(&sim.solver()))
+    if (const auto* swe = dynamic_cast<const SweSolver*>(&sim.solver())) {
         max_substeps_ = std::max(max_substeps_, swe->last_substeps());
+        if (f == frames_ / 2 - 1) swe_half_ = {swe->balance(), swe->simulated_s()};
+        if (f == 3 * frames_ / 4 - 1) swe_quarter_ = {swe->balance(), swe->simulated_s()};
+    }
     const bool sampled = 2 * f >= frames_ && f % 10 == 0;
     if (sampled) {
         wet_sum_ += sim.wet_fraction();

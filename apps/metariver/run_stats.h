@@ -38,6 +38,14 @@ public:
     double simulate_ms_total() const { return simulate_ms_total_; }
     /// Time steps of the busiest frame (a heightfield solver's CFL substeps; 0 for others).
     uint64_t max_substeps() const { return max_substeps_; }
+    /// swe: the balance and simulated time at the start of the second half and of the
+    /// last quarter of the run (the rates of outflow over inflow and of storage).
+    struct SweMark {
+        SweBalance balance;
+        double time_s = 0.0;
+    };
+    const SweMark& swe_half() const { return swe_half_; }
+    const SweMark& swe_quarter() const { return swe_quarter_; }
 
 private:
     long long frames_;
@@ -48,6 +56,7 @@ private:
     float max_speed_ = 0.0f, density_max_ = 0.0f;
     double simulate_ms_total_ = 0.0;
     uint64_t max_substeps_ = 0;
+    SweMark swe_half_, swe_quarter_;
 };
 
 /// The bodies after the last frame (bodies.h, from SceneView::bodies): count, mean

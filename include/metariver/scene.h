@@ -328,6 +328,9 @@ public:
     size_t cells() const { return ground_.size(); }
     /// Covered cells / cells (0 for an empty path).
     float measure(std::span<const Vec3> positions, std::span<const uint8_t> active) const;
+    /// The same for a heightfield solver's water (its grid is the terrain's): a path cell
+    /// is covered when a cell deeper than `wet_depth` lies within the radius.
+    float measure(const HeightfieldWater& water, float wet_depth) const;
 
 private:
     int rows_ = 0, columns_ = 0;

@@ -13,11 +13,52 @@
 #include <cmath>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace mr {
 
 class Terrain;  // terrain.h
+
+/// swe.discharge, swe.time_scale, swe.init_max_time = "auto" (resolved by the solver).
+inline constexpr float kSweAuto = -1.0f;
+/// swe.discharge = "auto": the discharge of uniform (Manning) flow kSweRiverDepth deep over
+/// one cell's width on the main channel's mean slope (a river at least a cell wide, at any scale).
+inline constexpr float kSweRiverDepth = 0.3f;  ///< metres
+/// The least slope that rule and the steady spin-up take (a flat map).
+inline constexpr float kSweLeastSlope = 1e-3f;
+/// swe.init_max_time = "auto": this many times the main channel's length over 0.5 m/s.
+inline constexpr float kSweInitCrossings = 4.0f;
+/// The steady spin-up stops after this many substeps whatever its time cap (a warning).
+inline constexpr uint64_t kSweInitMaxSubsteps = 400000;
+
+/// How the water starts (swe.init).
+enum class SweInit {
+    Dry,     ///< the map dry (or the lake of initial_level)
+    Steady,  ///< spun up before frame 0 until what leaves matches what comes in
+};
+std::string_view to_string(SweInit i);
+
+/// [[swe.sources]]: a discharge at a point or spread evenly over the cells of a line.
+enum class SweSourceShape { Point, Line };
+std::string_view to_string(SweSourceShape s);
+/// Most entries of [[swe.sources]] and of [[swe.sinks]].
+inline constexpr size_t kMaxSweSources = 64;
+struct SweSource {
+    SweSourceShape shape = SweSourceShape::Point;
+    Vec3 start{0.0f};  ///< metres (x, z; y unused): the point, or the line's first end
+    Vec3 end{0.0f};    ///< the line's other end (Line only)
+    float discharge = 1.0f;  ///< m^3/s
+    bool operator==(const SweSource&) const = default;
+};
+/// [[swe.sinks]]: removes up to `discharge` m^3/s from the cells within `radius` of
+/// `center` (0: the one cell under it), never more than they hold.
+struct SweSink {
+    Vec3 center{0.0f};
+    float radius = 0.0f;
+    float discharge = 1.0f;
+    bool operator==(const SweSink&) const = default;
+};
 
 /// [swe]: the shallow-water solver's keys (solver = "swe").
 struct SweDef {
@@ -25,12 +66,29 @@ struct SweDef {
     float cfl = 0.45f;             ///< Courant number of the adaptive time step, (0, 0.5]
     float dry_depth = 1e-3f;       ///< metres: shallower water has no velocity
     bool second_order = true;      ///< MUSCL + Heun (false: first order, half the cost)
-    float discharge = 0.0f;        ///< the source, m^3/s at source_center; 0: none
+    /// The main source, m^3/s at source_center; 0: none; kSweAuto: the river rule above
+    /// (kSweRiverDepth) unless the scene has initial_level or [[swe.sources]] (then 0).
+    float discharge = kSweAuto;
     /// Metres (x, z; y unused): where the source pours. auto_source: the particle source's
     /// resolved centre (particles.spawn_center, the head of the main channel by default).
     Vec3 source_center{0.0f};
     bool auto_source = true;
-    float rain = 0.0f;             ///< mm/h over the whole map
+    float rain = 0.0f;             ///< mm/h over the whole map (or the circle below)
+    /// Metres (x, z): with rain_radius > 0, rain falls only within rain_radius of it.
+    Vec3 rain_center{0.0f};
+    float rain_radius = 0.0f;      ///< metres; 0: the whole map
+    /// Simulated seconds per second of frame time; kSweAuto: area_scale (1 at 1 m per
+    /// sample; a km-cell DEM runs hours a second).
+    float time_scale = 1.0f;
+    SweInit init = SweInit::Dry;
+    /// Steady spin-up: stops when |outflow + sunk - inflow| over a window is below this share
+    /// of the inflow (and the storage's change too).
+    float init_tolerance = 0.02f;
+    /// Steady spin-up: simulated seconds at most; kSweAuto: kSweInitCrossings x the main
+    /// channel's length over 0.5 m/s.
+    float init_max_time = kSweAuto;
+    std::vector<SweSource> sources;  ///< [[swe.sources]]
+    std::vector<SweSink> sinks;      ///< [[swe.sinks]]
     /// Metres: a still lake up to this level at the start (every sample below it wet);
     /// NaN: the map starts dry.
     float initial_level = std::nanf("");
@@ -41,13 +99,25 @@ struct SweDef {
 
 /// Volumes in m^3 since the solver was made.
 struct SweBalance {
-    double initial = 0.0, inflow = 0.0, rain = 0.0, outflow = 0.0, stored = 0.0;
-    /// initial + inflow + rain - outflow - stored (round-off).
-    double error() const { return initial + inflow + rain - outflow - stored; }
+    double initial = 0.0, inflow = 0.0, rain = 0.0, outflow = 0.0, sunk = 0.0, stored = 0.0;
+    double exchanged = 0.0;  ///< net volume other solvers put in (the hybrid), negative: taken
+    /// initial + inflow + rain + exchanged - outflow - sunk - stored (round-off).
+    double error() const { return initial + inflow + rain + exchanged - outflow - sunk - stored; }
+};
+
+/// What the steady spin-up (swe.init = "steady") did before frame 0.
+struct SweInitReport {
+    bool ran = false;
+    bool converged = false;       ///< within init_tolerance before the cap
+    double simulated_s = 0.0;     ///< simulated seconds spun up
+    double wall_ms = 0.0;         ///< what it cost
+    uint64_t substeps = 0;
+    double outflow_over_inflow = 0.0;  ///< (outflow + sunk) / (inflow + rain) over the last window
 };
 
 namespace swe {
 class ShallowWater;
+struct PointSource;
 }
 
 class SweSolver final : public Solver {
@@ -66,8 +136,9 @@ public:
     const HeightfieldWater* water_heightfield() const override { return &water_; }
     std::vector<std::string> warnings() const override;
 
-    /// Live edit of friction, CFL, dry depth, order, discharge and rain (the source's
-    /// place and the initial lake need a new solver: false, nothing changed).
+    /// Live edit of friction, CFL, dry depth, order, discharge, rain, the time scale, the
+    /// sources and sinks (the initial lake and swe.init need a new solver: false, nothing
+    /// changed).
     bool set_params(const SweDef& def, Vec3 resolved_source);
     SweBalance balance() const;
     const SweDef& def() const { return def_; }
@@ -79,18 +150,34 @@ public:
     const swe::ShallowWater& core() const { return *core_; }
     /// Shows the core's current state in water_heightfield().
     void refresh() { publish(); }
+    /// swe.discharge and swe.time_scale with "auto" resolved.
+    float discharge() const { return discharge_; }
+    float time_scale() const { return time_scale_; }
+    /// Simulated seconds since frame 0 (the spin-up not counted).
+    double simulated_s() const;
+    /// The main channel from the source's cell to where it leaves the map (the drainage
+    /// network's D8 path): its length (m) and mean slope (at least kSweLeastSlope).
+    float channel_length() const { return channel_length_; }
+    float channel_slope() const { return channel_slope_; }
+    const SweInitReport& init_report() const { return init_; }
 
 private:
     void apply_def();
     void publish();
+    void spin_up();
+    void add_sources(std::vector<swe::PointSource>& out) const;
 
     SweDef def_;
     Vec3 source_{0.0f};
     std::unique_ptr<swe::ShallowWater> core_;
     HeightfieldWater water_;
     SolverCounters counters_;
-    uint64_t frame_ = 0, last_substeps_ = 0;
+    uint64_t frame_ = 0, last_substeps_ = 0, init_substeps_ = 0;
     int source_i_ = -1, source_j_ = -1;
+    float discharge_ = 0.0f, time_scale_ = 1.0f;
+    float channel_length_ = 0.0f, channel_slope_ = kSweLeastSlope;
+    double start_time_ = 0.0;  ///< the core's time at frame 0
+    SweInitReport init_;
 };
 
 }  // namespace mr

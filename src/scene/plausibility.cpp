@@ -86,6 +86,22 @@ float ChannelCoverage::measure(std::span<const Vec3> positions, std::span<const 
     return float(double(count) / double(cells_.size()));
 }
 
+float ChannelCoverage::measure(const HeightfieldWater& water, float wet_depth) const {
+    if (cells_.empty() || water.rows != rows_ || water.columns != columns_) return 0.0f;
+    const int reach = int(std::floor(radius_ / scale_));
+    size_t count = 0;
+    for (const auto& [i, j] : cells_) {
+        bool wet = false;
+        for (int a = std::max(i - reach, 0); a <= std::min(i + reach, rows_ - 1) && !wet; ++a)
+            for (int b = std::max(j - reach, 0); b <= std::min(j + reach, columns_ - 1) && !wet; ++b) {
+                const float da = float(a - i) * scale_, db = float(b - j) * scale_;
+                wet = da * da + db * db <= radius_ * radius_ && water.depth[size_t(a) * size_t(columns_) + size_t(b)] > wet_depth;
+            }
+        count += wet;
+    }
+    return float(double(count) / double(cells_.size()));
+}
+
 OutletMeter::OutletMeter(const Terrain& t, const ChannelMap& m, std::pair<int, int> main_outlet) {
     const float s = t.area_scale();
     auto add = [&](int i, int j, uint32_t acc) {

@@ -114,6 +114,20 @@ constexpr KeyWords kDamWords{kNone, [](S d) { return std::isnan(d.swe.dam_z) ? 0
                              [](SceneDef& d, int i) {
                                  if (i == 0) d.swe.dam_z = std::nanf("");
                              }};
+constexpr KeyWords kSweDischargeWords{kAuto, [](S d) { return d.swe.discharge == kSweAuto ? 0 : -1; },
+                                      [](SceneDef& d, int i) {
+                                          if (i == 0) d.swe.discharge = kSweAuto;
+                                      }};
+constexpr KeyWords kSweTimeScaleWords{kAuto, [](S d) { return d.swe.time_scale == kSweAuto ? 0 : -1; },
+                                      [](SceneDef& d, int i) {
+                                          if (i == 0) d.swe.time_scale = kSweAuto;
+                                      }};
+constexpr KeyWords kSweInitTimeWords{kAuto, [](S d) { return d.swe.init_max_time == kSweAuto ? 0 : -1; },
+                                     [](SceneDef& d, int i) {
+                                         if (i == 0) d.swe.init_max_time = kSweAuto;
+                                     }};
+constexpr std::string_view kSweInits[] = {"dry", "steady"};
+constexpr std::string_view kSweShapes[] = {"point", "line"};
 constexpr KeyWords kLevelWords{kNone, [](S d) { return std::isnan(d.swe.initial_level) ? 0 : -1; },
                                [](SceneDef& d, int i) {
                                    if (i == 0) d.swe.initial_level = std::nanf("");
@@ -451,13 +465,40 @@ const SceneKey kKeys[] = {
      .help = "Water shallower than this has no velocity (wetting and drying).", .field = MR_FIELD(swe.dry_depth)},
     {.name = "swe.second_order", .type = K::Bool, .readers = kSwe, .edit = E::Solver,
      .help = "MUSCL slopes with Heun's two stages; false: first order at half the cost.", .field = MR_FIELD(swe.second_order)},
-    {.name = "swe.discharge", .type = K::Float, .unit = "m^3/s", .range = closed(0, 1e6), .readers = kSwe, .edit = E::Solver,
-     .help = "The source's discharge at swe.source_center; 0: no source.", .field = MR_FIELD(swe.discharge)},
+    {.name = "swe.discharge", .type = K::Float, .unit = "m^3/s", .range = closed(0, 1e6), .words = kSweDischargeWords,
+     .readers = kSwe, .edit = E::Solver,
+     .help = "The source's discharge at swe.source_center; 0: no source; auto: a river at least a cell wide at any scale "
+             "(uniform Manning flow 0.3 m deep over one cell's width on the main channel's mean slope), 0 when the scene "
+             "has swe.initial_level or [[swe.sources]].",
+     .field = MR_FIELD(swe.discharge)},
     {.name = "swe.source_center", .type = K::Vec3, .unit = "m", .range = big_vec(-1e6), .words = kSweSourceWords, .readers = kSwe,
      .edit = E::Solver, .help = "Where the source pours (x, z; y unused); auto: particles.spawn_center's resolved place.",
      .field = MR_FIELD(swe.source_center)},
     {.name = "swe.rain", .type = K::Float, .unit = "mm/h", .range = closed(0, 1e4), .readers = kSwe, .edit = E::Solver,
-     .help = "Rain over the whole map.", .field = MR_FIELD(swe.rain)},
+     .help = "Rain over the whole map, or within swe.rain_radius of swe.rain_center.", .field = MR_FIELD(swe.rain)},
+    {.name = "swe.rain_center", .type = K::Vec3, .unit = "m", .range = big_vec(-1e6), .readers = kSwe, .edit = E::Solver,
+     .help = "The centre (x, z; y unused) of the circle swe.rain falls in when swe.rain_radius > 0.", .field = MR_FIELD(swe.rain_center)},
+    {.name = "swe.rain_radius", .type = K::Float, .unit = "m", .range = closed(0, 1e7), .readers = kSwe, .edit = E::Solver,
+     .help = "Rain only on the cells within this distance of swe.rain_center; 0: over the whole map.", .field = MR_FIELD(swe.rain_radius)},
+    {.name = "swe.time_scale", .type = K::Float, .range = closed(1e-3, 1e6), .words = kSweTimeScaleWords, .readers = kSwe,
+     .edit = E::Solver,
+     .help = "Simulated seconds per second of frame time (substeps follow); auto: terrain.area_scale (1 at 1 m per sample, "
+             "9266 on a 5 arc-minute DEM at --real-scale, where the water crosses about a cell a second at 1 m/s).",
+     .field = MR_FIELD(swe.time_scale)},
+    {.name = "swe.init", .type = K::Choice, .choices = kSweInits, .readers = kSwe, .edit = E::Rebuild,
+     .help = "dry: the map starts dry (or holds swe.initial_level's lake); steady: spun up before frame 0 (first order, CFL "
+             "0.5) until what leaves the map matches what comes in within swe.init_tolerance, or swe.init_max_time: frame 0 "
+             "is the river.",
+     .field = MR_FIELD(swe.init)},
+    {.name = "swe.init_tolerance", .type = K::Float, .range = closed(1e-6, 1), .readers = kSwe, .edit = E::Rebuild,
+     .help = "swe.init = \"steady\": the spin-up stops when, over two windows of a fortieth of its time cap running, "
+             "outflow + sinks differ from inflow + rain, and the stored volume changes, by at most this share of the inflow.",
+     .field = MR_FIELD(swe.init_tolerance)},
+    {.name = "swe.init_max_time", .type = K::Float, .unit = "s", .range = closed(1e-3, 1e10), .words = kSweInitTimeWords,
+     .readers = kSwe, .edit = E::Rebuild,
+     .help = "swe.init = \"steady\": simulated seconds the spin-up runs at most; auto: 4 times the main channel's length "
+             "over 0.5 m/s.",
+     .field = MR_FIELD(swe.init_max_time)},
     {.name = "swe.initial_level", .type = K::Float, .unit = "m", .range = closed(-1e6, 1e6), .words = kLevelWords, .readers = kSwe,
      .edit = E::Rebuild, .help = "A still lake up to this height at the start (every sample below it wet); none: the map starts dry.",
      .field = MR_FIELD(swe.initial_level)},
@@ -517,7 +558,8 @@ const SceneSection kSections[] = {
                "bvh_leaf_triangles), [pbf]; left out, the "
                "flow rate and sink are off and spawn_interval is the paper-engine preset's."},
     {"swe", "Shallow water on the terrain's grid (docs/shallow-water.md): solver = \"swe\" and the hybrid's grid; the "
-            "terrain's edges are open (water leaves the map)."},
+            "terrain's edges are open (water leaves the map). Nothing is carved for it (terrain.condition = \"auto\" "
+            "keeps the heights)."},
     {"hybrid", "The grid's water as PBF particles where it falls over a drop, and back where they land (docs/waterfalls.md): "
                "solver = \"hybrid\" only; its particles take [pbf] and [collision], its grid [swe]."},
 };
@@ -572,6 +614,29 @@ const SceneListKey kBodyKeys[] = {
       .help = "Coulomb friction coefficient against the terrain and the other bodies."},
      MR_ITEM(bodies, friction)},
 };
+// [[swe.sources]] and [[swe.sinks]].
+const SceneListKey kSweSourceKeys[] = {
+    {{.name = "shape", .type = K::Choice, .choices = kSweShapes,
+      .help = "point: the discharge into the cell under start; line: spread evenly over the cells from start to end."},
+     MR_ITEM(swe.sources, shape)},
+    {{.name = "start", .type = K::Vec3, .unit = "m", .range = big_vec(-1e6), .help = "The point, or the line's first end (x, z; y unused)."},
+     MR_ITEM(swe.sources, start)},
+    {{.name = "end", .type = K::Vec3, .unit = "m", .range = big_vec(-1e6), .help = "The line's other end (shape = \"line\")."},
+     MR_ITEM(swe.sources, end)},
+    {{.name = "discharge", .type = K::Float, .unit = "m^3/s", .range = closed(0, 1e7), .help = "What this source pours."},
+     MR_ITEM(swe.sources, discharge)},
+};
+const SceneListKey kSweSinkKeys[] = {
+    {{.name = "center", .type = K::Vec3, .unit = "m", .range = big_vec(-1e6), .help = "The sink's centre (x, z; y unused)."},
+     MR_ITEM(swe.sinks, center)},
+    {{.name = "radius", .type = K::Float, .unit = "m", .range = closed(0, 1e7),
+      .help = "The cells within this distance of the centre; 0: the one cell under it."},
+     MR_ITEM(swe.sinks, radius)},
+    {{.name = "discharge", .type = K::Float, .unit = "m^3/s", .range = closed(0, 1e7),
+      .help = "What it removes at most, spread evenly over its cells; a cell never gives more than it holds (counted as "
+              "sunk in the mass balance)."},
+     MR_ITEM(swe.sinks, discharge)},
+};
 #undef MR_ITEM
 
 const SceneList kLists[] = {
@@ -602,6 +667,22 @@ const SceneList kLists[] = {
      .size = [](S d) { return d.bodies.size(); },
      .resize = [](SceneDef& d, size_t n) { d.bodies.resize(n); },
      .keys = kBodyKeys},
+    {.name = "swe.sources",
+     .help = "More shallow-water sources besides swe.discharge, each `[[swe.sources]]` a discharge at a point or along a "
+             "line. With any of them swe.discharge = \"auto\" pours nothing.",
+     .readers = kSwe,
+     .max = kMaxSweSources,
+     .size = [](S d) { return d.swe.sources.size(); },
+     .resize = [](SceneDef& d, size_t n) { d.swe.sources.resize(n); },
+     .keys = kSweSourceKeys},
+    {.name = "swe.sinks",
+     .help = "Shallow-water sinks, each `[[swe.sinks]]` removing water from a disc of cells (a drain, a pump, a lake's "
+             "outlet pipe).",
+     .readers = kSwe,
+     .max = kMaxSweSources,
+     .size = [](S d) { return d.swe.sinks.size(); },
+     .resize = [](SceneDef& d, size_t n) { d.swe.sinks.resize(n); },
+     .keys = kSweSinkKeys},
 };
 
 }  // namespace

@@ -437,6 +437,8 @@ float Simulation::Impl::wet_fraction() const {
 float Simulation::Impl::channel_coverage() const {
     refresh_channel();
     const Particles& p = particles();
+    const HeightfieldWater* w = solver_->water_heightfield();
+    if (p.size() == 0 && w) return coverage_.measure(*w, def_.swe.dry_depth);  // swe: its wet cells
     return coverage_.measure(p.position, p.active);
 }
 

@@ -1,5 +1,6 @@
 // The "swe" solver (include/metariver/swe_solver.h): the shallow-water core
 // (src/swe/shallow_water.h) on the terrain's grid, shown as a HeightfieldWater.
+#include <metariver/drainage.h>
 #include <metariver/swe_solver.h>
 #include <metariver/terrain.h>
 
@@ -8,13 +9,19 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 
 namespace mr {
 
+std::string_view to_string(SweInit i) { return i == SweInit::Steady ? "steady" : "dry"; }
+std::string_view to_string(SweSourceShape s) { return s == SweSourceShape::Line ? "line" : "point"; }
+
 namespace {
 
 constexpr double kMmPerHour = 1e-3 / 3600.0;  // m/s
+/// The least Manning's n the river rule divides by (manning = 0: frictionless).
+constexpr double kRuleLeastManning = 0.01;
 
 swe::ShallowWaterDef core_def(const SweDef& d, double gravity) {
     swe::ShallowWaterDef c;
@@ -42,6 +49,21 @@ SweSolver::SweSolver(const Terrain& terrain, const SweDef& def, Vec3 resolved_so
     water_.depth.assign(water_.size(), 0.0f);
     water_.velocity.assign(water_.size(), Vec3(0.0f));
     core_ = std::make_unique<swe::ShallowWater>(nx, ny, water_.spacing, bed, core_def(def_, gravity > 0.0f && std::isfinite(gravity) ? gravity : 9.81));
+    // The main channel from the source's cell (the drainage network's D8 path to the edge):
+    // the river rule's slope and the spin-up's time cap.
+    const Vec3 c = def_.auto_source ? source_ : def_.source_center;
+    const int si = std::clamp(static_cast<int>(std::lround((c.z - water_.origin.z) / water_.spacing)), 0, ny - 1);
+    const int sj = std::clamp(static_cast<int>(std::lround((c.x - water_.origin.x) / water_.spacing)), 0, nx - 1);
+    if (!v.empty()) {
+        const auto path = ChannelMap::build(terrain).path_from(si, sj);
+        double length = 0.0;
+        for (size_t k = 1; k < path.size(); ++k)
+            length += water_.spacing * std::hypot(double(path[k].first - path[k - 1].first), double(path[k].second - path[k - 1].second));
+        channel_length_ = static_cast<float>(std::max(length, double(water_.spacing)));
+        const double drop = path.empty() ? 0.0 : terrain.sample(path.front().first, path.front().second) -
+                                                     terrain.sample(path.back().first, path.back().second);
+        channel_slope_ = std::max(static_cast<float>(drop / channel_length_), kSweLeastSlope);
+    }
     if (std::isfinite(def_.initial_level))
         for (int j = 0; j < ny; ++j) {
             if (std::isfinite(def_.dam_z) && water_.origin.z + static_cast<float>(j) * water_.spacing < def_.dam_z) continue;
@@ -49,6 +71,9 @@ SweSolver::SweSolver(const Terrain& terrain, const SweDef& def, Vec3 resolved_so
         }
     core_->balance_reset();
     apply_def();
+    if (def_.init == SweInit::Steady) spin_up();
+    start_time_ = core_->time();
+    core_->balance_reset();
     publish();
 }
 
@@ -56,20 +81,133 @@ SweSolver::~SweSolver() = default;
 
 void SweSolver::apply_def() {
     core_->set_def(core_def(def_, core_->def().gravity));
-    core_->set_rain(std::max(static_cast<double>(def_.rain), 0.0) * kMmPerHour);
+    const double rain = std::max(static_cast<double>(def_.rain), 0.0) * kMmPerHour;
+    if (def_.rain_radius > 0.0f) {  // rain only within the circle
+        std::vector<double> mask(water_.size(), 0.0);
+        const float r2 = def_.rain_radius * def_.rain_radius;
+        for (int j = 0; j < water_.rows; ++j)
+            for (int i = 0; i < water_.columns; ++i) {
+                const float dx = water_.origin.x + float(i) * water_.spacing - def_.rain_center.x;
+                const float dz = water_.origin.z + float(j) * water_.spacing - def_.rain_center.z;
+                if (dx * dx + dz * dz <= r2) mask[static_cast<size_t>(j) * water_.columns + i] = rain;
+            }
+        core_->set_rain(0.0);
+        core_->set_rain_mask(std::move(mask));
+    } else {
+        core_->set_rain_mask({});
+        core_->set_rain(rain);
+    }
+    time_scale_ = def_.time_scale == kSweAuto ? water_.spacing : std::max(def_.time_scale, 1e-6f);
+    // The river rule: uniform Manning flow kSweRiverDepth deep over one cell's width on the
+    // main channel's slope, q = h^(5/3) sqrt(S) / n per metre of width.
+    const bool other_water = std::isfinite(def_.initial_level) || !def_.sources.empty();
+    const double n = std::max(static_cast<double>(def_.manning), kRuleLeastManning);
+    const double rule = water_.spacing * std::pow(double(kSweRiverDepth), 5.0 / 3.0) * std::sqrt(double(channel_slope_)) / n;
+    discharge_ = def_.discharge == kSweAuto ? (other_water ? 0.0f : static_cast<float>(rule)) : std::max(def_.discharge, 0.0f);
     const Vec3 c = def_.auto_source ? source_ : def_.source_center;
     source_i_ = static_cast<int>(std::lround((c.x - water_.origin.x) / water_.spacing));
     source_j_ = static_cast<int>(std::lround((c.z - water_.origin.z) / water_.spacing));
     const bool inside = source_i_ >= 0 && source_j_ >= 0 && source_i_ < water_.columns && source_j_ < water_.rows;
     std::vector<swe::PointSource> sources;
-    if (def_.discharge > 0.0f && inside) sources.push_back({source_i_, source_j_, def_.discharge});
+    if (discharge_ > 0.0f && inside) sources.push_back({source_i_, source_j_, discharge_});
+    add_sources(sources);
     core_->set_sources(std::move(sources));
 }
+
+namespace {
+/// The cell under (x, z) metres, or (-1, -1) outside the grid.
+std::pair<int, int> cell_of(const HeightfieldWater& w, float x, float z) {
+    const int i = static_cast<int>(std::lround((x - w.origin.x) / w.spacing));
+    const int j = static_cast<int>(std::lround((z - w.origin.z) / w.spacing));
+    if (i < 0 || j < 0 || i >= w.columns || j >= w.rows) return {-1, -1};
+    return {i, j};
+}
+/// The grid's cells a segment crosses (sampled every quarter cell, each cell once, in order).
+std::vector<std::pair<int, int>> line_cells(const HeightfieldWater& w, Vec3 a, Vec3 b) {
+    std::vector<std::pair<int, int>> cells;
+    const float len = std::hypot(b.x - a.x, b.z - a.z);
+    const int n = std::min(static_cast<int>(std::ceil(4.0f * len / w.spacing)), 1 << 22);
+    for (int k = 0; k <= n; ++k) {
+        const float t = n > 0 ? float(k) / float(n) : 0.0f;
+        const auto c = cell_of(w, a.x + t * (b.x - a.x), a.z + t * (b.z - a.z));
+        if (c.first >= 0 && std::find(cells.begin(), cells.end(), c) == cells.end()) cells.push_back(c);
+    }
+    return cells;
+}
+/// The cells whose centres lie within r metres of (x, z); the cell under it when none does.
+std::vector<std::pair<int, int>> disc_cells(const HeightfieldWater& w, Vec3 c, float r) {
+    std::vector<std::pair<int, int>> cells;
+    const int reach = static_cast<int>(std::ceil(r / w.spacing)) + 1;
+    const auto centre = cell_of(w, c.x, c.z);
+    const int ci = static_cast<int>(std::lround((c.x - w.origin.x) / w.spacing));
+    const int cj = static_cast<int>(std::lround((c.z - w.origin.z) / w.spacing));
+    for (int j = std::max(cj - reach, 0); j <= std::min(cj + reach, w.rows - 1); ++j)
+        for (int i = std::max(ci - reach, 0); i <= std::min(ci + reach, w.columns - 1); ++i) {
+            const float dx = w.origin.x + float(i) * w.spacing - c.x, dz = w.origin.z + float(j) * w.spacing - c.z;
+            if (dx * dx + dz * dz <= r * r) cells.emplace_back(i, j);
+        }
+    if (cells.empty() && centre.first >= 0) cells.push_back(centre);
+    return cells;
+}
+}  // namespace
+
+// [[swe.sources]] (each discharge spread evenly over its cells) and [[swe.sinks]] (a negative
+// discharge the core never lets take more than a cell holds).
+void SweSolver::add_sources(std::vector<swe::PointSource>& out) const {
+    for (const SweSource& s : def_.sources) {
+        const auto cells = s.shape == SweSourceShape::Line ? line_cells(water_, s.start, s.end) : disc_cells(water_, s.start, 0.0f);
+        for (const auto& [i, j] : cells) out.push_back({i, j, double(s.discharge) / double(cells.size())});
+    }
+    for (const SweSink& s : def_.sinks) {
+        const auto cells = disc_cells(water_, s.center, s.radius);
+        for (const auto& [i, j] : cells) out.push_back({i, j, -double(s.discharge) / double(cells.size())});
+    }
+}
+
+// swe.init = "steady": first order at the largest CFL, in windows, until what leaves (the
+// edges and the sinks) is what comes in (sources and rain) within init_tolerance over two
+// windows running; then the scheme asked for (second order holds less water than the first
+// order's diffusion) until it is calm again; or the time cap.
+void SweSolver::spin_up() {
+    const auto t0 = std::chrono::steady_clock::now();
+    const swe::ShallowWaterDef asked = core_->def();
+    swe::ShallowWaterDef fast = asked;
+    fast.second_order = false;
+    fast.cfl = 0.5;
+    const double cap = def_.init_max_time == kSweAuto ? kSweInitCrossings * channel_length_ / 0.5 : def_.init_max_time;
+    const double window = std::max(cap / 40.0, 1e-3);
+    const uint64_t steps0 = core_->stats().substeps;
+    const auto calm_under = [&](const swe::ShallowWaterDef& scheme) {
+        core_->set_def(scheme);
+        int calm = 0;
+        swe::MassBalance prev = core_->balance();
+        while (core_->time() < cap && core_->stats().substeps - steps0 < kSweInitMaxSubsteps) {
+            core_->advance(window);
+            const swe::MassBalance b = core_->balance();
+            const double in = (b.inflow - prev.inflow) + (b.rain - prev.rain);
+            const double out = (b.outflow - prev.outflow) + (b.sunk - prev.sunk);
+            const double tol = def_.init_tolerance * (in > 0.0 ? in : std::max(b.stored, 1e-12));
+            init_.outflow_over_inflow = in > 0.0 ? out / in : 0.0;
+            calm = std::abs(out - in) <= tol && std::abs(b.stored - prev.stored) <= tol ? calm + 1 : 0;
+            prev = b;
+            if (calm >= 2) return true;
+        }
+        return false;
+    };
+    init_.converged = calm_under(fast) && (!asked.second_order || calm_under(asked));
+    core_->set_def(asked);
+    init_.ran = true;
+    init_.simulated_s = core_->time();
+    init_.substeps = init_substeps_ = core_->stats().substeps - steps0;
+    init_.wall_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+double SweSolver::simulated_s() const { return core_->time() - start_time_; }
 
 bool SweSolver::set_params(const SweDef& def, Vec3 resolved_source) {
     const bool same_lake = std::isnan(def.initial_level) ? std::isnan(def_.initial_level) : def.initial_level == def_.initial_level;
     const bool same_dam = std::isnan(def.dam_z) ? std::isnan(def_.dam_z) : def.dam_z == def_.dam_z;
-    if (!same_lake || !same_dam) return false;
+    if (!same_lake || !same_dam || def.init != def_.init) return false;
     def_ = def;
     source_ = resolved_source;
     apply_def();
@@ -95,9 +233,9 @@ void SweSolver::publish() {
 
 void SweSolver::step_frame(float frame_dt) {
     const uint64_t before = core_->stats().substeps;
-    if (frame_dt > 0.0f && std::isfinite(frame_dt)) core_->advance(frame_dt);
+    if (frame_dt > 0.0f && std::isfinite(frame_dt)) core_->advance(double(frame_dt) * time_scale_);
     last_substeps_ = core_->stats().substeps - before;
-    counters_.substeps = core_->stats().substeps;
+    counters_.substeps = core_->stats().substeps - init_substeps_;
     counters_.cell_updates = core_->stats().cell_updates;
     ++frame_;
     publish();
@@ -105,14 +243,28 @@ void SweSolver::step_frame(float frame_dt) {
 
 SweBalance SweSolver::balance() const {
     const swe::MassBalance b = core_->balance();
-    return {b.initial, b.inflow, b.rain, b.outflow, b.stored};
+    return {.initial = b.initial, .inflow = b.inflow, .rain = b.rain, .outflow = b.outflow, .sunk = b.sunk,
+            .stored = b.stored, .exchanged = b.exchanged};
 }
 
 std::vector<std::string> SweSolver::warnings() const {
     std::vector<std::string> w;
-    if (def_.discharge > 0.0f && (source_i_ < 0 || source_j_ < 0 || source_i_ >= water_.columns || source_j_ >= water_.rows))
+    if (discharge_ > 0.0f && (source_i_ < 0 || source_j_ < 0 || source_i_ >= water_.columns || source_j_ >= water_.rows))
         w.push_back(fmt::format("swe.source_center: ({}, {}) lies outside the terrain; swe.discharge pours nothing",
                                 def_.auto_source ? source_.x : def_.source_center.x, def_.auto_source ? source_.z : def_.source_center.z));
+    for (size_t k = 0; k < def_.sources.size(); ++k) {
+        const SweSource& s = def_.sources[k];
+        const bool in = s.shape == SweSourceShape::Line ? !line_cells(water_, s.start, s.end).empty()
+                                                        : cell_of(water_, s.start.x, s.start.z).first >= 0;
+        if (!in) w.push_back(fmt::format("swe.sources[{}]: lies outside the terrain; it pours nothing", k + 1));
+    }
+    for (size_t k = 0; k < def_.sinks.size(); ++k)
+        if (disc_cells(water_, def_.sinks[k].center, def_.sinks[k].radius).empty())
+            w.push_back(fmt::format("swe.sinks[{}]: lies outside the terrain; it takes nothing", k + 1));
+    if (init_.ran && !init_.converged)
+        w.push_back(fmt::format("swe.init: the steady spin-up stopped at its cap ({:.4g} s simulated, {} substeps) with "
+                                "outflow {:.3f} of inflow; raise swe.init_max_time",
+                                init_.simulated_s, init_.substeps, init_.outflow_over_inflow));
     return w;
 }
 
