@@ -28,7 +28,7 @@ inline constexpr float kSweRiverDepth = 0.3f;  ///< metres
 /// The least slope that rule and the steady spin-up take (a flat map).
 inline constexpr float kSweLeastSlope = 1e-3f;
 /// swe.init_max_time = "auto": this many times the main channel's length over 0.5 m/s.
-inline constexpr float kSweInitCrossings = 4.0f;
+inline constexpr float kSweInitCrossings = 8.0f;
 /// The steady spin-up stops after this many substeps whatever its time cap (a warning).
 inline constexpr uint64_t kSweInitMaxSubsteps = 400000;
 
@@ -165,6 +165,10 @@ private:
     void apply_def();
     void publish();
     void spin_up();
+    /// swe.init = "steady": the depressions the rivers run through (every one under rain
+    /// over the whole map) start full to their spill level, as a steady river leaves them.
+    /// `starts`: the sources' cells (column, row).
+    void fill_depressions(const std::vector<std::pair<int, int>>& starts);
     void add_sources(std::vector<swe::PointSource>& out) const;
 
     SweDef def_;

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <queue>
 
 namespace mr {
 
@@ -34,6 +35,40 @@ swe::ShallowWaterDef core_def(const SweDef& d, double gravity) {
     return c;
 }
 
+/// The cell under (x, z) metres, or (-1, -1) outside the grid.
+std::pair<int, int> cell_of(const HeightfieldWater& w, float x, float z) {
+    const int i = static_cast<int>(std::lround((x - w.origin.x) / w.spacing));
+    const int j = static_cast<int>(std::lround((z - w.origin.z) / w.spacing));
+    if (i < 0 || j < 0 || i >= w.columns || j >= w.rows) return {-1, -1};
+    return {i, j};
+}
+/// The grid's cells a segment crosses (sampled every quarter cell, each cell once, in order).
+std::vector<std::pair<int, int>> line_cells(const HeightfieldWater& w, Vec3 a, Vec3 b) {
+    std::vector<std::pair<int, int>> cells;
+    const float len = std::hypot(b.x - a.x, b.z - a.z);
+    const int n = std::min(static_cast<int>(std::ceil(4.0f * len / w.spacing)), 1 << 22);
+    for (int k = 0; k <= n; ++k) {
+        const float t = n > 0 ? float(k) / float(n) : 0.0f;
+        const auto c = cell_of(w, a.x + t * (b.x - a.x), a.z + t * (b.z - a.z));
+        if (c.first >= 0 && std::find(cells.begin(), cells.end(), c) == cells.end()) cells.push_back(c);
+    }
+    return cells;
+}
+/// The cells whose centres lie within r metres of (x, z); the cell under it when none does.
+std::vector<std::pair<int, int>> disc_cells(const HeightfieldWater& w, Vec3 c, float r) {
+    std::vector<std::pair<int, int>> cells;
+    const int reach = static_cast<int>(std::ceil(r / w.spacing)) + 1;
+    const auto centre = cell_of(w, c.x, c.z);
+    const int ci = static_cast<int>(std::lround((c.x - w.origin.x) / w.spacing));
+    const int cj = static_cast<int>(std::lround((c.z - w.origin.z) / w.spacing));
+    for (int j = std::max(cj - reach, 0); j <= std::min(cj + reach, w.rows - 1); ++j)
+        for (int i = std::max(ci - reach, 0); i <= std::min(ci + reach, w.columns - 1); ++i) {
+            const float dx = w.origin.x + float(i) * w.spacing - c.x, dz = w.origin.z + float(j) * w.spacing - c.z;
+            if (dx * dx + dz * dz <= r * r) cells.emplace_back(i, j);
+        }
+    if (cells.empty() && centre.first >= 0) cells.push_back(centre);
+    return cells;
+}
 }  // namespace
 
 SweSolver::SweSolver(const Terrain& terrain, const SweDef& def, Vec3 resolved_source, float gravity)
@@ -54,8 +89,10 @@ SweSolver::SweSolver(const Terrain& terrain, const SweDef& def, Vec3 resolved_so
     const Vec3 c = def_.auto_source ? source_ : def_.source_center;
     const int si = std::clamp(static_cast<int>(std::lround((c.z - water_.origin.z) / water_.spacing)), 0, ny - 1);
     const int sj = std::clamp(static_cast<int>(std::lround((c.x - water_.origin.x) / water_.spacing)), 0, nx - 1);
+    const ChannelMap map = ChannelMap::build(terrain);
+    std::vector<std::pair<int, int>> path;
     if (!v.empty()) {
-        const auto path = ChannelMap::build(terrain).path_from(si, sj);
+        path = map.path_from(si, sj);
         double length = 0.0;
         for (size_t k = 1; k < path.size(); ++k)
             length += water_.spacing * std::hypot(double(path[k].first - path[k - 1].first), double(path[k].second - path[k - 1].second));
@@ -71,7 +108,15 @@ SweSolver::SweSolver(const Terrain& terrain, const SweDef& def, Vec3 resolved_so
         }
     core_->balance_reset();
     apply_def();
-    if (def_.init == SweInit::Steady) spin_up();
+    if (def_.init == SweInit::Steady) {
+        std::vector<std::pair<int, int>> starts;  // (column, row) of every source
+        if (discharge_ > 0.0f) starts.emplace_back(sj, si);
+        for (const SweSource& s : def_.sources)
+            if (const auto c = cell_of(water_, s.start.x, s.start.z); c.first >= 0) starts.push_back(c);
+        fill_depressions(starts);
+        core_->balance_reset();
+        spin_up();
+    }
     start_time_ = core_->time();
     core_->balance_reset();
     publish();
@@ -114,42 +159,6 @@ void SweSolver::apply_def() {
     core_->set_sources(std::move(sources));
 }
 
-namespace {
-/// The cell under (x, z) metres, or (-1, -1) outside the grid.
-std::pair<int, int> cell_of(const HeightfieldWater& w, float x, float z) {
-    const int i = static_cast<int>(std::lround((x - w.origin.x) / w.spacing));
-    const int j = static_cast<int>(std::lround((z - w.origin.z) / w.spacing));
-    if (i < 0 || j < 0 || i >= w.columns || j >= w.rows) return {-1, -1};
-    return {i, j};
-}
-/// The grid's cells a segment crosses (sampled every quarter cell, each cell once, in order).
-std::vector<std::pair<int, int>> line_cells(const HeightfieldWater& w, Vec3 a, Vec3 b) {
-    std::vector<std::pair<int, int>> cells;
-    const float len = std::hypot(b.x - a.x, b.z - a.z);
-    const int n = std::min(static_cast<int>(std::ceil(4.0f * len / w.spacing)), 1 << 22);
-    for (int k = 0; k <= n; ++k) {
-        const float t = n > 0 ? float(k) / float(n) : 0.0f;
-        const auto c = cell_of(w, a.x + t * (b.x - a.x), a.z + t * (b.z - a.z));
-        if (c.first >= 0 && std::find(cells.begin(), cells.end(), c) == cells.end()) cells.push_back(c);
-    }
-    return cells;
-}
-/// The cells whose centres lie within r metres of (x, z); the cell under it when none does.
-std::vector<std::pair<int, int>> disc_cells(const HeightfieldWater& w, Vec3 c, float r) {
-    std::vector<std::pair<int, int>> cells;
-    const int reach = static_cast<int>(std::ceil(r / w.spacing)) + 1;
-    const auto centre = cell_of(w, c.x, c.z);
-    const int ci = static_cast<int>(std::lround((c.x - w.origin.x) / w.spacing));
-    const int cj = static_cast<int>(std::lround((c.z - w.origin.z) / w.spacing));
-    for (int j = std::max(cj - reach, 0); j <= std::min(cj + reach, w.rows - 1); ++j)
-        for (int i = std::max(ci - reach, 0); i <= std::min(ci + reach, w.columns - 1); ++i) {
-            const float dx = w.origin.x + float(i) * w.spacing - c.x, dz = w.origin.z + float(j) * w.spacing - c.z;
-            if (dx * dx + dz * dz <= r * r) cells.emplace_back(i, j);
-        }
-    if (cells.empty() && centre.first >= 0) cells.push_back(centre);
-    return cells;
-}
-}  // namespace
 
 // [[swe.sources]] (each discharge spread evenly over its cells) and [[swe.sinks]] (a negative
 // discharge the core never lets take more than a cell holds).
@@ -200,6 +209,88 @@ void SweSolver::spin_up() {
     init_.simulated_s = core_->time();
     init_.substeps = init_substeps_ = core_->stats().substeps - steps0;
     init_.wall_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+namespace {
+/// The priority flood (Barnes et al. 2014) over the solver's 4-neighbour faces: each cell's
+/// spill level (the lowest surface from which water reaches the map's edge through faces,
+/// flat over a depression) and the neighbour it was reached from (towards the edge; -1 on
+/// the edge). D8's flood (ChannelMap) crosses diagonal passes the faces do not have.
+struct Flood4 {
+    std::vector<double> level;
+    std::vector<int> from;
+};
+Flood4 flood4(const swe::ShallowWater& core) {
+    const int nx = core.nx(), ny = core.ny();
+    const size_t n = static_cast<size_t>(nx) * ny;
+    Flood4 f{std::vector<double>(n, 0.0), std::vector<int>(n, -1)};
+    std::vector<uint8_t> done(n, 0);
+    using Item = std::pair<double, int>;  // level, cell: lowest first, ties by index
+    std::priority_queue<Item, std::vector<Item>, std::greater<>> open;
+    for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i)
+            if (i == 0 || j == 0 || i == nx - 1 || j == ny - 1) {
+                const int k = j * nx + i;
+                f.level[size_t(k)] = core.bed(i, j);
+                done[size_t(k)] = 1;
+                open.emplace(f.level[size_t(k)], k);
+            }
+    while (!open.empty()) {
+        const auto [lv, k] = open.top();
+        open.pop();
+        const int i = k % nx, j = k / nx;
+        const int next[4][2] = {{i - 1, j}, {i + 1, j}, {i, j - 1}, {i, j + 1}};
+        for (const auto& [a, b] : next) {
+            if (a < 0 || b < 0 || a >= nx || b >= ny || done[size_t(b) * nx + a]) continue;
+            const int q = b * nx + a;
+            done[size_t(q)] = 1;
+            f.level[size_t(q)] = std::max(core.bed(a, b), lv);
+            f.from[size_t(q)] = k;
+            open.emplace(f.level[size_t(q)], q);
+        }
+    }
+    return f;
+}
+}  // namespace
+
+void SweSolver::fill_depressions(const std::vector<std::pair<int, int>>& starts) {
+    const int nx = water_.columns, ny = water_.rows;
+    const Flood4 f = flood4(*core_);
+    // Depression cells: the spill level more than a millimetre above the bed.
+    const auto low = [&](int k) { return f.level[size_t(k)] - core_->bed(k % nx, k / nx) > 1e-3; };
+    std::vector<uint8_t> seen(static_cast<size_t>(nx) * ny, 0);
+    std::vector<int> seeds, stack;
+    if (def_.rain > 0.0f && def_.rain_radius <= 0.0f) {  // rain over the whole map fills every one
+        for (int k = 0; k < nx * ny; ++k) seeds.push_back(k);
+    } else {
+        for (const auto& [i, j] : starts)  // each source's route to the edge, through the spill points
+            for (int k = j * nx + i; k >= 0; k = f.from[size_t(k)]) seeds.push_back(k);
+    }
+    // The head over a spill point that passes the sources' discharge (a broad-crested weir
+    // one cell wide, q = 1.705 h^(3/2) m^2/s): each depression starts that much above its
+    // spill level, so it spills at once instead of approaching the rate over weeks at km cells.
+    double q = discharge_;
+    for (const SweSource& s : def_.sources) q += s.discharge;
+    const double head = std::pow(q / (1.705 * water_.spacing), 2.0 / 3.0);
+    for (const int k0 : seeds) {
+        if (seen[size_t(k0)] || !low(k0)) continue;
+        seen[size_t(k0)] = 1;
+        stack.assign(1, k0);
+        while (!stack.empty()) {  // one depression (4-connected), full to its spill level
+            const int k = stack.back();
+            stack.pop_back();
+            const int i = k % nx, j = k / nx;
+            const double h = f.level[size_t(k)] + head - core_->bed(i, j);
+            if (h > core_->depth(i, j)) core_->set_state(i, j, h);
+            const int next[4][2] = {{i - 1, j}, {i + 1, j}, {i, j - 1}, {i, j + 1}};
+            for (const auto& [a, b] : next) {
+                const int q = b * nx + a;
+                if (a < 0 || b < 0 || a >= nx || b >= ny || seen[size_t(q)] || !low(q)) continue;
+                seen[size_t(q)] = 1;
+                stack.push_back(q);
+            }
+        }
+    }
 }
 
 double SweSolver::simulated_s() const { return core_->time() - start_time_; }
