@@ -87,6 +87,10 @@ struct SweDef {
     /// Steady spin-up: simulated seconds at most; kSweAuto: kSweInitCrossings x the main
     /// channel's length over 0.5 m/s.
     float init_max_time = kSweAuto;
+    /// Metres (terrain height): cells whose bed lies below it are the sea, a sink that takes
+    /// every drop reaching it (counted as sunk); NaN: none. On a DEM at --real-scale the sea
+    /// is at -metres_min of its sidecar.
+    float sea_level = std::nanf("");
     std::vector<SweSource> sources;  ///< [[swe.sources]]
     std::vector<SweSink> sinks;      ///< [[swe.sinks]]
     /// Metres: a still lake up to this level at the start (every sample below it wet);

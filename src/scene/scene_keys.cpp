@@ -126,6 +126,10 @@ constexpr KeyWords kSweInitTimeWords{kAuto, [](S d) { return d.swe.init_max_time
                                      [](SceneDef& d, int i) {
                                          if (i == 0) d.swe.init_max_time = kSweAuto;
                                      }};
+constexpr KeyWords kSeaWords{kNone, [](S d) { return std::isnan(d.swe.sea_level) ? 0 : -1; },
+                             [](SceneDef& d, int i) {
+                                 if (i == 0) d.swe.sea_level = std::nanf("");
+                             }};
 constexpr std::string_view kSweInits[] = {"dry", "steady"};
 constexpr std::string_view kSweShapes[] = {"point", "line"};
 constexpr KeyWords kLevelWords{kNone, [](S d) { return std::isnan(d.swe.initial_level) ? 0 : -1; },
@@ -480,6 +484,11 @@ const SceneKey kKeys[] = {
      .help = "The centre (x, z; y unused) of the circle swe.rain falls in when swe.rain_radius > 0.", .field = MR_FIELD(swe.rain_center)},
     {.name = "swe.rain_radius", .type = K::Float, .unit = "m", .range = closed(0, 1e7), .readers = kSwe, .edit = E::Solver,
      .help = "Rain only on the cells within this distance of swe.rain_center; 0: over the whole map.", .field = MR_FIELD(swe.rain_radius)},
+    {.name = "swe.sea_level", .type = K::Float, .unit = "m", .range = closed(-1e6, 1e6), .words = kSeaWords, .readers = kSwe,
+     .edit = E::Solver,
+     .help = "Cells whose bed lies below this height are the sea: a sink taking all the water that reaches them (counted as "
+             "sunk); none: no sea. On a DEM at --real-scale the sea is at minus the sidecar's metres_min.",
+     .field = MR_FIELD(swe.sea_level)},
     {.name = "swe.time_scale", .type = K::Float, .range = closed(1e-3, 1e6), .words = kSweTimeScaleWords, .readers = kSwe,
      .edit = E::Solver,
      .help = "Simulated seconds per second of frame time (substeps follow); auto: terrain.area_scale (1 at 1 m per sample, "

@@ -167,6 +167,10 @@ void SweSolver::add_sources(std::vector<swe::PointSource>& out) const {
         const auto cells = s.shape == SweSourceShape::Line ? line_cells(water_, s.start, s.end) : disc_cells(water_, s.start, 0.0f);
         for (const auto& [i, j] : cells) out.push_back({i, j, double(s.discharge) / double(cells.size())});
     }
+    if (std::isfinite(def_.sea_level))  // the sea: every drop that reaches it (far above any cell's volume a step)
+        for (int j = 0; j < water_.rows; ++j)
+            for (int i = 0; i < water_.columns; ++i)
+                if (core_->bed(i, j) < def_.sea_level) out.push_back({i, j, -1e30});
     for (const SweSink& s : def_.sinks) {
         const auto cells = disc_cells(water_, s.center, s.radius);
         for (const auto& [i, j] : cells) out.push_back({i, j, -double(s.discharge) / double(cells.size())});
@@ -220,7 +224,7 @@ struct Flood4 {
     std::vector<double> level;
     std::vector<int> from;
 };
-Flood4 flood4(const swe::ShallowWater& core) {
+Flood4 flood4(const swe::ShallowWater& core, double sea_level) {
     const int nx = core.nx(), ny = core.ny();
     const size_t n = static_cast<size_t>(nx) * ny;
     Flood4 f{std::vector<double>(n, 0.0), std::vector<int>(n, -1)};
@@ -229,7 +233,7 @@ Flood4 flood4(const swe::ShallowWater& core) {
     std::priority_queue<Item, std::vector<Item>, std::greater<>> open;
     for (int j = 0; j < ny; ++j)
         for (int i = 0; i < nx; ++i)
-            if (i == 0 || j == 0 || i == nx - 1 || j == ny - 1) {
+            if (i == 0 || j == 0 || i == nx - 1 || j == ny - 1 || core.bed(i, j) < sea_level) {  // edges and the sea drain
                 const int k = j * nx + i;
                 f.level[size_t(k)] = core.bed(i, j);
                 done[size_t(k)] = 1;
@@ -255,7 +259,7 @@ Flood4 flood4(const swe::ShallowWater& core) {
 
 void SweSolver::fill_depressions(const std::vector<std::pair<int, int>>& starts) {
     const int nx = water_.columns, ny = water_.rows;
-    const Flood4 f = flood4(*core_);
+    const Flood4 f = flood4(*core_, std::isfinite(def_.sea_level) ? double(def_.sea_level) : -HUGE_VAL);
     // Depression cells: the spill level more than a millimetre above the bed.
     const auto low = [&](int k) { return f.level[size_t(k)] - core_->bed(k % nx, k / nx) > 1e-3; };
     std::vector<uint8_t> seen(static_cast<size_t>(nx) * ny, 0);
