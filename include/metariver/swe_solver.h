@@ -27,7 +27,8 @@ inline constexpr float kSweAuto = -1.0f;
 inline constexpr float kSweRiverDepth = 0.3f;  ///< metres
 /// The least slope that rule and the steady spin-up take (a flat map).
 inline constexpr float kSweLeastSlope = 1e-3f;
-/// swe.init_max_time = "auto": this many times the main channel's length over 0.5 m/s.
+/// swe.init_max_time = "auto": this many times the main channel's length (at least half the
+/// map's diagonal) over 0.5 m/s.
 inline constexpr float kSweInitCrossings = 8.0f;
 /// The steady spin-up stops after this many substeps whatever its time cap (a warning).
 inline constexpr uint64_t kSweInitMaxSubsteps = 400000;

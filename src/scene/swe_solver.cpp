@@ -187,7 +187,9 @@ void SweSolver::spin_up() {
     swe::ShallowWaterDef fast = asked;
     fast.second_order = false;
     fast.cfl = 0.5;
-    const double cap = def_.init_max_time == kSweAuto ? kSweInitCrossings * channel_length_ / 0.5 : def_.init_max_time;
+    // The channel, or half the map's diagonal where the route is shorter (a flat map's).
+    const double reach = std::max(double(channel_length_), 0.5 * water_.spacing * std::hypot(double(water_.columns), double(water_.rows)));
+    const double cap = def_.init_max_time == kSweAuto ? kSweInitCrossings * reach / 0.5 : def_.init_max_time;
     const double window = std::max(cap / 40.0, 1e-3);
     const uint64_t steps0 = core_->stats().substeps;
     const auto calm_under = [&](const swe::ShallowWaterDef& scheme) {
