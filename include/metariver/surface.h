@@ -86,20 +86,35 @@ struct SurfaceWorkspace {
     std::unique_ptr<Impl> impl;
 };
 
+/// Scratch of append_heightfield_surface, reused by the caller (no allocation once warm).
+struct HeightfieldScratch {
+    std::vector<uint32_t> vertex;    ///< per sample: its vertex, or none
+    std::vector<uint32_t> crossing;  ///< 3 per sample: the shoreline vertex on its +x, +z and diagonal edge
+    std::vector<float> level;        ///< per sample: the water's level (wet) or the ring's (below)
+};
+
 /// Water given as depths over a heightfield (a solver's HeightfieldWater on the
 /// terrain's grid: solver.h) as a mesh, appended to `out` (its indices offset past the
 /// vertices it holds, so a particle surface and a heightfield surface make one mesh).
 /// `bed` and `depth` hold rows x columns samples, row-major (index i * columns + j, as
-/// Terrain::vertices()): the bed's positions and the water's depth above them, metres. A
-/// cell (the square between samples (i, j) and (i + 1, j + 1)) is wet when the depths at
-/// its four corners are all > 0; each wet cell gives two triangles split as the terrain's
-/// mesh splits it, counter-clockwise seen from above (normals up). A vertex is its
-/// sample's bed position raised by the depth, one per sample of a wet cell, with the
-/// normalised area-weighted mean of its wet triangles' normals (smooth). Nothing is
-/// appended when the sizes do not match rows x columns or either is < 2. `scratch`
-/// (optional, reused by the caller: no allocation once warm) holds a vertex index per sample.
+/// Terrain::vertices()): the bed's positions and the water's depth above them, metres.
+/// A sample is wet when its depth is > 0; its level is bed + depth. A dry sample beside a
+/// wet one (8 neighbours: the ring) gets the mean level of its wet neighbours, capped at
+/// its own bed. Each cell is split into two triangles as the terrain's mesh splits it, and
+/// each triangle is cut where level - bed (depth on wet samples, <= 0 on the ring) crosses
+/// 0, linear along its edges (marching triangles): the shoreline is where the water's
+/// plane meets the terrain's triangles, not the cells' staircase, and on a lake it is the
+/// terrain's contour at the lake's level (a cut within `snap` = 0.05 of an edge's end
+/// moves to that end, so no sliver triangles). Counter-clockwise seen from above
+/// (normals up). Vertices: one per wet sample (its bed raised by the depth), in sample
+/// order, then one per cut edge; normals: the normalised area-weighted mean of the
+/// vertex's triangles' normals. A fully wet grid gives two triangles per cell on the
+/// samples alone. `velocity` (optional, one per sample) gives `vertex_velocity` (appended,
+/// one per new vertex): a sample's own, a cut's its wet end's. Nothing is appended when
+/// the sizes do not match rows x columns or either is < 2.
 void append_heightfield_surface(std::span<const Vec3> bed, std::span<const float> depth, int rows, int columns,
-                                SurfaceMesh& out, std::vector<uint32_t>* scratch = nullptr);
+                                SurfaceMesh& out, HeightfieldScratch* scratch = nullptr,
+                                std::span<const Vec3> velocity = {}, std::vector<Vec3>* vertex_velocity = nullptr);
 
 /// extract_surface on a SparseField, block-parallel (oneTBB) and skipping blocks whose
 /// value range cannot cross the threshold. Gives the mesh extract_surface gives on

@@ -36,7 +36,7 @@ struct Simulation::Impl {
     SurfaceWorkspace surface_ws_;
     SmoothingWorkspace smooth_ws_;
     SurfaceMesh surface_;
-    std::vector<uint32_t> heightfield_scratch_;  ///< append_heightfield_surface's
+    HeightfieldScratch heightfield_scratch_;  ///< append_heightfield_surface's
     FrameTimings timings_;
     uint64_t field_overflows_ = 0;
     uint64_t terrain_lifts_ = 0;

@@ -1,57 +1,152 @@
 // The surface of water given as depths over a heightfield (a solver's HeightfieldWater):
-// a triangle grid over the wet cells at bed + depth, split as the terrain's mesh is, with
+// the wet samples' triangles at bed + depth, split as the terrain's mesh is, cut along the
+// line where the water's level meets the bed (marching triangles over level - bed), with
 // area-weighted vertex normals.
 #include <metariver/surface.h>
 
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 
 namespace mr {
 
-void append_heightfield_surface(std::span<const Vec3> bed, std::span<const float> depth, int rows, int columns,
-                                SurfaceMesh& out, std::vector<uint32_t>* scratch) {
-    if (rows < 2 || columns < 2) return;
-    const size_t n = size_t(rows) * size_t(columns);
-    if (bed.size() != n || depth.size() != n) return;
-    constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
-    const auto wet = [&](int i, int j) {
-        const size_t c = size_t(i) * size_t(columns) + size_t(j);
-        return depth[c] > 0.0f && depth[c + 1] > 0.0f && depth[c + size_t(columns)] > 0.0f &&
-               depth[c + size_t(columns) + 1] > 0.0f;
-    };
-    // One vertex per sample of a wet cell, numbered in sample order after what `out` holds.
-    const size_t first = out.positions.size();
-    std::vector<uint32_t> own;
-    std::vector<uint32_t>& vertex = scratch ? *scratch : own;  // sample -> its vertex, kNone: none
-    vertex.assign(n, kNone);
-    for (int i = 0; i + 1 < rows; ++i)
-        for (int j = 0; j + 1 < columns; ++j) {
-            if (!wet(i, j)) continue;
-            const size_t c = size_t(i) * size_t(columns) + size_t(j);
-            for (const size_t s : {c, c + 1, c + size_t(columns), c + size_t(columns) + 1}) vertex[s] = 0;
+namespace {
+
+constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
+constexpr float kSnap = 0.05f;  // a cut this close to an edge's end (of its length) moves to the end
+
+/// The water's level per sample: bed + depth where wet; on the ring (dry beside a wet
+/// sample, 8 neighbours) the mean of the wet neighbours' levels capped at the own bed, so
+/// level - bed is > 0 exactly on the wet samples. Samples beyond the ring are never read.
+void water_levels(std::span<const Vec3> bed, std::span<const float> depth, int rows, int columns,
+                  std::vector<float>& level) {
+    level.resize(bed.size());
+    for (size_t k = 0; k < bed.size(); ++k) level[k] = bed[k].y + std::max(depth[k], 0.0f);
+    for (int i = 0; i < rows; ++i)
+        for (int j = 0; j < columns; ++j) {
+            const size_t k = size_t(i) * size_t(columns) + size_t(j);
+            if (depth[k] > 0.0f) continue;
+            float sum = 0.0f;
+            int count = 0;
+            for (int di = -1; di <= 1; ++di)
+                for (int dj = -1; dj <= 1; ++dj) {
+                    const int a = i + di, b = j + dj;
+                    if (a < 0 || b < 0 || a >= rows || b >= columns) continue;
+                    const size_t q = size_t(a) * size_t(columns) + size_t(b);
+                    if (depth[q] <= 0.0f) continue;
+                    sum += bed[q].y + depth[q];
+                    ++count;
+                }
+            if (count > 0) level[k] = std::min(sum / float(count), bed[k].y);
         }
-    for (size_t s = 0; s < n; ++s) {
-        if (vertex[s] == kNone) continue;
-        vertex[s] = uint32_t(out.positions.size());
-        out.positions.push_back(bed[s] + Vec3(0.0f, depth[s], 0.0f));
+}
+
+class Builder {
+public:
+    Builder(std::span<const Vec3> bed, std::span<const float> depth, int columns, SurfaceMesh& out,
+            HeightfieldScratch& s, std::span<const Vec3> velocity, std::vector<Vec3>* vertex_velocity)
+        : bed_(bed), depth_(depth), w_(size_t(columns)), out_(out), s_(s), velocity_(velocity), vv_(vertex_velocity) {
+        const Vec3 dx = bed[1] - bed[0], dz = bed[w_] - bed[0];
+        min_area_ = 1e-6f * std::abs(dx.x * dz.z - dx.z * dz.x);  // of a cell's, seen from above
     }
-    out.normals.resize(out.positions.size(), Vec3(0.0f));
-    // Two triangles per wet cell, (c, c + w, c + 1) and (c + 1, c + w, c + w + 1) as the
-    // terrain's; each adds its area-weighted normal (the cross product) to its corners.
-    const auto triangle = [&](size_t a, size_t b, size_t c) {
-        const uint32_t ia = vertex[a], ib = vertex[b], ic = vertex[c];
-        out.indices.insert(out.indices.end(), {ia, ib, ic});
-        const Vec3 nrm = glm::cross(out.positions[ib] - out.positions[ia], out.positions[ic] - out.positions[ia]);
-        for (const uint32_t v : {ia, ib, ic}) out.normals[v] += nrm;
-    };
+
+    bool wet(size_t k) const { return depth_[k] > 0.0f; }
+
+    /// The vertex of sample k at its level (created on first use, with the velocity of
+    /// sample `velocity_of`: k's own, or for a dry k a cut's wet end's).
+    uint32_t sample_vertex(size_t k, size_t velocity_of) {
+        uint32_t& v = s_.vertex[k];
+        if (v == kNone) v = add(Vec3(bed_[k].x, s_.level[k], bed_[k].z), velocity_of);
+        return v;
+    }
+
+    /// Triangle (a, b, c), counter-clockwise from above: its part where level > bed.
+    void triangle(size_t a, size_t b, size_t c) {
+        const size_t corner[3] = {a, b, c};
+        const bool in[3] = {wet(a), wet(b), wet(c)};
+        if (!in[0] && !in[1] && !in[2]) return;
+        uint32_t poly[4];
+        int n = 0;
+        for (int e = 0; e < 3; ++e) {
+            const size_t p = corner[e], q = corner[(e + 1) % 3];
+            if (in[e]) poly[n++] = sample_vertex(p, p);
+            if (in[e] != in[(e + 1) % 3]) poly[n++] = in[e] ? cut(p, q) : cut(q, p);
+        }
+        int m = 0;  // snapped cuts may repeat a vertex: drop the repeats
+        for (int k = 0; k < n; ++k)
+            if (m == 0 || poly[m - 1] != poly[k]) poly[m++] = poly[k];
+        while (m > 1 && poly[m - 1] == poly[0]) --m;
+        for (int k = 1; k + 1 < m; ++k) emit(poly[0], poly[k], poly[k + 1]);
+    }
+
+private:
+    uint32_t add(const Vec3& p, size_t velocity_of) {
+        out_.positions.push_back(p);
+        out_.normals.emplace_back(0.0f);
+        if (vv_) vv_->push_back(velocity_.empty() ? Vec3(0.0f) : velocity_[velocity_of]);
+        return uint32_t(out_.positions.size() - 1);
+    }
+
+    /// The shoreline's vertex on the edge from wet sample p to dry sample q (one per edge).
+    uint32_t cut(size_t p, size_t q) {
+        const size_t lo = std::min(p, q), hi = std::max(p, q);
+        const size_t slot = 3 * lo + (hi == lo + 1 ? 0 : hi == lo + w_ ? 1 : 2);
+        uint32_t& v = s_.crossing[slot];
+        if (v != kNone) return v;
+        const float fp = s_.level[p] - bed_[p].y, fq = s_.level[q] - bed_[q].y;  // > 0, <= 0
+        const float t = fp / (fp - fq);
+        if (t < kSnap) return v = sample_vertex(p, p);
+        if (t > 1.0f - kSnap) return v = sample_vertex(q, p);
+        const Vec3 a(bed_[p].x, s_.level[p], bed_[p].z), b(bed_[q].x, s_.level[q], bed_[q].z);
+        return v = add(a + t * (b - a), p);
+    }
+
+    void emit(uint32_t a, uint32_t b, uint32_t c) {
+        const Vec3 nrm = glm::cross(out_.positions[b] - out_.positions[a], out_.positions[c] - out_.positions[a]);
+        if (!(nrm.y > 2.0f * min_area_)) return;  // collinear (or turned over): no triangle
+        out_.indices.insert(out_.indices.end(), {a, b, c});
+        for (const uint32_t v : {a, b, c}) out_.normals[v] += nrm;
+    }
+
+    std::span<const Vec3> bed_;
+    std::span<const float> depth_;
+    size_t w_;
+    SurfaceMesh& out_;
+    HeightfieldScratch& s_;
+    std::span<const Vec3> velocity_;
+    std::vector<Vec3>* vv_;
+    float min_area_ = 0.0f;
+};
+
+}  // namespace
+
+void append_heightfield_surface(std::span<const Vec3> bed, std::span<const float> depth, int rows, int columns,
+                                SurfaceMesh& out, HeightfieldScratch* scratch, std::span<const Vec3> velocity,
+                                std::vector<Vec3>* vertex_velocity) {
+    if (rows < 2 || columns < 2) return;
+    const size_t n = size_t(rows) * size_t(columns), w = size_t(columns);
+    if (bed.size() != n || depth.size() != n) return;
+    if (!velocity.empty() && velocity.size() != n) velocity = {};
+    HeightfieldScratch own;
+    HeightfieldScratch& s = scratch ? *scratch : own;
+    water_levels(bed, depth, rows, columns, s.level);
+    s.vertex.assign(n, kNone);
+    s.crossing.assign(3 * n, kNone);
+    const size_t first = out.positions.size();
+    out.normals.resize(first, Vec3(0.0f, 1.0f, 0.0f));
+    Builder build(bed, depth, columns, out, s, velocity, vertex_velocity);
+    for (size_t k = 0; k < n; ++k)  // the wet samples' vertices first, in sample order
+        if (build.wet(k)) build.sample_vertex(k, k);
+    // Two triangles per cell, (c, c + w, c + 1) and (c + 1, c + w, c + w + 1) as the
+    // terrain's, each cut to its wet part.
     for (int i = 0; i + 1 < rows; ++i)
         for (int j = 0; j + 1 < columns; ++j) {
-            if (!wet(i, j)) continue;
-            const size_t c = size_t(i) * size_t(columns) + size_t(j), w = size_t(columns);
-            triangle(c, c + w, c + 1);
-            triangle(c + 1, c + w, c + w + 1);
+            const size_t c = size_t(i) * w + size_t(j);
+            if (!build.wet(c) && !build.wet(c + 1) && !build.wet(c + w) && !build.wet(c + w + 1)) continue;
+            build.triangle(c, c + w, c + 1);
+            build.triangle(c + 1, c + w, c + w + 1);
         }
     for (size_t v = first; v < out.normals.size(); ++v) {
         const float len = glm::length(out.normals[v]);

@@ -6,6 +6,8 @@
 
 #include <glm/geometric.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <map>
 #include <utility>
 #include <vector>
@@ -64,21 +66,89 @@ TEST(HeightfieldSurface, SmoothNormalsOfAPlaneAreItsNormal) {
     }
 }
 
-TEST(HeightfieldSurface, ACellWithADryCornerIsLeftOut) {
-    // 3 x 3 samples, four cells; the centre sample dry: no cell has four wet corners.
+TEST(HeightfieldSurface, ADrySampleCutsItsTrianglesWhereTheLevelMeetsTheBed) {
+    // 3 x 3 samples on a flat bed, the centre dry: its ring level is its bed (0), so the
+    // cuts lie at the centre sample itself (snapped) and the water covers every cell.
     const auto b = bed(3, 3, [](int, int) { return 0.0f; });
     std::vector<float> depth(9, 0.2f);
     depth[4] = 0.0f;
     SurfaceMesh m;
     append_heightfield_surface(b, depth, 3, 3, m);
-    EXPECT_EQ(m.triangle_count(), 0u);
-    EXPECT_EQ(m.vertex_count(), 0u);
-    // The corner sample (2, 2) dry instead: three wet cells, eight samples used.
-    depth[4] = 0.2f;
-    depth[8] = 0.0f;
-    append_heightfield_surface(b, depth, 3, 3, m);
-    EXPECT_EQ(m.triangle_count(), 6u);
-    EXPECT_EQ(m.vertex_count(), 8u);
+    EXPECT_EQ(m.triangle_count(), 8u);
+    EXPECT_EQ(m.vertex_count(), 9u);  // eight wet samples and the dry centre at its bed
+    // A bank: the centre sample 1 m high; its neighbours' level 0.2 m meets it a fifth of
+    // the way up each edge (0.2 along, 0.16 on the diagonal's halves... all at y = 0.2).
+    const auto bank = bed(3, 3, [](int i, int j) { return i == 1 && j == 1 ? 1.0f : 0.0f; });
+    SurfaceMesh k;
+    append_heightfield_surface(bank, depth, 3, 3, k);
+    EXPECT_GT(k.vertex_count(), 8u);
+    for (size_t v = 8; v < k.vertex_count(); ++v) {  // the cuts: 0.2 of the way to the centre
+        EXPECT_NEAR(k.positions[v].y, 0.2f, 1e-6f) << v;
+        const float d = std::max(std::abs(k.positions[v].x - 1.0f), std::abs(k.positions[v].z - 1.0f));
+        EXPECT_NEAR(d, 0.8f, 1e-5f) << v;
+    }
+    for (size_t t = 0; t < k.indices.size(); t += 3) {
+        const Vec3 a = k.positions[k.indices[t]], c1 = k.positions[k.indices[t + 1]], c2 = k.positions[k.indices[t + 2]];
+        EXPECT_GT(glm::cross(c1 - a, c2 - a).y, 0.0f) << t / 3;
+    }
+    // Everything dry: nothing.
+    SurfaceMesh none;
+    append_heightfield_surface(b, std::vector<float>(9, 0.0f), 3, 3, none);
+    EXPECT_EQ(none.vertex_count(), 0u);
+    EXPECT_EQ(none.triangle_count(), 0u);
+}
+
+TEST(HeightfieldSurface, ALakeInABowlEndsOnTheContourNotOnTheCellsStaircase) {
+    // A paraboloid bowl z = 0.02 r^2 (cells of 1 m) filled to L = 2 m: the shoreline is the
+    // circle r = 10 m. The old mesh (cells with four wet corners) stopped up to a cell and
+    // a half inside it; the cut mesh's shoreline lies on the bed's triangles at L.
+    const int n = 41;
+    const float c = 20.0f, level = 2.0f, r_shore = 10.0f;
+    const auto b = bed(n, n, [&](int i, int j) {
+        const float x = float(j) - c, z = float(i) - c;
+        return 0.02f * (x * x + z * z);
+    });
+    std::vector<float> depth(b.size());
+    std::vector<Vec3> velocity(b.size(), Vec3(0.0f));
+    for (size_t k = 0; k < b.size(); ++k) {
+        depth[k] = std::max(level - b[k].y, 0.0f);
+        if (depth[k] > 0.0f) velocity[k] = Vec3(1.0f, 0.0f, 0.0f);
+    }
+    SurfaceMesh m;
+    HeightfieldScratch scratch;
+    std::vector<Vec3> vv;
+    append_heightfield_surface(b, depth, n, n, m, &scratch, velocity, &vv);
+    ASSERT_EQ(vv.size(), m.vertex_count());
+    for (const Vec3& v : vv) EXPECT_EQ(v, Vec3(1.0f, 0.0f, 0.0f));  // a cut's velocity: its wet end's
+    // The shoreline's vertices: those after the wet samples' (the cuts, and the dry
+    // samples a cut snapped to).
+    const size_t wet = size_t(std::count_if(depth.begin(), depth.end(), [](float d) { return d > 0.0f; }));
+    ASSERT_GT(m.vertex_count(), wet + 60);  // the circle's ~63 m at under a cell per vertex
+    float worst = 0.0f;
+    for (size_t v = wet; v < m.vertex_count(); ++v) {
+        const Vec3 p = m.positions[v];
+        worst = std::max(worst, std::abs(std::hypot(p.x - c, p.z - c) - r_shore));
+    }
+    // Linear interpolation of the bowl along the edges, and cuts snapped by 5 % of an edge:
+    // well under a tenth of a cell (the staircase: up to 1.4 cells).
+    EXPECT_LT(worst, 0.1f);
+    // The area seen from above is the disc's (the staircase of cells with four wet corners
+    // misses 46 m^2 of it): the inscribed polygon's chords take under 1 m^2.
+    double area = 0.0;
+    for (size_t t = 0; t < m.indices.size(); t += 3) {
+        const Vec3 a = m.positions[m.indices[t]], c1 = m.positions[m.indices[t + 1]], c2 = m.positions[m.indices[t + 2]];
+        area += 0.5 * double(glm::cross(c1 - a, c2 - a).y);
+    }
+    EXPECT_NEAR(area, 3.14159265 * r_shore * r_shore, 1.5);
+    float top = -1e9f, min_area = 1e9f;
+    for (const Vec3& p : m.positions) top = std::max(top, p.y);
+    EXPECT_LE(top, level + 1e-5f);  // nothing above the lake
+    for (size_t t = 0; t < m.indices.size(); t += 3) {
+        const Vec3 a = m.positions[m.indices[t]], c1 = m.positions[m.indices[t + 1]], c2 = m.positions[m.indices[t + 2]];
+        min_area = std::min(min_area, 0.5f * glm::cross(c1 - a, c2 - a).y);
+    }
+    EXPECT_GT(min_area, 1e-4f);  // no sliver: the smallest cut is 5 % of an edge on two sides
+    for (const Vec3& nrm : m.normals) EXPECT_GT(nrm.y, 0.999f);  // flat: normals up
 }
 
 TEST(HeightfieldSurface, AppendsAfterWhatTheMeshHoldsAndRefusesWrongSizes) {
@@ -88,7 +158,7 @@ TEST(HeightfieldSurface, AppendsAfterWhatTheMeshHoldsAndRefusesWrongSizes) {
     m.positions = {Vec3(0.0f), Vec3(1.0f, 0.0f, 0.0f), Vec3(0.0f, 0.0f, 1.0f)};
     m.normals = {Vec3(0.0f, 0.0f, 1.0f), Vec3(0.0f, 0.0f, 1.0f), Vec3(0.0f, 0.0f, 1.0f)};
     m.indices = {0, 1, 2};
-    std::vector<uint32_t> scratch;
+    HeightfieldScratch scratch;
     append_heightfield_surface(b, depth, 2, 2, m, &scratch);
     ASSERT_EQ(m.vertex_count(), 7u);
     ASSERT_EQ(m.triangle_count(), 3u);
