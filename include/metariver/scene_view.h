@@ -26,6 +26,10 @@ struct SceneView {
     /// Metres: the particles' neighbourhood for the surface's velocities (flow_radius in
     /// scene.h); 0 gives every vertex velocity 0.
     float flow_radius = 0.0f;
+    /// The fluid's velocity at the surface's last vertices, when the producer knows it (a
+    /// heightfield's water: append_heightfield_surface's vertex_velocity), m/s; the
+    /// vertices before them take theirs from the particles. Empty: all from the particles.
+    std::span<const Vec3> surface_velocity;
     /// The rigid bodies in the water (their meshes and transforms); empty: none.
     std::span<const BodyState> bodies;
     /// Who made the view and at which of its frames: a reader that saw the same owner

@@ -306,7 +306,14 @@ struct Renderer::Impl {
         water_idx.upload(m.indices.data(), m.indices.size() * sizeof(uint32_t), stats);
         stats.water_triangles = m.triangle_count();
         const auto t0 = std::chrono::steady_clock::now();
-        surface_velocities(m.positions, *view.particles, view.flow_radius, flow_ws, scratch_velocity);
+        // The particles' velocities for the particle surface, the producer's own for the
+        // vertices it knows them for (a heightfield's, at the end of the mesh).
+        const size_t known = std::min(view.surface_velocity.size(), m.positions.size());
+        const size_t from_particles = m.positions.size() - known;
+        surface_velocities(std::span<const Vec3>(m.positions).first(from_particles), *view.particles, view.flow_radius,
+                           flow_ws, scratch_velocity);
+        scratch_velocity.insert(scratch_velocity.end(), view.surface_velocity.end() - std::ptrdiff_t(known),
+                                view.surface_velocity.end());
         stats.flow_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
         water_vel.upload(scratch_velocity.data(), scratch_velocity.size() * sizeof(Vec3), stats);
         view.particles->gather_active_positions(scratch_positions);

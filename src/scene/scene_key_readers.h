@@ -78,15 +78,16 @@ constexpr ReadIf kCollisionSection{
 constexpr ReadIf kSeedSolver{.holds = [](S d) { return d.solver != SolverKind::Pbf && d.solver != SolverKind::Hybrid; },
                              .refusal = [](F f) { return seed_unused(f.def.solver); },
                              .scope = ReadScope::Solver};
-/// Diffuse particles need the fluid's kernel neighbourhoods.
+/// Diffuse particles need the fluid's kernel neighbourhoods (PBF) or its velocity on a
+/// grid (swe: heightfield_foam.h).
 constexpr std::string (*kFoamSolverRefusal)(F) = [](F f) {
-    return fmt::format("only solver = \"pbf\" makes foam (diffuse particles need the fluid's kernel neighbourhoods; {} "
-                       "has none): remove [foam]",
+    return fmt::format("only solver = \"pbf\" or \"swe\" makes foam (diffuse particles need the fluid's kernel "
+                       "neighbourhoods or its velocity on a grid; {} has neither): remove [foam]",
                        solver_is(f.def));
 };
-constexpr ReadIf kFoamSolver{.holds = [](S d) { return d.solver == SolverKind::Pbf; }, .refusal = kFoamSolverRefusal,
+constexpr ReadIf kFoamSolver{.holds = [](S d) { return d.solver == SolverKind::Pbf || d.solver == SolverKind::Swe; }, .refusal = kFoamSolverRefusal,
                              .scope = ReadScope::Solver};
-constexpr ReadIf kFoamSwitchSolver{.holds = [](S d) { return d.solver == SolverKind::Pbf; },
+constexpr ReadIf kFoamSwitchSolver{.holds = [](S d) { return d.solver == SolverKind::Pbf || d.solver == SolverKind::Swe; },
                                    .refusal = kFoamSolverRefusal,
                                    .scope = ReadScope::Solver,
                              .agrees = [](S d) { return !d.foam.enabled; }};
@@ -349,8 +350,8 @@ MR_READERS(kLambda, "surface.method taubin; laplacian with steps = uniform", kSm
 MR_READERS(kPassBand, "surface.method taubin; laplacian with steps = chebyshev", kSmoothSurfaceOn, kSmoothMethod,
            kSmoothIterations, kSmoothPassBand);
 MR_READERS(kFeatures, "smoothing with field.kernel = poly6", kSmoothSurfaceOn, kSmoothMethod, kSmoothIterations, kSmoothFeatures);
-MR_READERS(kFoamSwitch, "solver = pbf", kFoamSwitchSolver);
-MR_READERS(kFoam, "solver = pbf, foam.enabled", kFoamSolver, kFoamOn);
+MR_READERS(kFoamSwitch, "solver = pbf or swe", kFoamSwitchSolver);
+MR_READERS(kFoam, "solver = pbf or swe, foam.enabled", kFoamSolver, kFoamOn);
 MR_READERS(kBulletSubsteps, "solver = bullet, max_substeps > 0", kBulletSection, kBulletSubstepsOn);
 MR_READERS(kBulletSleep, "solver = bullet without bullet.springs", kBulletSection, kSleepNoSprings);
 

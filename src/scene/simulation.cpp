@@ -155,6 +155,8 @@ Simulation::Impl::Impl(const SceneDef& def, Terrain terrain, Bvh bvh, std::optio
     if (!solver_) return;  // create() reports it
     if (solver_entry_.foam_kernel_radius && def_.foam.enabled)
         foam_.emplace(def_.foam, solver_entry_.foam_kernel_radius(def_), def_.integrator.gravity);
+    else if (def_.foam.enabled && !solver_->water_particles() && solver_->water_heightfield())
+        heightfield_foam_.emplace(def_.foam);
     if (solver_entry_.prefills && def_.spawn.prefill && terrain_.condition_report().mode == TerrainCondition::Carve)
         prefill_channel();
 }
@@ -363,6 +365,7 @@ void Simulation::Impl::step(float frame_dt) {
         build_particle_surface(*p);
     } else {
         surface_.clear();
+        heightfield_velocity_.clear();
         timings_.field_ms = timings_.surface_ms = timings_.smoothing_ms = 0.0;
         smooth_ws_.stats = SmoothingStats{};
     }
@@ -371,6 +374,12 @@ void Simulation::Impl::step(float frame_dt) {
 
 void Simulation::Impl::step_foam(float frame_dt) {
     const Particles* p = solver_->water_particles();
+    const HeightfieldWater* w = solver_->water_heightfield();
+    if (heightfield_foam_ && w) {
+        const auto t0 = Clock::now();
+        heightfield_foam_->step(*w, terrain_.vertices(), frame_dt, solver_->frame());
+        timings_.foam_ms = ms_since(t0);
+    }
     if (!foam_ || !p) return;
     const auto t0 = Clock::now();
     const float dt = def_.integrator.fixed_dt > 0.0f ? def_.integrator.fixed_dt : frame_dt;
@@ -416,7 +425,9 @@ void Simulation::Impl::build_particle_surface(const Particles& p) {
 void Simulation::Impl::append_heightfield(const HeightfieldWater& w) {
     // On the terrain's grid: each vertex is its bed sample raised by the depth.
     const auto t0 = Clock::now();
-    append_heightfield_surface(terrain_.vertices(), w.depth, w.rows, w.columns, surface_, &heightfield_scratch_);
+    heightfield_velocity_.clear();
+    append_heightfield_surface(terrain_.vertices(), w.depth, w.rows, w.columns, surface_, &heightfield_scratch_,
+                               w.velocity, &heightfield_velocity_);
     timings_.surface_ms += ms_since(t0);
 }
 

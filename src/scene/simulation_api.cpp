@@ -103,8 +103,10 @@ SceneView Simulation::view() const {
                      .paper_rows = impl_->def_.terrain.paper_row_orientation,
                      .particles = &particles(),
                      .surface = &impl_->surface_,
-                     .foam = f ? &f->particles() : nullptr,
+                     .foam = f ? &f->particles()
+                                : impl_->heightfield_foam_ ? &impl_->heightfield_foam_->particles() : nullptr,
                      .flow_radius = flow_radius(impl_->def_),
+                     .surface_velocity = impl_->heightfield_velocity_,
                      .bodies = bodies(),
                      .owner = this,
                      .frame = frame()};

@@ -6,6 +6,8 @@
 
 #include <metariver/scene.h>
 
+#include "heightfield_foam.h"
+
 #include <tbb/task_arena.h>
 
 #include <limits>
@@ -37,6 +39,7 @@ struct Simulation::Impl {
     SmoothingWorkspace smooth_ws_;
     SurfaceMesh surface_;
     HeightfieldScratch heightfield_scratch_;  ///< append_heightfield_surface's
+    std::vector<Vec3> heightfield_velocity_;  ///< the velocity at the heightfield's vertices (the mesh's last)
     FrameTimings timings_;
     uint64_t field_overflows_ = 0;
     uint64_t terrain_lifts_ = 0;
@@ -53,6 +56,7 @@ struct Simulation::Impl {
     mutable SampleRect channel_stale_;
     std::optional<RiverSize> sizing_;
     std::optional<FoamSystem> foam_;
+    std::optional<HeightfieldFoam> heightfield_foam_;  ///< [foam] on a heightfield solver's water
     size_t prefilled_ = 0;
     /// Every piece of work runs inside it (Simulation::set_threads): its concurrency
     /// bounds the threads the solver, the field and the surface use.
