@@ -15,6 +15,8 @@
 
 namespace mr {
 
+class Terrain;  // terrain.h
+
 struct Particles;  // particles.h
 
 /// Counters a solver accumulates; tests and --stats read them.
@@ -93,6 +95,9 @@ public:
     /// step_frame: each one's position at exit (just past the terrain's edge), in the
     /// solver's deterministic order. Empty for solvers without sinks.
     virtual std::span<const Vec3> last_exits() const { return {}; }
+    /// The terrain's heights changed over samples rows i0..i1 (z), columns j0..j1 (x)
+    /// (Simulation::sculpt / restore): a solver with its own copy of the bed reads them.
+    virtual void terrain_edited(const Terrain& /*terrain*/, int /*i0*/, int /*i1*/, int /*j0*/, int /*j1*/) {}
 };
 
 }  // namespace mr

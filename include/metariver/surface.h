@@ -99,7 +99,7 @@ struct HeightfieldScratch {
 /// `bed` and `depth` hold rows x columns samples, row-major (index i * columns + j, as
 /// Terrain::vertices()): the bed's positions and the water's depth above them, metres.
 /// A sample is wet when its depth is > 0; its level is bed + depth. A dry sample beside a
-/// wet one (8 neighbours: the ring) gets the mean level of its wet neighbours, capped at
+/// wet one (8 neighbours: the ring) gets the lowest level of its wet neighbours, capped at
 /// its own bed. Each cell is split into two triangles as the terrain's mesh splits it, and
 /// each triangle is cut where level - bed (depth on wet samples, <= 0 on the ring) crosses
 /// 0, linear along its edges (marching triangles): the shoreline is where the water's

@@ -140,6 +140,15 @@ public:
     uint64_t frame() const override { return frame_; }
     const HeightfieldWater* water_heightfield() const override { return &water_; }
     std::vector<std::string> warnings() const override;
+    /// Interaction (swe_edit.cpp): pours count x kPourVolume m^3 at once over the cells
+    /// within kPourRadius cells of `center` (counted as inflow in balance()); pushes
+    /// the wet cells within `radius` (2D) by velocity x (1 - (d / radius)^2)^2 (returns
+    /// how many); a sculpted bed reaches the core, each cell keeping its depth.
+    static constexpr double kPourVolume = 0.125;  // m^3: a particle of the default river (0.5 m)
+    static constexpr double kPourRadius = 2.0;
+    void pour(const Vec3& center, int count) override;
+    size_t push(const Vec3& center, float radius, const Vec3& velocity) override;
+    void terrain_edited(const Terrain& terrain, int i0, int i1, int j0, int j1) override;
 
     /// Live edit of friction, CFL, dry depth, order, discharge, rain, the time scale, the
     /// sources and sinks (the initial lake and swe.init need a new solver: false, nothing
@@ -187,6 +196,7 @@ private:
     float channel_length_ = 0.0f, channel_slope_ = kSweLeastSlope;
     double start_time_ = 0.0;  ///< the core's time at frame 0
     SweInitReport init_;
+    double poured_ = 0.0;  ///< m^3 pour() added (inflow)
 };
 
 }  // namespace mr

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace mr {
 
@@ -61,9 +62,12 @@ float HeightfieldFoam::emission_rate(const HeightfieldWater& w, std::span<const 
     const Vec3 v = w.velocity[k];
     const float phi_k = ramp(0.5f * glm::dot(v, v), def_.energy_min, def_.energy_max);
     if (phi_k <= 0.0f) return 0.0f;
+    // The flow converging on the cell's neighbours (a jump; not the shear at the banks).
     float ta = 0.0f;
-    for (const size_t n : {k - 1, k + 1, k - cols, k + cols})
-        if (w.depth[n] >= kWetDepth) ta += glm::length(v - w.velocity[n]);
+    const std::pair<size_t, Vec3> around[4] = {{k - 1, Vec3(-1, 0, 0)}, {k + 1, Vec3(1, 0, 0)},
+                                               {k - cols, Vec3(0, 0, -1)}, {k + cols, Vec3(0, 0, 1)}};
+    for (const auto& [n, e] : around)
+        if (w.depth[n] >= kWetDepth) ta += std::max(glm::dot(v - w.velocity[n], e), 0.0f);
     const auto level = [&](size_t n) { return bed[n].y + w.depth[n]; };
     const float gx = (level(k + 1) - level(k - 1)) / (2.0f * w.spacing);
     const float gz = (level(k + cols) - level(k - cols)) / (2.0f * w.spacing);

@@ -2,7 +2,8 @@
 // particles of [foam] (foam.h) seeded from the grid's velocity instead of the particles'
 // neighbourhoods, with Ihmsen et al.'s potentials read on the cells:
 //   kinetic      I_k  = 0.5 |v|^2                                   (J/kg)
-//   trapped air  I_ta = sum over the 4 neighbours of |v - v_n|       (m/s: shear, a jump)
+//   trapped air  I_ta = sum over the 4 neighbours n of max((v - v_n) . e_n, 0), e_n the
+//                unit step to n (m/s: the flow converging, a jump; not the banks' shear)
 //   wave crest   I_wc = |grad (bed + depth)|                         (the surface's slope)
 // mapped by the same Phi(I, min, max) and [foam] thresholds; a wet cell emits
 // Phi_k (rate_ta Phi_ta + rate_wc Phi_wc) dt (spacing / 0.5 m)^2 foam particles (the

@@ -145,6 +145,7 @@ void Simulation::Impl::restore(const TerrainEdit& edit) {
 void Simulation::Impl::after_terrain_edit(const TerrainEdit& e) {
     if (e.empty()) return;
     bvh_.refit_heights(terrain_);
+    solver_->terrain_edited(terrain_, e.i0, e.i1, e.j0, e.j1);
     // The network is updated over the changed samples when next read (refresh_channel).
     SampleRect& r = channel_stale_;
     r = {std::min(r.i0, e.i0), std::max(r.i1, e.i1), std::min(r.j0, e.j0), std::max(r.j1, e.j1)};

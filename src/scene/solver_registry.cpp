@@ -103,8 +103,6 @@ SolverEntry swe_entry() {
             return std::make_unique<SweSolver>(t, d.swe, d.spawn.center, d.integrator.gravity);
         },
         .apply = edits<SweSolver>([](SweSolver& s, const SceneDef& d) { return s.set_params(d.swe, d.spawn.center); }),
-        .no_push = "has no particles to push (its water is a heightfield)",
-        .no_sculpt = "reads the bed once when it is made; sculpt with pbf or springs",
     };
 }
 

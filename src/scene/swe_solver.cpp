@@ -340,7 +340,7 @@ void SweSolver::step_frame(float frame_dt) {
 
 SweBalance SweSolver::balance() const {
     const swe::MassBalance b = core_->balance();
-    return {.initial = b.initial, .inflow = b.inflow, .rain = b.rain, .outflow = b.outflow, .sunk = b.sunk,
+    return {.initial = b.initial, .inflow = b.inflow + poured_, .rain = b.rain, .outflow = b.outflow, .sunk = b.sunk,
             .stored = b.stored, .exchanged = b.exchanged};
 }
 

@@ -18,8 +18,10 @@ constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
 constexpr float kSnap = 0.05f;  // a cut this close to an edge's end (of its length) moves to the end
 
 /// The water's level per sample: bed + depth where wet; on the ring (dry beside a wet
-/// sample, 8 neighbours) the mean of the wet neighbours' levels capped at the own bed, so
-/// level - bed is > 0 exactly on the wet samples. Samples beyond the ring are never read.
+/// sample, 8 neighbours) the lowest of the wet neighbours' levels capped at the own bed,
+/// so level - bed is > 0 exactly on the wet samples. The lowest, not the mean: beside a
+/// steep stream the upstream neighbours' levels would lift the ring over banks the water
+/// beside them does not reach (teeth along the bank). Samples beyond the ring are never read.
 void water_levels(std::span<const Vec3> bed, std::span<const float> depth, int rows, int columns,
                   std::vector<float>& level) {
     level.resize(bed.size());
@@ -28,18 +30,15 @@ void water_levels(std::span<const Vec3> bed, std::span<const float> depth, int r
         for (int j = 0; j < columns; ++j) {
             const size_t k = size_t(i) * size_t(columns) + size_t(j);
             if (depth[k] > 0.0f) continue;
-            float sum = 0.0f;
-            int count = 0;
+            float lowest = bed[k].y;  // the cap
             for (int di = -1; di <= 1; ++di)
                 for (int dj = -1; dj <= 1; ++dj) {
                     const int a = i + di, b = j + dj;
                     if (a < 0 || b < 0 || a >= rows || b >= columns) continue;
                     const size_t q = size_t(a) * size_t(columns) + size_t(b);
-                    if (depth[q] <= 0.0f) continue;
-                    sum += bed[q].y + depth[q];
-                    ++count;
+                    if (depth[q] > 0.0f) lowest = std::min(lowest, bed[q].y + depth[q]);
                 }
-            if (count > 0) level[k] = std::min(sum / float(count), bed[k].y);
+            level[k] = lowest;
         }
 }
 

@@ -11,6 +11,8 @@
 #include <glm/geometric.hpp>
 
 #include <cmath>
+#include <memory>
+#include <utility>
 #include <vector>
 
 namespace mr {
@@ -85,6 +87,59 @@ TEST(SweLook, ADamBreakHasFoamAndItsMeshCarriesTheWatersVelocity) {
     for (const Vec3& u : v.surface_velocity) fastest = std::max(fastest, glm::length(u));
     EXPECT_GT(fastest, 2.0f);
     EXPECT_LE(fastest, s.solver().counters().max_speed + 1e-4f);
+}
+
+
+/// The default valley under swe with a still lake up to 13 m over its lower part.
+std::unique_ptr<Simulation> lake() {
+    SceneDef d = default_scene();
+    d.solver = SolverKind::Swe;
+    d.swe.initial_level = 13.0f;
+    auto sim = Simulation::create(d);
+    EXPECT_TRUE(sim.ok()) << sim.error().message;
+    return sim.ok() ? std::move(sim.value()) : nullptr;
+}
+
+const SweSolver& swe(const Simulation& s) { return dynamic_cast<const SweSolver&>(s.solver()); }
+
+/// The wet sample nearest the lake's middle: (row, column) and its position.
+std::pair<size_t, Vec3> a_wet_sample(const Simulation& s) {
+    const HeightfieldWater& w = *s.heightfield();
+    size_t best = 0;
+    for (size_t k = 0; k < w.size(); ++k)
+        if (w.depth[k] > w.depth[best]) best = k;
+    return {best, s.terrain().vertices()[best]};
+}
+
+TEST(SweLook, PourAddsWaterCountedAsInflowPushMovesItSculptingMovesTheBed) {
+    auto sim = lake();
+    ASSERT_TRUE(sim);
+    Simulation& s = *sim;
+    const auto [k, at] = a_wet_sample(s);
+    const double before = swe(s).balance().stored;
+    s.pour(at, 40);  // 40 x 0.125 m^3
+    EXPECT_NEAR(swe(s).balance().stored - before, 40 * SweSolver::kPourVolume, 1e-9);
+    EXPECT_NEAR(swe(s).balance().inflow, 40 * SweSolver::kPourVolume, 1e-12);
+    for (int f = 0; f < 60; ++f) s.step(1.0f / 60.0f);
+    EXPECT_LT(std::abs(swe(s).balance().error()), 1e-9 * swe(s).balance().stored);
+
+    // Push: the cells within the radius move the way they were pushed.
+    auto still = lake();
+    ASSERT_TRUE(still);
+    auto pushed = s.push(at, 3.0f, Vec3(2.0f, 0.0f, 0.0f));
+    ASSERT_TRUE(pushed.ok()) << pushed.error().message;
+    EXPECT_GT(pushed.value(), 5u);
+    EXPECT_GT(s.heightfield()->velocity[k].x, 1.0f);
+
+    // Sculpt: a mound raised under the lake raises the water with it (the core's bed),
+    // and the lake flows off it.
+    auto edit = still->sculpt(Brush{.x = at.x, .z = at.z, .radius = 3.0f, .strength = 1.0f, .mode = BrushMode::Raise});
+    ASSERT_TRUE(edit.ok()) << edit.error().message;
+    const float bed_now = still->terrain().vertices()[k].y;
+    EXPECT_GT(bed_now, at.y);
+    for (int f = 0; f < 30; ++f) still->step(1.0f / 60.0f);
+    EXPECT_GT(still->solver().counters().max_speed, 0.05f);  // was at rest
+    EXPECT_LT(std::abs(swe(*still).balance().error()), 1e-9 * swe(*still).balance().stored);
 }
 
 }  // namespace
