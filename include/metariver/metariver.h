@@ -33,7 +33,7 @@ extern "C" {
 
 /* The API this header describes; mr_api_version() is the library's (same major: compatible). */
 #define MR_API_VERSION_MAJOR 1
-#define MR_API_VERSION_MINOR 1 /* 1: bodies (mr_world_add_body & co) */
+#define MR_API_VERSION_MINOR 2 /* 1: bodies (mr_world_add_body & co); 2: the shallow-water grid (mr_world_heightfield) */
 #define MR_API_VERSION ((MR_API_VERSION_MAJOR << 16) | MR_API_VERSION_MINOR)
 
 typedef enum mr_status {
@@ -144,6 +144,21 @@ typedef struct mr_terrain_info {
 MR_API mr_status mr_world_terrain(const mr_world* world, mr_terrain_info* out);
 /* Ground heights in metres, heights[row * columns + column] (capacity >= rows * columns). */
 MR_API mr_status mr_world_copy_terrain_heights(const mr_world* world, float* heights, size_t capacity);
+
+/* The water as a grid (solver = "swe": one cell per terrain sample). MR_ERROR_UNSUPPORTED
+ * for a solver whose water is not a grid (particles). */
+typedef struct mr_heightfield_info {
+    int32_t columns, rows; /* cells along x and z */
+    float spacing;         /* metres between neighbouring cells */
+    float origin[2];       /* x and z of cell (row 0, column 0), metres */
+} mr_heightfield_info;
+MR_API mr_status mr_world_heightfield(const mr_world* world, mr_heightfield_info* out);
+/* Copies the grid of the latest frame, cell row * columns + column: depth (m, 0: dry),
+ * velocity (2 floats a cell: x and z, m/s) and bed (the ground, m); any of the three may
+ * be NULL (not copied). capacity: cells each non-NULL buffer holds (>= rows * columns, else
+ * MR_ERROR_BUFFER_TOO_SMALL, nothing written). */
+MR_API mr_status mr_world_copy_heightfield(const mr_world* world, float* depth, float* velocity, float* bed,
+                                           size_t capacity);
 
 /* The resolved scene as TOML (what `metariver scene` prints): writes at most capacity
  * bytes including the terminating NUL; *length: the text's length without it

@@ -26,6 +26,7 @@ from .world import Particles as Particles
 from .world import Stats as Stats
 from .world import Surface as Surface
 from .world import TerrainInfo as TerrainInfo
+from .world import Heightfield as Heightfield
 
 class ParticlesView:
     @property
@@ -56,6 +57,7 @@ class World:
     @property
     def terrain(self) -> TerrainInfo: ...
     def terrain_heights(self) -> npt.NDArray[np.float32]: ...
+    def heightfield(self) -> Heightfield: ...
     @property
     def scene_toml(self) -> str: ...
     @property

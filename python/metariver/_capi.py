@@ -73,6 +73,10 @@ class mr_terrain_info(ctypes.Structure):
                 ("max_y", c_float)]
 
 
+class mr_heightfield_info(ctypes.Structure):
+    _fields_ = [("columns", c_int32), ("rows", c_int32), ("spacing", c_float), ("origin", c_float * 2)]
+
+
 class mr_brush(ctypes.Structure):
     _fields_ = [("x", c_float), ("z", c_float), ("radius", c_float), ("strength", c_float), ("mode", c_int),
                 ("target", c_float)]
@@ -116,6 +120,8 @@ _SIGNATURES = {
                                       POINTER(c_size_t), POINTER(c_size_t)]),
     "mr_world_terrain": (c_int, [_world_p, POINTER(mr_terrain_info)]),
     "mr_world_copy_terrain_heights": (c_int, [_world_p, _f32p, c_size_t]),
+    "mr_world_heightfield": (c_int, [_world_p, POINTER(mr_heightfield_info)]),
+    "mr_world_copy_heightfield": (c_int, [_world_p, _f32p, _f32p, _f32p, c_size_t]),
     "mr_world_scene_toml": (c_int, [_world_p, c_char_p, c_size_t, POINTER(c_size_t)]),
     "mr_world_apply_toml": (c_int, [_world_p, c_char_p, POINTER(c_int32)]),
     "mr_world_sculpt": (c_int, [_world_p, POINTER(mr_brush)]),

@@ -41,6 +41,17 @@ class TerrainInfo:
     max_y: float
 
 
+class Heightfield(NamedTuple):
+    """The water as a grid (solver = "swe"), copies: depth (rows, columns) in metres (0: dry),
+    velocity (rows, columns, 2) x and z in m/s, bed (rows, columns) the ground in metres;
+    spacing (m) between cells, origin (x, z) of cell [0, 0]."""
+    depth: np.ndarray
+    velocity: np.ndarray
+    bed: np.ndarray
+    spacing: float
+    origin: tuple[float, float]
+
+
 class Particles(NamedTuple):
     """Copies of the active particles: positions and velocities, (N, 3) float32."""
     positions: np.ndarray
@@ -315,6 +326,18 @@ class World:
         out = np.empty((t.rows, t.columns), np.float32)
         self._check(_capi.lib().mr_world_copy_terrain_heights(self._h(), f32p(out), out.size))
         return out
+
+    def heightfield(self) -> Heightfield:
+        """The shallow-water grid of the latest frame (copies); Error for a world whose water
+        is particles (the C API's MR_ERROR_UNSUPPORTED)."""
+        h, lib = self._h(), _capi.lib()
+        info = _capi.mr_heightfield_info()
+        self._check(lib.mr_world_heightfield(h, ctypes.byref(info)))
+        depth = np.empty((info.rows, info.columns), np.float32)
+        velocity = np.empty((info.rows, info.columns, 2), np.float32)
+        bed = np.empty((info.rows, info.columns), np.float32)
+        self._check(lib.mr_world_copy_heightfield(h, f32p(depth), f32p(velocity), f32p(bed), depth.size))
+        return Heightfield(depth, velocity, bed, info.spacing, (info.origin[0], info.origin[1]))
 
     @property
     def scene_toml(self) -> str:

@@ -162,6 +162,55 @@ mr_status mr_world_copy_terrain_heights(const mr_world* world, float* heights, s
     });
 }
 
+namespace {
+
+/// The world's heightfield water, or an MR_ERROR_UNSUPPORTED naming the solver.
+const mr::HeightfieldWater* heightfield_of(const mr_world* world, const char* fn, mr_status& status) {
+    const mr::HeightfieldWater* w = world->sim->heightfield();
+    status = w ? MR_OK
+               : fail(world, MR_ERROR_UNSUPPORTED,
+                      fmt::format("{}: solver = \"{}\" has no water grid (its water is particles; solver = \"swe\" has one)",
+                                  fn, world->sim->solver_entry().kind.name));
+    return w;
+}
+
+}  // namespace
+
+mr_status mr_world_heightfield(const mr_world* world, mr_heightfield_info* out) {
+    return guarded(world, "mr_world_heightfield", false, [&] {
+        if (!out) return null_argument(world, "mr_world_heightfield", "out");
+        mr_status status = MR_OK;
+        const mr::HeightfieldWater* w = heightfield_of(world, "mr_world_heightfield", status);
+        if (!w) return status;
+        *out = mr_heightfield_info{w->columns, w->rows, w->spacing, {w->origin.x, w->origin.z}};
+        return MR_OK;
+    });
+}
+
+mr_status mr_world_copy_heightfield(const mr_world* world, float* depth, float* velocity, float* bed, size_t capacity) {
+    return guarded(world, "mr_world_copy_heightfield", false, [&] {
+        mr_status status = MR_OK;
+        const mr::HeightfieldWater* w = heightfield_of(world, "mr_world_copy_heightfield", status);
+        if (!w) return status;
+        const size_t n = w->size();
+        if ((depth || velocity || bed) && capacity < n)
+            return fail(world, MR_ERROR_BUFFER_TOO_SMALL,
+                        fmt::format("mr_world_copy_heightfield: capacity: {} is smaller than the {} cells ({} rows x {} "
+                                    "columns)", capacity, n, w->rows, w->columns));
+        const auto ground = world->sim->terrain().vertices();
+        for (size_t k = 0; k < n; ++k) {
+            if (depth) depth[k] = w->depth[k];
+            if (velocity) {
+                const mr::Vec3 v = k < w->velocity.size() ? w->velocity[k] : mr::Vec3(0.0f);
+                velocity[2 * k] = v.x;
+                velocity[2 * k + 1] = v.z;
+            }
+            if (bed) bed[k] = k < ground.size() ? ground[k].y : 0.0f;
+        }
+        return MR_OK;
+    });
+}
+
 mr_status mr_world_scene_toml(const mr_world* world, char* buffer, size_t capacity, size_t* length) {
     return guarded(world, "mr_world_scene_toml", false, [&] {
         if (!length) return null_argument(world, "mr_world_scene_toml", "length");
