@@ -554,7 +554,7 @@ const SceneSection kSections[] = {
     {"surface", "The marching-cubes surface and its smoothing (docs/rendering.md, \"Surface smoothing\"); the paper "
                 "presets and springs-valley have method = \"none\"."},
     {"foam", "Diffuse spray, foam and bubbles (Ihmsen et al. 2012; docs/rendering.md, \"Foam and spray\"); solver = "
-             "\"pbf\" only. Per fluid particle i and frame, over its neighbours j within h (W~ = 1 - r/h): trapped air "
+             "\"pbf\", and \"swe\" from its grid's velocity (docs/shallow-water.md). Per fluid particle i and frame, over its neighbours j within h (W~ = 1 - r/h): trapped air "
              "I_ta = sum |v_ij| (1 - v^_ij . x^_ij) W~ (m/s), wave crest I_wc = sum (1 - n^_i . n^_j) W~ over convex j "
              "where v^_i . n^_i >= 0.6, kinetic energy I_k = 0.5 |v_i|^2 (J/kg); each mapped to [0, 1] by "
              "(min(I, max) - min(I, min)) / (max - min); i emits Phi_k (trapped_air_rate Phi_ta + wave_crest_rate "
