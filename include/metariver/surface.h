@@ -98,9 +98,11 @@ struct HeightfieldScratch {
 /// vertices it holds, so a particle surface and a heightfield surface make one mesh).
 /// `bed` and `depth` hold rows x columns samples, row-major (index i * columns + j, as
 /// Terrain::vertices()): the bed's positions and the water's depth above them, metres.
-/// A sample is wet when its depth is > 0; its level is bed + depth. A dry sample beside a
-/// wet one (8 neighbours: the ring) gets the lowest level of its wet neighbours, capped at
-/// its own bed. Each cell is split into two triangles as the terrain's mesh splits it, and
+/// A sample is wet when its depth is > 5 mm (thinner films, as a shallow-water solver
+/// leaves on slopes, are drawn as dry); its level is bed + depth. A dry sample beside a
+/// wet one (8 neighbours: the ring) gets L, the lowest level of its wet neighbours, where
+/// its bed is above L, else bed - (L - bed) (a dry sample under the water beside it ends
+/// the water part way to it). Each cell is split into two triangles as the terrain's mesh splits it, and
 /// each triangle is cut where level - bed (depth on wet samples, <= 0 on the ring) crosses
 /// 0, linear along its edges (marching triangles): the shoreline is where the water's
 /// plane meets the terrain's triangles, not the cells' staircase, and on a lake it is the

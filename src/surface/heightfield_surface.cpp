@@ -16,12 +16,16 @@ namespace {
 
 constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
 constexpr float kSnap = 0.05f;  // a cut this close to an edge's end (of its length) moves to the end
+constexpr float kFilm = 0.005f;  // metres: thinner water is drawn as dry (films left on slopes)
 
 /// The water's level per sample: bed + depth where wet; on the ring (dry beside a wet
-/// sample, 8 neighbours) the lowest of the wet neighbours' levels capped at the own bed,
-/// so level - bed is > 0 exactly on the wet samples. The lowest, not the mean: beside a
-/// steep stream the upstream neighbours' levels would lift the ring over banks the water
-/// beside them does not reach (teeth along the bank). Samples beyond the ring are never read.
+/// sample, 8 neighbours) from L, the lowest of the wet neighbours' levels: L where the
+/// sample's bed is above it (the cut is the contour), else as far below the bed as L is
+/// above it (bed - |L - bed|), so level - bed is > 0 exactly on the wet samples and
+/// continuous in L. A dry sample lower than the water beside it (a front, a steep stream's
+/// bank) then ends the water part way to it, not at it (which drew teeth along such banks).
+/// The lowest, not the mean: upstream neighbours would lift the ring over the banks.
+/// Samples beyond the ring are never read.
 void water_levels(std::span<const Vec3> bed, std::span<const float> depth, int rows, int columns,
                   std::vector<float>& level) {
     level.resize(bed.size());
@@ -29,16 +33,16 @@ void water_levels(std::span<const Vec3> bed, std::span<const float> depth, int r
     for (int i = 0; i < rows; ++i)
         for (int j = 0; j < columns; ++j) {
             const size_t k = size_t(i) * size_t(columns) + size_t(j);
-            if (depth[k] > 0.0f) continue;
-            float lowest = bed[k].y;  // the cap
+            if (depth[k] > kFilm) continue;
+            float lowest = std::numeric_limits<float>::max();
             for (int di = -1; di <= 1; ++di)
                 for (int dj = -1; dj <= 1; ++dj) {
                     const int a = i + di, b = j + dj;
                     if (a < 0 || b < 0 || a >= rows || b >= columns) continue;
                     const size_t q = size_t(a) * size_t(columns) + size_t(b);
-                    if (depth[q] > 0.0f) lowest = std::min(lowest, bed[q].y + depth[q]);
+                    if (depth[q] > kFilm) lowest = std::min(lowest, bed[q].y + depth[q]);
                 }
-            level[k] = lowest;
+            if (lowest < std::numeric_limits<float>::max()) level[k] = bed[k].y - std::abs(lowest - bed[k].y);
         }
 }
 
@@ -51,7 +55,7 @@ public:
         min_area_ = 1e-6f * std::abs(dx.x * dz.z - dx.z * dz.x);  // of a cell's, seen from above
     }
 
-    bool wet(size_t k) const { return depth_[k] > 0.0f; }
+    bool wet(size_t k) const { return depth_[k] > kFilm; }
 
     /// The vertex of sample k at its level (created on first use, with the velocity of
     /// sample `velocity_of`: k's own, or for a dry k a cut's wet end's).

@@ -67,15 +67,21 @@ TEST(HeightfieldSurface, SmoothNormalsOfAPlaneAreItsNormal) {
 }
 
 TEST(HeightfieldSurface, ADrySampleCutsItsTrianglesWhereTheLevelMeetsTheBed) {
-    // 3 x 3 samples on a flat bed, the centre dry: its ring level is its bed (0), so the
-    // cuts lie at the centre sample itself (snapped) and the water covers every cell.
+    // 3 x 3 samples on a flat bed, the centre dry under its neighbours' level 0.2 m: its
+    // ring level is 0.2 m below its bed, so the water ends half way to it (a hole).
     const auto b = bed(3, 3, [](int, int) { return 0.0f; });
     std::vector<float> depth(9, 0.2f);
     depth[4] = 0.0f;
     SurfaceMesh m;
     append_heightfield_surface(b, depth, 3, 3, m);
-    EXPECT_EQ(m.triangle_count(), 8u);
-    EXPECT_EQ(m.vertex_count(), 9u);  // eight wet samples and the dry centre at its bed
+    ASSERT_EQ(m.vertex_count(), 14u);  // eight wet samples and a cut on each of the 6 edges to the centre
+    for (size_t v = 8; v < m.vertex_count(); ++v) {
+        const float d = std::max(std::abs(m.positions[v].x - 1.0f), std::abs(m.positions[v].z - 1.0f));
+        EXPECT_NEAR(d, 0.5f, 1e-5f) << v;
+        EXPECT_NEAR(m.positions[v].y, 0.0f, 1e-6f) << v;  // on the ground
+    }
+    // The 6 triangles touching the centre cut to quads (2 each), the 2 that do not whole.
+    EXPECT_EQ(m.triangle_count(), 14u);
     // A bank: the centre sample 1 m high; its neighbours' level 0.2 m meets it a fifth of
     // the way up each edge (0.2 along, 0.16 on the diagonal's halves... all at y = 0.2).
     const auto bank = bed(3, 3, [](int i, int j) { return i == 1 && j == 1 ? 1.0f : 0.0f; });
