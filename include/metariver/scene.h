@@ -38,6 +38,7 @@ enum class TerrainSource {
     File,    ///< a PNG heightmap
     Waterfall,  ///< procedural: a channel over a cliff into a plunge pool (procedural_waterfall)
     Weir,       ///< procedural: a channel across a weir (procedural_weir)
+    Alps,       ///< assets/heightmaps/real/alps.png, built into the library (108 x 61 samples)
 };
 std::string_view to_string(TerrainSource s);
 

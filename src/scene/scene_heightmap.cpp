@@ -14,6 +14,13 @@ Result<Heightmap> load_scene_heightmap(const SceneDef& def) {
         case TerrainSource::Flat: return flat_heightmap(s.width, s.height);
         case TerrainSource::Waterfall: return procedural_waterfall(s.width, s.height);
         case TerrainSource::Weir: return procedural_weir(s.width, s.height);
+        case TerrainSource::Alps: {
+            // assets/heightmaps/real/alps.png, read into the library at configure time (src/CMakeLists.txt)
+            static constexpr uint8_t kAlpsPng[] = {
+#include "alps_png.inc"
+            };
+            return load_heightmap_png_memory(kAlpsPng, "alps (assets/heightmaps/real/alps.png)");
+        }
         case TerrainSource::File:
             if (s.heightmap.empty())
                 return Error{fmt::format("scene '{}' needs a heightmap file (give --heightmap FILE)", def.name)};
