@@ -31,6 +31,7 @@ std::string_view to_string(TerrainSource s) {
         case TerrainSource::File: return "file";
         case TerrainSource::Waterfall: return "waterfall";
         case TerrainSource::Weir: return "weir";
+        case TerrainSource::Alps: return "alps";
     }
     return "?";
 }
@@ -238,11 +239,36 @@ SceneDef hybrid_weir() {
     return d;
 }
 
+/// The hybrid on a real DEM with steep reaches: the ETOPO5 Alps crop (terrain.source =
+/// "alps", built in) shrunk to 15 m per sample and 400 m of relief, so that its valley heads
+/// drop more than hybrid.drop (3 m) between neighbouring cells; its pits filled (the DEM's
+/// pits would hold the river in a pool at its head); 50 m^3/s poured at the head of the main
+/// channel, the river spun up before frame 0 (swe.init = "steady"). Particles of 0.5 m: a
+/// fall off a 15 m cell is metres wide.
+SceneDef hybrid_alps() {
+    SceneDef d = hybrid_base("waterfall-alps", TerrainSource::Alps, 50.0f);
+    d.source = {.kind = TerrainSource::Alps, .heightmap = {}, .width = 108, .height = 61, .seed = 1};
+    d.terrain.area_scale = 15.0f;
+    d.terrain.height_scale = 400.0f;
+    d.terrain.condition = TerrainCondition::Fill;
+    d.spawn.auto_center = true;  // swe.source_center "auto": the head of the main channel
+    d.spawn.auto_channel = true;
+    d.swe.auto_source = true;
+    d.swe.init = SweInit::Steady;
+    d.hybrid.drop = 3.0f;
+    d.pbf = PbfDef{.spacing = 0.5f, .kernel_radius = 1.0f};
+    d.pbf.auto_spacing = false;
+    d.field.radius = 1.75f;  // 3.5 spacings, as the waterfall's
+    d.field.resolution = 3.0f;
+    d.field.bounds_offset = 1.75f;
+    return d;
+}
+
 }  // namespace
 
 std::vector<std::string> preset_names() {
     return {"default", "springs-valley", "paper-full", "paper-nile", "paper-bowl", "paper-engine", "paper-nile-engine",
-            "waterfall", "weir"};
+            "waterfall", "weir", "waterfall-alps"};
 }
 
 Result<SceneDef> preset(std::string_view name) {
@@ -259,6 +285,7 @@ Result<SceneDef> preset(std::string_view name) {
     if (name == "paper-nile-engine") return paper_nile_engine();
     if (name == "waterfall") return hybrid_waterfall();
     if (name == "weir") return hybrid_weir();
+    if (name == "waterfall-alps") return hybrid_alps();
     std::string known;
     for (const auto& n : preset_names()) known += (known.empty() ? "" : ", ") + n;
     return Error{fmt::format("unknown preset '{}' (known: {})", name, known)};
@@ -298,7 +325,7 @@ Status validate(const SceneDef& d) {
         check(d.pbf.kernel_radius > d.pbf.spacing && d.pbf.kernel_radius <= 4.0f * d.pbf.spacing,
               "pbf.kernel_radius: must be in (pbf.spacing, 4 pbf.spacing] = ({}, {}] (got {})", d.pbf.spacing,
               4.0f * d.pbf.spacing, d.pbf.kernel_radius);
-    if (d.solver == SolverKind::Pbf && d.foam.enabled) {
+    if ((d.solver == SolverKind::Pbf || d.solver == SolverKind::Hybrid) && d.foam.enabled) {  // FoamSystem's ranges
         const FoamDef& f = d.foam;
         auto above = [&](const char* hi_key, float hi, const char* lo_key, float lo) {
             check(hi > lo, "{}: must be in ({} = {}, {}] (got {})", hi_key, lo_key, lo, find_scene_key(hi_key)->range.hi, hi);

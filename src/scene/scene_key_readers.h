@@ -81,13 +81,14 @@ constexpr ReadIf kSeedSolver{.holds = [](S d) { return d.solver != SolverKind::P
 /// Diffuse particles need the fluid's kernel neighbourhoods (PBF) or its velocity on a
 /// grid (swe: heightfield_foam.h).
 constexpr std::string (*kFoamSolverRefusal)(F) = [](F f) {
-    return fmt::format("only solver = \"pbf\" or \"swe\" makes foam (diffuse particles need the fluid's kernel "
+    return fmt::format("only solver = \"pbf\", \"swe\" or \"hybrid\" makes foam (diffuse particles need the fluid's kernel "
                        "neighbourhoods or its velocity on a grid; {} has neither): remove [foam]",
                        solver_is(f.def));
 };
-constexpr ReadIf kFoamSolver{.holds = [](S d) { return d.solver == SolverKind::Pbf || d.solver == SolverKind::Swe; }, .refusal = kFoamSolverRefusal,
+inline bool makes_foam(S d) { return d.solver == SolverKind::Pbf || d.solver == SolverKind::Swe || d.solver == SolverKind::Hybrid; }
+constexpr ReadIf kFoamSolver{.holds = makes_foam, .refusal = kFoamSolverRefusal,
                              .scope = ReadScope::Solver};
-constexpr ReadIf kFoamSwitchSolver{.holds = [](S d) { return d.solver == SolverKind::Pbf || d.solver == SolverKind::Swe; },
+constexpr ReadIf kFoamSwitchSolver{.holds = makes_foam,
                                    .refusal = kFoamSolverRefusal,
                                    .scope = ReadScope::Solver,
                              .agrees = [](S d) { return !d.foam.enabled; }};
@@ -138,6 +139,16 @@ constexpr ReadIf kDistanceBullet{.holds = springs_on, .refusal = [](F) -> std::s
                                      return "solver = \"bullet\" applies springs only with bullet.springs = true";
                                  },
                              .scope = ReadScope::Solver};
+
+// The hybrid's particles all come from its grid where the water falls (hybrid_solver.h): no
+// particle source; of [particles] it reads spawn_center (and auto_height) only, as
+// swe.source_center = "auto".
+constexpr ReadIf kParticleSourceSolver{.holds = [](S d) { return d.solver != SolverKind::Hybrid; }, .refusal = [](F) -> std::string {
+                                           return "solver = \"hybrid\" has no particle source: its particles come from the "
+                                                  "grid where the water falls (hybrid.max_particles is their budget, [pbf] "
+                                                  "their physics; docs/waterfalls.md); remove it";
+                                       },
+                                       .scope = ReadScope::Solver};
 
 // ---- Keys another key's value makes irrelevant (issue 13, "no silent option") ----
 
@@ -271,7 +282,7 @@ constexpr ReadIf kFrictionPbf{.holds = [](S d) { return d.solver == SolverKind::
                               }};
 // The terrain: a PNG has its own size and no procedure; only the valley is random.
 inline std::string source_is(F f) { return fmt::format("terrain.source = \"{}\"", to_string(f.def.source.kind)); }
-constexpr ReadIf kProceduralSource{.holds = [](S d) { return d.source.kind != TerrainSource::File; }, .refusal = [](F f) {
+constexpr ReadIf kProceduralSource{.holds = [](S d) { return d.source.kind != TerrainSource::File && d.source.kind != TerrainSource::Alps; }, .refusal = [](F f) {
                                        return ignored(source_is(f) + " (the PNG gives the size; nothing is generated)",
                                                       "remove it or use a procedural source");
                                    }};
@@ -318,11 +329,12 @@ MR_READERS(kFile, "terrain.source = file", kFileSource);
 MR_READERS(kProcedural, "a procedural terrain.source", kProceduralSource);
 MR_READERS(kValley, "terrain.source = valley", kProceduralSource, kValleySource);
 MR_READERS(kAutoCentre, "spawn_center auto, channel", kAutoCentreOn);
-MR_READERS(kNotPoint, "source_shape box, disc", kNotPointShape);
-MR_READERS(kNoRate, "a scene without a particle rate", kIntervalNoRate);
-MR_READERS(kRate, "a scene with a particle rate", kLitresSolver, kLitresRate);
-MR_READERS(kShape, "solver = springs, pbf", kShapeSolver);
-MR_READERS(kFlowRate, "solver = springs, pbf", kFlowSolver);
+MR_READERS(kNotPoint, "source_shape box, disc; not solver = hybrid", kParticleSourceSolver, kNotPointShape);
+MR_READERS(kNoRate, "a scene without a particle rate; not solver = hybrid", kParticleSourceSolver, kIntervalNoRate);
+MR_READERS(kRate, "a scene with a particle rate", kParticleSourceSolver, kLitresSolver, kLitresRate);
+MR_READERS(kShape, "solver = springs, pbf", kParticleSourceSolver, kShapeSolver);
+MR_READERS(kFlowRate, "solver = springs, pbf", kParticleSourceSolver, kFlowSolver);
+MR_READERS(kParticleSource, "every scene but solver = hybrid", kParticleSourceSolver);
 MR_READERS(kPbfRate, "solver = pbf with a particle rate", kFollowPbf, kFollowRate);
 MR_READERS(kPbfOrCarve, "solver = pbf; terrain.condition = carve", kPbfSection);
 MR_READERS(kScorr, "solver = pbf, scorr_k > 0", kPbfSection, kPbfOnly, kScorrOn);

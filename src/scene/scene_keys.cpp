@@ -55,7 +55,7 @@ constexpr KeyRange big_vec(double lo) { return {.lo = lo, .hi = 1e6}; }
 // Who reads a key, and what the reader says to a file that sets it elsewhere.
 using namespace key_readers;
 
-constexpr std::string_view kSources[] = {"valley", "strict", "bowl", "flat", "file", "waterfall", "weir"};
+constexpr std::string_view kSources[] = {"valley", "strict", "bowl", "flat", "file", "waterfall", "weir", "alps"};
 constexpr std::string_view kConditions[] = {"none", "fill", "breach", "carve", "auto"};
 constexpr std::string_view kShapes[] = {"box", "disc", "point"};
 constexpr std::string_view kSinks[] = {"none", "box", "edges"};
@@ -156,7 +156,8 @@ const SceneKey kKeys[] = {
     {.name = "terrain.source", .type = K::Choice, .choices = kSources, .readers = kAll, .edit = E::Rebuild,
      .help = "valley: procedural valley with a winding river channel; strict, bowl: procedural equivalents of the paper's "
              "strict17.png and bowl.png; flat; file: the PNG of terrain.heightmap; waterfall, weir: a straight channel over a "
-             "cliff into a plunge pool, or across a weir (the hybrid solver's scenes, docs/waterfalls.md).",
+             "cliff into a plunge pool, or across a weir (the hybrid solver's scenes, docs/waterfalls.md); alps: the ETOPO5 Alps "
+             "crop assets/heightmaps/real/alps.png (108 x 61 samples), built into the library so that a preset can use it.",
      .field = MR_FIELD(source.kind)},
     {.name = "terrain.heightmap", .type = K::String, .readers = kFile, .edit = E::Rebuild,
      .help = "PNG (8/16-bit gray, gray+alpha, RGB, RGBA; red channel), relative to the scene file; setting it implies "
@@ -189,7 +190,7 @@ const SceneKey kKeys[] = {
      .field = MR_FIELD(terrain.condition)},
     // [particles]
     {.name = "particles.count", .type = K::Int, .range = closed(1, kMaxParticles), .words = kCountWords,
-     .readers = kAll, .edit = E::Rebuild,
+     .readers = kParticleSource, .edit = E::Rebuild,
      .help = "Particle budget, or \"auto\": a PBF river sizes it to its main channel (docs/river.md, \"Sizing\"); other "
              "solvers take 4000.",
      .field = MR_FIELD(spawn.count)},
@@ -201,7 +202,7 @@ const SceneKey kKeys[] = {
      .help = "Half size of the source (a disc: radius .x, half height .y).", .field = MR_FIELD(spawn.half_extent)},
     {.name = "particles.spawn_interval", .type = K::Int, .unit = "frames", .range = closed(0, 1e6), .readers = kNoRate,
      .help = "Frames between two activations without a particle rate; 0 = all at once.", .field = MR_FIELD(spawn.interval)},
-    {.name = "particles.initial_velocity", .type = K::Vec3, .unit = "m/s", .range = closed(-1e4, 1e4), .readers = kAll,
+    {.name = "particles.initial_velocity", .type = K::Vec3, .unit = "m/s", .range = closed(-1e4, 1e4), .readers = kParticleSource,
      .help = "Velocity given at (re)spawn.", .field = MR_FIELD(spawn.initial_velocity)},
     {.name = "particles.auto_height", .type = K::Float, .unit = "m", .range = closed(0, 1e4),
      .readers = kAutoCentre, .edit = E::Rebuild,
@@ -554,7 +555,8 @@ const SceneSection kSections[] = {
     {"surface", "The marching-cubes surface and its smoothing (docs/rendering.md, \"Surface smoothing\"); the paper "
                 "presets and springs-valley have method = \"none\"."},
     {"foam", "Diffuse spray, foam and bubbles (Ihmsen et al. 2012; docs/rendering.md, \"Foam and spray\"); solver = "
-             "\"pbf\", and \"swe\" from its grid's velocity (docs/shallow-water.md). Per fluid particle i and frame, over its neighbours j within h (W~ = 1 - r/h): trapped air "
+             "\"pbf\", \"swe\" from its grid's velocity (docs/shallow-water.md), and \"hybrid\" both: its particles' spray where "
+             "the water falls, its grid's foam on the reaches and pools (docs/waterfalls.md). Per fluid particle i and frame, over its neighbours j within h (W~ = 1 - r/h): trapped air "
              "I_ta = sum |v_ij| (1 - v^_ij . x^_ij) W~ (m/s), wave crest I_wc = sum (1 - n^_i . n^_j) W~ over convex j "
              "where v^_i . n^_i >= 0.6, kinetic energy I_k = 0.5 |v_i|^2 (J/kg); each mapped to [0, 1] by "
              "(min(I, max) - min(I, min)) / (max - min); i emits Phi_k (trapped_air_rate Phi_ta + wave_crest_rate "

@@ -153,12 +153,20 @@ Simulation::Impl::Impl(const SceneDef& def, Terrain terrain, Bvh bvh, std::optio
     // def_.spawn is the resolved source (`spawn`) from here on.
     solver_ = solver_entry_.create(def_, terrain_, bvh_);
     if (!solver_) return;  // create() reports it
-    if (solver_entry_.foam_kernel_radius && def_.foam.enabled)
-        foam_.emplace(def_.foam, solver_entry_.foam_kernel_radius(def_), def_.integrator.gravity);
-    else if (def_.foam.enabled && !solver_->water_particles() && solver_->water_heightfield())
-        heightfield_foam_.emplace(def_.foam);
+    make_foam();
     if (solver_entry_.prefills && def_.spawn.prefill && terrain_.condition_report().mode == TerrainCondition::Carve)
         prefill_channel();
+}
+
+void Simulation::Impl::make_foam() {
+    foam_.reset();
+    heightfield_foam_.reset();
+    if (!def_.foam.enabled) return;
+    // Particles' foam where the solver has kernel neighbourhoods, the grid's where it has a
+    // heightfield; the hybrid has both (its falls throw spray, its pools and reaches foam).
+    if (solver_entry_.foam_kernel_radius)
+        foam_.emplace(def_.foam, solver_entry_.foam_kernel_radius(def_), def_.integrator.gravity);
+    if (solver_->water_heightfield()) heightfield_foam_.emplace(def_.foam);
 }
 
 void Simulation::Impl::configure_field() {
@@ -375,16 +383,13 @@ void Simulation::Impl::step(float frame_dt) {
 void Simulation::Impl::step_foam(float frame_dt) {
     const Particles* p = solver_->water_particles();
     const HeightfieldWater* w = solver_->water_heightfield();
-    if (heightfield_foam_ && w) {
-        const auto t0 = Clock::now();
-        heightfield_foam_->step(*w, terrain_.vertices(), frame_dt, solver_->frame());
-        timings_.foam_ms = ms_since(t0);
-    }
-    if (!foam_ || !p) return;
     const auto t0 = Clock::now();
-    const float dt = def_.integrator.fixed_dt > 0.0f ? def_.integrator.fixed_dt : frame_dt;
-    foam_->step(*p, terrain_, dt, solver_->frame());
-    timings_.foam_ms = ms_since(t0);
+    if (heightfield_foam_ && w) heightfield_foam_->step(*w, terrain_.vertices(), frame_dt, solver_->frame());
+    if (foam_ && p) {
+        const float dt = def_.integrator.fixed_dt > 0.0f ? def_.integrator.fixed_dt : frame_dt;
+        foam_->step(*p, terrain_, dt, solver_->frame());
+    }
+    if (foam_ || heightfield_foam_) timings_.foam_ms = ms_since(t0);
 }
 
 void Simulation::Impl::build_particle_surface(const Particles& p) {

@@ -98,13 +98,26 @@ float Simulation::spray_fraction() const {
 
 SceneView Simulation::view() const {
     const FoamSystem* f = foam();
+    const DiffuseParticles* foam = f ? &f->particles() : impl_->heightfield_foam_ ? &impl_->heightfield_foam_->particles() : nullptr;
+    if (f && impl_->heightfield_foam_) {  // the hybrid: the particles' spray and the grid's foam drawn together
+        DiffuseParticles& both = impl_->foam_view_;
+        both = f->particles();
+        const DiffuseParticles& g = impl_->heightfield_foam_->particles();
+        auto append = [](auto& to, const auto& from) { to.insert(to.end(), from.begin(), from.end()); };
+        append(both.position, g.position);
+        append(both.velocity, g.velocity);
+        append(both.life, g.life);
+        append(both.kind, g.kind);
+        append(both.neighbours, g.neighbours);
+        append(both.fluid_velocity, g.fluid_velocity);
+        foam = &both;
+    }
     return SceneView{.terrain = &impl_->terrain_,
                      .bvh = &impl_->bvh_,
                      .paper_rows = impl_->def_.terrain.paper_row_orientation,
                      .particles = &particles(),
                      .surface = &impl_->surface_,
-                     .foam = f ? &f->particles()
-                                : impl_->heightfield_foam_ ? &impl_->heightfield_foam_->particles() : nullptr,
+                     .foam = foam,
                      .flow_radius = flow_radius(impl_->def_),
                      .surface_velocity = impl_->heightfield_velocity_,
                      .bodies = bodies(),

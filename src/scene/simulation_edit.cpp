@@ -80,11 +80,7 @@ Result<ApplyResult> Simulation::Impl::apply(const SceneDef& next) {
     def_ = edited;
     requested_ = next;
     configure_field();
-    if (foam_changed) {
-        foam_.reset();
-        if (solver_entry_.foam_kernel_radius && def_.foam.enabled)
-            foam_.emplace(def_.foam, solver_entry_.foam_kernel_radius(def_), def_.integrator.gravity);
-    }
+    if (foam_changed) make_foam();
     r.applied = true;
     return r;
 }

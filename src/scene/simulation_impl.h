@@ -102,6 +102,11 @@ struct Simulation::Impl {
     void configure_field();
     /// The foam's step on the latest frame's particles ([foam]).
     void step_foam(float frame_dt);
+    /// [foam]'s systems for this solver: the particles' (FoamSystem), the grid's
+    /// (HeightfieldFoam), or both (hybrid); none when foam.enabled is false.
+    void make_foam();
+    /// The hybrid's two foams in one list for SceneView (rebuilt by view()).
+    mutable DiffuseParticles foam_view_;
     /// field -> marching cubes -> smoothing over `p` into surface_ (cleared first).
     void build_particle_surface(const Particles& p);
     /// The heightfield's triangle grid appended to surface_.

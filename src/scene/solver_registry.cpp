@@ -116,6 +116,7 @@ SolverEntry hybrid_entry() {
         },
         .apply = edits<HybridSolver>([](HybridSolver& s, const SceneDef& d) { return s.set_params(d.hybrid, d.swe, d.spawn.center); }),
         .spray_scale = [](const SceneDef& d) { return SprayScale{.spacing = d.pbf.spacing, .kernel_radius = d.pbf.kernel_radius}; },
+        .foam_kernel_radius = [](const SceneDef& d) { return d.pbf.kernel_radius; },  // and the grid's foam (Simulation)
         .no_push = "hands its particles to the grid and back; push with pbf or springs",
         .no_sculpt = "reads the bed once when it is made; sculpt with pbf or springs",
     };

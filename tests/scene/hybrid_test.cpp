@@ -136,6 +136,16 @@ TEST(Hybrid, KeysAreReadAndChecked) {
     auto pbf = parse_scene_toml("solver = \"pbf\"\n[hybrid]\ndrop = 2.0\n", "test.toml", default_scene());
     ASSERT_FALSE(pbf.ok());
     EXPECT_NE(pbf.error().message.find("hybrid"), std::string::npos) << pbf.error().message;
+    // A particle source's keys are refused, naming the key and where the particles come from;
+    // spawn_center is read (swe.source_center = "auto").
+    for (const char* key : {"count = 300", "flow_rate = 5.0", "spawn_interval = 3", "initial_velocity = [0, 0, 1]"}) {
+        auto r = parse_scene_toml(std::string("preset = \"waterfall\"\n[particles]\n") + key + "\n", "h.toml", default_scene());
+        ASSERT_FALSE(r.ok()) << key;
+        const std::string name = std::string("particles.") + std::string(key).substr(0, std::string(key).find(' '));
+        EXPECT_NE(r.error().message.find(name), std::string::npos) << r.error().message;
+        EXPECT_NE(r.error().message.find("come from the grid"), std::string::npos) << r.error().message;
+    }
+    EXPECT_TRUE(parse_scene_toml("preset = \"waterfall-alps\"\n[particles]\nspawn_center = \"auto\"\n", "h.toml", default_scene()).ok());
     // The preset's file reads back to the same scene.
     auto again = parse_scene_toml(scene_to_toml(preset("weir").value(), "weir"), "weir.toml", default_scene());
     ASSERT_TRUE(again.ok()) << again.error().message;
@@ -152,6 +162,50 @@ TEST(Hybrid, TheWeirShedsAtItsCrest) {
     std::printf("weir, 15 s: %.3f m^3 to particles, %.3f m^3 to the grid\n", st.to_particles, st.to_grid);
     EXPECT_GT(st.to_particles, 0.1);
     EXPECT_GT(st.to_grid, 0.05);
+}
+
+TEST(Hybrid, TheWaterfallMakesSprayFromItsParticlesAndFoamFromItsGrid) {
+    SceneDef d = preset("waterfall").value();
+    d.foam.enabled = true;
+    auto sim = Simulation::create(d);
+    ASSERT_TRUE(sim.ok()) << sim.error().message;
+    Simulation& s = *sim.value();
+    for (int f = 0; f < 300; ++f) s.step(kFrame);
+    ASSERT_NE(s.foam(), nullptr);  // the particles' foam system
+    const DiffuseParticles& spray = s.foam()->particles();
+    // Spray at the foot of the fall: between the pool's middle (row 43) and the lip (row 55).
+    size_t at_foot = 0;
+    for (size_t i = 0; i < spray.size(); ++i)
+        at_foot += spray.kind[i] == uint8_t(DiffuseKind::Spray) && spray.position[i].z > 40.0f && spray.position[i].z < 56.0f;
+    // The grid's foam is drawn with it: the view holds more than the particles' own.
+    const SceneView v = s.view();
+    ASSERT_NE(v.foam, nullptr);
+    std::printf("waterfall with foam, 5 s: %zu from the particles (%zu spray at the foot, %llu made), %zu from the grid\n",
+                spray.size(), at_foot, static_cast<unsigned long long>(s.foam()->stats().generated_total),
+                v.foam->size() - spray.size());
+    EXPECT_GT(s.foam()->stats().generated_total, 0u);
+    EXPECT_GT(at_foot, 0u);
+    EXPECT_GT(v.foam->size(), spray.size());
+}
+
+TEST(Hybrid, TheAlpsPresetRunsOnItsBuiltInDem) {
+    // terrain.source = "alps": the PNG built into the library, 108 x 61 samples at 5 m.
+    SceneDef d = preset("waterfall-alps").value();
+    auto sim = Simulation::create(d);
+    ASSERT_TRUE(sim.ok()) << sim.error().message;
+    const HeightfieldWater& w0 = *sim.value()->heightfield();
+    EXPECT_EQ(w0.columns, 108);
+    EXPECT_EQ(w0.rows, 61);
+    for (int f = 0; f < 600; ++f) sim.value()->step(kFrame);
+    const HybridStats& st = hybrid_of(*sim.value()).stats();
+    std::printf("waterfall-alps, 10 s: %.3f m^3 to particles, %.3f m^3 to the grid, %zu particles active\n", st.to_particles,
+                st.to_grid, sim.value()->particles().active_count());
+    EXPECT_GT(st.to_particles, 1.0);  // its valley heads drop more than hybrid.drop between cells
+    EXPECT_GT(st.to_grid, 0.5);
+    // Its file reads back to the same terrain, from any directory.
+    auto again = parse_scene_toml(scene_to_toml(d, "waterfall-alps"), "alps.toml", default_scene());
+    ASSERT_TRUE(again.ok()) << again.error().message;
+    EXPECT_EQ(again.value().source.kind, TerrainSource::Alps);
 }
 
 }  // namespace

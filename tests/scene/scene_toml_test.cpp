@@ -569,7 +569,7 @@ drag = 0.25
     // Keys foam.enabled = false makes irrelevant name both.
     bad("[foam]\nenabled = false\nmax_particles = 10\n", "foam.max_particles: ignored when foam.enabled = false");
     // Only PBF and swe make foam.
-    bad("solver = \"springs\"\n[foam]\nenabled = true\n", "foam.enabled: only solver = \"pbf\" or \"swe\" makes foam");
+    bad("solver = \"springs\"\n[foam]\nenabled = true\n", "foam.enabled: only solver = \"pbf\", \"swe\" or \"hybrid\" makes foam");
     bad("solver = \"springs\"\n[foam]\nlifetime_min = 1\n", "foam.lifetime_min: only solver = \"pbf\"");
     for (const char* ok : {"[foam]\nenabled = false\n", "solver = \"springs\"\n[foam]\nenabled = false\n",
                            "[foam]\nmax_particles = 0\n", "[foam]\nlifetime_min = 2\nlifetime_max = 2\n"}) {
