@@ -29,6 +29,10 @@ double velocity(double h, double q, double dry) { return h > dry ? q / h : 0.0; 
 
 }  // namespace
 
+double ShallowWater::manning_c(double dt) const {
+    return dt * def_.gravity * (def_.manning * def_.manning);  // Manning: q / (1 + dt g n^2 |u| / h^(4/3))
+}
+
 ShallowWater::ShallowWater(int nx, int ny, double dx, std::span<const double> bed, const ShallowWaterDef& def)
     : nx_(std::max(nx, 1)), ny_(std::max(ny, 1)), dx_(dx > 0.0 ? dx : 1.0), stride_(static_cast<size_t>(nx_) + 2), def_(def) {
     const size_t n = stride_ * (static_cast<size_t>(ny_) + 2);
@@ -237,6 +241,7 @@ void ShallowWater::stage(int kind, std::vector<double>* const* in, std::vector<d
     si.r = dt / dx_;
     si.weight = dt * dx_;
     si.second = def_.second_order;
+    si.friction = def_.second_order ? manning_c(dt) : 0.0;  // Heun: in each stage
     si.wall_west = def_.west.kind == EdgeKind::Wall;
     si.wall_east = def_.east.kind == EdgeKind::Wall;
     si.wall_south = def_.south.kind == EdgeKind::Wall;
@@ -270,7 +275,7 @@ FinishRow ShallowWater::finish_template(double dt) const {
     row.rain_rate = masked ? rain_mask_.data() : nullptr;
     row.rain = rain_ > 0.0 && !masked ? rain_ * dt : 0.0;
     row.dt = dt;
-    row.c = dt * def_.gravity * (def_.manning * def_.manning);  // Manning: q / (1 + dt g n^2 |u| / h^(4/3))
+    row.c = def_.second_order ? 0.0 : manning_c(dt);  // Heun's stages apply it themselves
     row.dry = def_.dry_depth;
     return row;
 }

@@ -7,7 +7,9 @@
 // 25(6)): well balanced (a lake at rest over any bed stays at rest to round-off) and
 // depth-positive; optional second order (MUSCL, minmod slopes of depth, surface and velocity,
 // with Heun's SSP-RK2 in time and Audusse's centred bed-slope term). Manning friction is
-// semi-implicit; the time step is adaptive under the CFL limit.
+// semi-implicit (at second order in each of Heun's stages, and only Heun's average clipped at
+// depth 0, so that the step stays positive and conservative at km cells and steps of 10^2-10^3 s);
+// the time step is adaptive under the CFL limit.
 //
 // Layout: structure of arrays (bed, depth, two discharges) of doubles on a grid with one ghost
 // cell on each side (the edges' conditions), row-major, row j along y (the terrain's z), and
@@ -143,6 +145,8 @@ private:
     /// The rain's and the clipped depths' sums, then the sources.
     void finish_tail(double dt);
     FinishRow finish_template(double dt) const;
+    /// Manning's c = dt g n^2 of a step of dt seconds.
+    double manning_c(double dt) const;
     /// The point sources and sinks over dt seconds (after the step's fluxes).
     void apply_sources(double dt);
     /// Marks column i of row j wet (its span grows).

@@ -79,6 +79,28 @@ struct Faces {
     }
 };
 
+inline double cbrt_estimate(double x) {
+    uint64_t b;
+    std::memcpy(&b, &x, sizeof b);
+    const uint32_t hi = static_cast<uint32_t>(b >> 32) / 3u + 715094163u;  // fdlibm's cbrt B1
+    const uint64_t yb = static_cast<uint64_t>(hi) << 32;
+    double y;
+    std::memcpy(&y, &yb, sizeof y);
+    for (int k = 0; k < 3; ++k) {  // Halley: 5 -> 15 -> 45 -> 53 bits
+        const double y3 = y * y * y;
+        y = y * (y3 + 2.0 * x) / (2.0 * y3 + x);
+    }
+    return y;
+}
+
+/// Manning's semi-implicit divisor 1 + c |u| / h^(4/3) (c = dt g n^2) of a cell holding
+/// (h, qx, qy), h taken at least `floor` (a depth the friction can divide by).
+inline double manning_divisor(double h, double qx, double qy, double c, double floor) {
+    const double hs = std::max(h, floor);
+    const double speed = std::sqrt(qx * qx + qy * qy) / hs;
+    return 1.0 + c * speed / (hs * cbrt_estimate(hs));
+}
+
 /// A reflective wall's outside state: the same depth and bed, the normal velocity reversed.
 FaceState mirror(const FaceState& s) { return {s.h, -s.un, s.ut, s.z}; }
 
@@ -331,7 +353,7 @@ private:
         const Faces fx(s_.fx), fs(fs_rows), fn(fn_rows);
         const Slopes sx(s_.sx), sy(s_.sy[ring2(j)]);
         double *MR_RESTRICT oh = out_.h + k0, *MR_RESTRICT ou = out_.hu + k0, *MR_RESTRICT ov = out_.hv + k0;
-        const double r = in_.r, g = in_.g, dry = in_.dry;
+        const double r = in_.r, g = in_.g, dry = in_.dry, c = in_.friction, floor = std::max(dry, 1e-12);
         double* MR_RESTRICT neg = s_.neg;  // 1 where a depth was clipped (counted after)
         MR_IVDEP
         for (int i = lo; i <= hi; ++i) {
@@ -343,17 +365,30 @@ private:
                 qx += r * (-g * h[i] * (sx.eta[i] - sx.h[i]));
                 qy += r * (-g * h[i] * (sy.eta[i] - sy.h[i]));
             }
-            neg[i] = hn < 0.0 ? 1.0 : 0.0;
-            hn = hn < 0.0 ? 0.0 : hn;
-            if (Kind == StageKind::HeunFirst) {
-                qx = hn <= dry ? 0.0 : qx;
-                qy = hn <= dry ? 0.0 : qy;
+            if (Kind != StageKind::Euler) {
+                // Each of Heun's stages is an Euler step of the fluxes and the friction, so
+                // that the second stage starts from the first's slowed discharges: friction
+                // applied only after the average let a stage accelerate a thin film on a
+                // steep km cell for a whole step and drain more than the cell held.
+                const double f = manning_divisor(hn, qx, qy, c, floor);
+                qx /= f;
+                qy /= f;
             }
             if (Kind == StageKind::HeunSecond) {
-                oh[i] = 0.5 * (oh[i] + hn);
+                // Heun's average may hold an intermediate negative depth: only the average
+                // is clipped (clipping the intermediate created its half as water).
+                const double avg = 0.5 * (oh[i] + hn);
+                neg[i] = avg < 0.0 ? 1.0 : 0.0;
+                oh[i] = avg < 0.0 ? 0.0 : avg;
                 ou[i] = 0.5 * (ou[i] + qx);
                 ov[i] = 0.5 * (ov[i] + qy);
             } else {
+                neg[i] = hn < 0.0 ? 1.0 : 0.0;
+                hn = hn < 0.0 ? 0.0 : hn;
+                if (Kind == StageKind::HeunFirst) {
+                    qx = hn <= dry ? 0.0 : qx;
+                    qy = hn <= dry ? 0.0 : qy;
+                }
                 oh[i] = hn;
                 ou[i] = qx;
                 ov[i] = qy;
@@ -386,20 +421,6 @@ private:
     Scratch& s_;
 };
 
-inline double cbrt_estimate(double x) {
-    uint64_t b;
-    std::memcpy(&b, &x, sizeof b);
-    const uint32_t hi = static_cast<uint32_t>(b >> 32) / 3u + 715094163u;  // fdlibm's cbrt B1
-    const uint64_t yb = static_cast<uint64_t>(hi) << 32;
-    double y;
-    std::memcpy(&y, &yb, sizeof y);
-    for (int k = 0; k < 3; ++k) {  // Halley: 5 -> 15 -> 45 -> 53 bits
-        const double y3 = y * y * y;
-        y = y * (y3 + 2.0 * x) / (2.0 * y3 + x);
-    }
-    return y;
-}
-
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
 #define MR_CLONES [[gnu::flatten, gnu::target_clones("avx2", "default")]]
 #else
@@ -408,13 +429,16 @@ inline double cbrt_estimate(double x) {
 
 MR_CLONES void finish_columns(double* MR_RESTRICT h, double* MR_RESTRICT hu, double* MR_RESTRICT hv, int lo, int hi, double c,
                               double dry) {
+    if (c == 0.0) {  // no friction here (none, or Heun's stages applied it)
+        for (int i = lo; i <= hi; ++i)
+            if (!(h[i] > dry)) hu[i] = hv[i] = 0.0;
+        return;
+    }
     const double floor = std::max(dry, 1e-12);  // a depth the friction can divide by
     MR_IVDEP
     for (int i = lo; i <= hi; ++i) {
         const double hh = h[i], qx = hu[i], qy = hv[i];
-        const double hs = std::max(hh, floor);
-        const double speed = std::sqrt(qx * qx + qy * qy) / hs;
-        const double f = 1.0 + c * speed / (hs * cbrt_estimate(hs));
+        const double f = manning_divisor(hh, qx, qy, c, floor);
         hu[i] = hh > dry ? qx / f : 0.0;
         hv[i] = hh > dry ? qy / f : 0.0;
     }
