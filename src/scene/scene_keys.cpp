@@ -463,7 +463,7 @@ const SceneKey kKeys[] = {
      .help = "The paper's eq. 3 ([springs]) as external forces: its future work.", .field = MR_FIELD(bullet.springs)},
     // [swe]
     {.name = "swe.manning", .type = K::Float, .unit = "s/m^(1/3)", .range = closed(0, 1), .readers = kSwe, .edit = E::Solver,
-     .help = "Manning's n of the bed (0.03: a natural channel; 0: frictionless), applied semi-implicitly.", .field = MR_FIELD(swe.manning)},
+     .help = "Manning's n of the bed (0.03: a natural channel; 0: frictionless), applied implicitly.", .field = MR_FIELD(swe.manning)},
     {.name = "swe.cfl", .type = K::Float, .range = above(0, 0.5), .readers = kSwe, .edit = E::Solver,
      .help = "Courant number of the adaptive time step (substeps per frame follow it).", .field = MR_FIELD(swe.cfl)},
     {.name = "swe.dry_depth", .type = K::Float, .unit = "m", .range = closed(0, 1), .readers = kSwe, .edit = E::Solver,

@@ -30,7 +30,7 @@ double velocity(double h, double q, double dry) { return h > dry ? q / h : 0.0; 
 }  // namespace
 
 double ShallowWater::manning_c(double dt) const {
-    return dt * def_.gravity * (def_.manning * def_.manning);  // Manning: q / (1 + dt g n^2 |u| / h^(4/3))
+    return dt * def_.gravity * (def_.manning * def_.manning);  // Manning: q_new (1 + dt g n^2 |u_new| / h^(4/3)) = q
 }
 
 ShallowWater::ShallowWater(int nx, int ny, double dx, std::span<const double> bed, const ShallowWaterDef& def)

@@ -7,7 +7,7 @@
 // 25(6)): well balanced (a lake at rest over any bed stays at rest to round-off) and
 // depth-positive; optional second order (MUSCL, minmod slopes of depth, surface and velocity,
 // with Heun's SSP-RK2 in time and Audusse's centred bed-slope term). Manning friction is
-// semi-implicit (at second order in each of Heun's stages, and only Heun's average clipped at
+// implicit (at second order in each of Heun's stages, and only Heun's average clipped at
 // depth 0, so that the step stays positive and conservative at km cells and steps of 10^2-10^3 s);
 // the time step is adaptive under the CFL limit.
 //

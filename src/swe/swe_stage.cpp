@@ -93,12 +93,17 @@ inline double cbrt_estimate(double x) {
     return y;
 }
 
-/// Manning's semi-implicit divisor 1 + c |u| / h^(4/3) (c = dt g n^2) of a cell holding
-/// (h, qx, qy), h taken at least `floor` (a depth the friction can divide by).
+/// Manning's implicit friction over a step, q_new (1 + c |q_new| / h^(7/3)) = q (c = dt g n^2),
+/// as the divisor q / q_new = (1 + sqrt(1 + 4x)) / 2 with x = c |q| / h^(7/3), for a cell
+/// holding (h, qx, qy), h taken at least `floor` (a depth the friction can divide by). Unlike
+/// the semi-implicit 1 + x (|u| taken before the friction), its steady state does not depend
+/// on dt: with the semi-implicit form and friction in each of Heun's stages the default
+/// valley held 1 % more water at cfl 0.45 than at 0.05.
 inline double manning_divisor(double h, double qx, double qy, double c, double floor) {
     const double hs = std::max(h, floor);
     const double speed = std::sqrt(qx * qx + qy * qy) / hs;
-    return 1.0 + c * speed / (hs * cbrt_estimate(hs));
+    const double x = c * speed / (hs * cbrt_estimate(hs));
+    return 0.5 * (1.0 + std::sqrt(1.0 + 4.0 * x));
 }
 
 /// A reflective wall's outside state: the same depth and bed, the normal velocity reversed.

@@ -27,8 +27,8 @@ struct StageIn {
     double r = 0.0;              ///< dt / dx
     double weight = 0.0;         ///< dt * dx: an edge face's flux to a volume
     bool second = false;         ///< MUSCL slopes (minmod of h, eta, u, v)
-    /// Heun's stages: dt g n^2, each stage's new discharges divided by Manning's
-    /// 1 + c |u| / h^(4/3) (0: no friction; Euler leaves it to finish_row).
+    /// Heun's stages: dt g n^2, each stage's new discharges slowed by the implicit Manning
+    /// friction as in FinishRow (0: no friction; Euler leaves it to finish_row).
     double friction = 0.0;
     /// Reflective edges (x = 0, x = max, y = 0, y = max): at second order their faces see the
     /// mirror of the inner cell's reconstructed state, so that no water crosses them (the
@@ -37,8 +37,8 @@ struct StageIn {
 };
 
 /// The end of a step on one row's columns [lo, hi]: rain (a rate per cell, or `rain` metres
-/// everywhere), discharges zeroed at or below the dry depth, semi-implicit Manning friction
-/// q / (1 + c |u| / h^(4/3)) with c = dt g n^2 (0: none, or done by Heun's stages).
+/// everywhere), discharges zeroed at or below the dry depth, implicit Manning friction
+/// q_new (1 + c |u_new| / h^(4/3)) = q with c = dt g n^2 (0: none, or done by Heun's stages).
 struct FinishRow {
     double *h = nullptr, *hu = nullptr, *hv = nullptr;
     const double* rain_rate = nullptr;  ///< m/s per cell of the row, or nullptr: `rain`
