@@ -276,7 +276,8 @@ constexpr ReadIf kNotPaperContact{.holds = [](S d) { return d.collision.mode != 
                                                      "picks robust mode's)",
                                                      "remove it or set mode = \"robust\"");
                                   }};
-constexpr ReadIf kFrictionPbf{.holds = [](S d) { return d.solver == SolverKind::Pbf; }, .refusal = [](F) {
+// The hybrid's particles are PBF's (hybrid_solver.h): their bed friction reads the law too.
+constexpr ReadIf kFrictionPbf{.holds = [](S d) { return d.solver == SolverKind::Pbf || d.solver == SolverKind::Hybrid; }, .refusal = [](F) {
                                   return ignored("solver = \"springs\" (a bounce's damping has no law; only PBF's bed friction)",
                                                  "remove it or use solver = \"pbf\"");
                               }};
@@ -346,7 +347,7 @@ MR_READERS(kSpringMode, "solver = springs, stiffness > 0", kSpringsSection, kSpr
 MR_READERS(kCollision, "solver = springs, pbf", kCollisionSection);
 MR_READERS(kContact, "solver = springs, pbf; collision.mode paper, robust", kCollisionSection, kContactOn);
 MR_READERS(kOffset, "solver = springs, pbf; collision.mode paper, robust; a prefilled channel", kCollisionSection, kOffsetContactOn);
-MR_READERS(kBedFriction, "solver = pbf, collision.mode = robust", kCollisionSection, kContactOn, kFrictionPbf);
+MR_READERS(kBedFriction, "solver = pbf, hybrid; collision.mode = robust", kCollisionSection, kContactOn, kFrictionPbf);
 MR_READERS(kPbfContact, "solver = pbf, collision.mode = robust", kPbfSection, kPbfOnly, kContactOn);
 MR_READERS(kRobust, "solver = springs, pbf; collision.mode = robust", kCollisionSection, kContactOn, kNotPaperContact);
 MR_READERS(kPbfCarved, "solver = pbf with terrain.condition carve (auto: carve for a river)", kPrefillPbf, kPrefillCarved);
