@@ -368,8 +368,7 @@ void PbfSolver::sleep(const Stage& s) {
     std::vector<Vec3>& mean = st.sleep_.mean_velocity;
     const bool near_bodies = s.bodies && !st.body_of_.empty();
     const auto covered = [&](int32_t b, const Vec3& x) {  // a body took its place
-        Vec3 n;
-        return b >= 0 && st.bodies_.all()[size_t(b)].sdf(x, n) < 0.0f;
+        return b >= 0 && st.bodies_.all()[size_t(b)].distance(x) < 0.0f;
     };
     for_each_slot(p.size(), 1024, [&](size_t i) {
         if (!p.active[i]) return;

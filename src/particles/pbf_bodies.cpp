@@ -20,7 +20,7 @@
 // SolverCounters::inside_bodies, then moved out (the guard, as for the terrain).
 //
 // Each particle meets one body, the nearest one whose bounding sphere (+ h) holds it
-// (body_of_, per step after binning). The reactions are summed serially in slot order:
+// (body_of_, per step after binning; the spheres binned over x and z, body_cells.h). The reactions are summed serially in slot order:
 // the same result for any thread count.
 #include <metariver/pbf_solver.h>
 
@@ -47,26 +47,6 @@ constexpr float kBodyMaxTurnAccel = 50.0f;
 /// (1 - exp(-rate dt) per step), times the body's share of its kernel; the body takes the
 /// opposite momentum.
 constexpr float kBodyDragRate = 3.0f;
-
-/// The poly6 kernel's share beyond a plane at signed distance d, and d share / dd.
-struct BodyShare {
-    float h, h2, k;
-    explicit BodyShare(float radius) : h(radius), h2(radius * radius), k(315.0f / (256.0f * std::pow(radius, 9.0f))) {}
-    float F(float z) const {  // antiderivative of (h^2 - z^2)^4
-        const float z2 = z * z, h4 = h2 * h2;
-        return z * (h4 * h4 - z2 * (4.0f / 3.0f * h4 * h2 - z2 * (1.2f * h4 - z2 * (4.0f / 7.0f * h2 - z2 / 9.0f))));
-    }
-    float share(float d) const {
-        if (d >= h) return 0.0f;
-        if (d <= -h) return 1.0f;
-        return k * (F(h) - F(d));
-    }
-    float slope(float d) const {
-        if (d >= h || d <= -h) return 0.0f;
-        const float a = h2 - d * d;
-        return -k * (a * a) * (a * a);
-    }
-};
 
 /// Per body its centre and (bound + margin)^2: a particle farther cannot meet it.
 void bounding_spheres(const std::vector<RigidBody>& bodies, float margin, std::vector<glm::vec4>& out) {
@@ -118,33 +98,40 @@ void PbfSolver::assign_bodies(const Stage& s) {
     State& st = *st_;
     const Particles& p = water_.pool.particles;
     const std::vector<RigidBody>& bodies = st.bodies_.all();
-    const size_t n = p.size();
-    st.body_of_.assign(n, -1);
-    st.body2_of_.assign(n, -1);
-    st.body_grad_.assign(n, Vec3(0.0f));
-    st.body_dx_.assign(n, Vec3(0.0f));
-    st.body2_dx_.assign(n, Vec3(0.0f));
+    // Sized for every slot; only the active prefix is read (particles.h), so only it is set.
+    const size_t n = p.active_count();
+    st.body_of_.resize(p.size());
+    st.body2_of_.resize(p.size());
+    st.body_grad_.resize(p.size());
+    st.body_dx_.resize(p.size());
+    st.body2_dx_.resize(p.size());
+    std::fill_n(st.body_of_.begin(), n, -1);
+    std::fill_n(st.body2_of_.begin(), n, -1);
+    std::fill_n(st.body_grad_.begin(), n, Vec3(0.0f));
+    std::fill_n(st.body_dx_.begin(), n, Vec3(0.0f));
+    std::fill_n(st.body2_dx_.begin(), n, Vec3(0.0f));
     st.body_near_.clear();
     if (!st.body_coupling_on_) return;
     const float reach = s.k.h + pbf_.spacing;  // the iterations move a particle at most 1.5 spacings
     bounding_spheres(bodies, reach, st.body_reach_);
+    st.body_cells_.build(st.body_reach_);
     const glm::vec4* const spheres = st.body_reach_.data();
     for_each_slot(n, 256, [&](size_t i) {
         if (!p.active[i]) return;
         const Vec3 x = p.position[i];
         float best = reach, second = reach;
-        for (size_t b = 0; b < bodies.size(); ++b) {
+        st.body_cells_.visit(x, [&](size_t b) {  // the broad phase: the cell's bodies, their compact spheres
             const Vec3 d = x - Vec3(spheres[b]);
-            if (glm::dot(d, d) > spheres[b].w) continue;  // the broad phase: compact spheres, not the bodies
-            Vec3 nrm;
-            const float sd = bodies[b].sdf(x, nrm);
+            if (glm::dot(d, d) > spheres[b].w) return false;
+            const float sd = bodies[b].distance(x);
             if (sd < best) {
                 second = best, st.body2_of_[i] = st.body_of_[i];
                 best = sd, st.body_of_[i] = int32_t(b);
             } else if (sd < second) {
                 second = sd, st.body2_of_[i] = int32_t(b);
             }
-        }
+            return false;
+        });
     });
     st.body_near_.clear();  // the later passes walk these only (serial: slot order)
     for (size_t i = 0; i < n; ++i)
@@ -152,8 +139,11 @@ void PbfSolver::assign_bodies(const Stage& s) {
 }
 
 // The bodies' share of the kernels (the density pass's C and grad C), body_grad_.
-float pbf_body_share(const RigidBody& body, float h, const Vec3& x, Vec3& grad) {
-    const BodyShare bs(h);
+float pbf_body_share(const RigidBody& body, const BodyShare& bs, const Vec3& x, Vec3& grad) {
+    if (body.outside_by(x, bs.h)) {  // share(d >= h) = 0
+        grad = Vec3(0.0f);
+        return 0.0f;
+    }
     Vec3 n;
     const float d = body.sdf(x, n);
     grad = bs.slope(d) * n;
@@ -169,10 +159,9 @@ namespace {
 /// bodies' reactions); true when it ends outside both.
 bool leave_bodies(const std::vector<RigidBody>& bodies, int32_t a, int32_t b, float skin, Vec3& x, Vec3& dxa, Vec3& dxb) {
     const auto out_of = [&](int32_t k, Vec3& dx) {
-        if (k < 0) return false;
+        if (k < 0 || bodies[size_t(k)].outside_by(x, 0.0f) || bodies[size_t(k)].distance(x) >= 0.0f) return false;
         Vec3 n;
         const float d = bodies[size_t(k)].sdf(x, n);
-        if (d >= 0.0f) return false;
         const Vec3 out = (skin - d) * n;  // to just off the surface: rounding keeps it outside
         x += out;
         dx += out;
@@ -193,8 +182,7 @@ bool leave_bodies(const std::vector<RigidBody>& bodies, int32_t a, int32_t b, fl
     if (glm::dot(e, e) < 1e-6f) e = glm::cross(na, Vec3(1.0f, 0.0f, 0.0f));
     e = glm::normalize(e);
     for (float step = skin; step < 1e3f * skin; step *= 2.0f) {
-        Vec3 n;
-        if (bodies[size_t(a)].sdf(x, n) >= 0.0f && bodies[size_t(b)].sdf(x, n) >= 0.0f) return true;
+        if (bodies[size_t(a)].distance(x) >= 0.0f && bodies[size_t(b)].distance(x) >= 0.0f) return true;
         x += step * e;
         dxa += 0.5f * step * e;
         dxb += 0.5f * step * e;
@@ -276,8 +264,8 @@ void PbfSolver::drag_bodies(const Stage& s) {
     const std::vector<uint32_t>& near = st.body_near_;
     for_each_slot(near.size(), 64, [&](size_t k) {
         const uint32_t i = near[k];
-        Vec3 n;
-        share[i] = relax * bs.share(bodies[size_t(st.body_of_[i])].sdf(p.position[i], n));
+        const RigidBody& body = bodies[size_t(st.body_of_[i])];
+        share[i] = body.outside_by(p.position[i], s.k.h) ? 0.0f : relax * bs.share(body.distance(p.position[i]));
     });
     std::vector<Vec3> momentum(bodies.size(), Vec3(0.0f));
     std::vector<float> weight(bodies.size(), 0.0f);
@@ -304,26 +292,28 @@ void PbfSolver::count_inside_bodies(const Stage&) {
     State& st = *st_;
     Particles& p = water_.pool.particles;
     const std::vector<RigidBody>& bodies = st.bodies_.all();
-    std::vector<uint8_t> inside(p.size(), 0);
-    bounding_spheres(bodies, 0.0f, st.body_reach_);  // every particle against every body: honest
+    const size_t active = p.active_count();  // the active prefix (particles.h)
+    std::vector<uint8_t> inside(active, 0);
+    bounding_spheres(bodies, 0.0f, st.body_reach_);  // every particle against every body (binned): honest
+    st.body_cells_.build(st.body_reach_);
     const glm::vec4* const spheres = st.body_reach_.data();
-    for_each_slot(p.size(), 256, [&](size_t i) {
+    for_each_slot(active, 256, [&](size_t i) {
         if (!p.active[i]) return;
         const Vec3 x = p.position[i];
-        for (size_t b = 0; b < bodies.size(); ++b) {
+        st.body_cells_.visit(x, [&](size_t b) {
             const Vec3 d = x - Vec3(spheres[b]);
-            if (glm::dot(d, d) > spheres[b].w) continue;
+            if (glm::dot(d, d) > spheres[b].w) return false;
             const RigidBody& body = bodies[b];
+            if (body.distance(x) >= 0.0f) return false;
             Vec3 n;
             const float sd = body.sdf(x, n);
-            if (sd >= 0.0f) continue;
             inside[i] = 1;
             p.position[i] = x + (kBodySkin * pbf_.spacing - sd) * n;
             const Vec3 vb = body.v + glm::cross(body.w, p.position[i] - body.x);
             const float vn = glm::dot(p.velocity[i] - vb, n);
             if (vn < 0.0f) p.velocity[i] -= vn * n;
-            break;
-        }
+            return true;
+        });
     });
     uint64_t count = 0;
     for (uint8_t c : inside) count += c;

@@ -49,6 +49,7 @@ void PbfSolver::density_pass(const Stage& s, const NeighborLists* nl, bool simd)
     float* const cache_w = nl ? st.pair_w_.data() : nullptr;
     float* const cache_g = nl ? st.pair_g_.data() : nullptr;
     int16_t* const cache_grad[3] = {st.pair_fixed_[0].data(), st.pair_fixed_[1].data(), st.pair_fixed_[2].data()};
+    const BodyShare body_share(k.h);
     for_each_binned(water_.grid.grid(), nl, [&](uint32_t i, auto&& each) {
         const Vec3 xi = p.position[i];
         float rho = 0.0f, sum_g2 = 0.0f;
@@ -83,7 +84,7 @@ void PbfSolver::density_pass(const Stage& s, const NeighborLists* nl, bool simd)
         }
         if (s.bodies && st.body_of_[i] >= 0) {  // the body's share (pbf_bodies.cpp)
             Vec3 gb;
-            C += pbf_body_share(st.bodies_.all()[size_t(st.body_of_[i])], k.h, xi, gb);
+            C += pbf_body_share(st.bodies_.all()[size_t(st.body_of_[i])], body_share, xi, gb);
             gi += gb;
             st.body_grad_[i] = gb;
         }

@@ -6,9 +6,11 @@
 
 #include <metariver/pbf_solver.h>
 
+#include "body_cells.h"
 #include "rigid_bodies.h"
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -57,6 +59,7 @@ struct PbfSolver::State {
     std::vector<Vec3> body_grad_, body_dx_, body2_dx_;
     std::vector<uint32_t> body_near_;  ///< the particles with a body (body_of_ >= 0), in slot order
     std::vector<glm::vec4> body_reach_;  ///< per body: its centre and (bound + reach)^2, for the broad phase
+    BodyCells body_cells_;               ///< body_reach_ binned (the broad phase's cells)
     bool body_coupling_on_ = true;  ///< off (test probe): the water does not see the bodies
 
     /// A solver's state (for the test probe, pbf_probe.h: a member type reaches the
@@ -70,9 +73,29 @@ struct PbfSolver::State {
 /// (and grad 0) where no terrain is within h.
 float pbf_terrain_share(const Terrain& terrain, float h, const Vec3& x, Vec3& grad);
 
-/// A body's share of a kernel of radius `h` centred at `x` (pbf_bodies.cpp), in [0, 1],
+/// The poly6 kernel's share beyond a plane at signed distance d, and d share / dd.
+struct BodyShare {
+    float h, h2, k;
+    explicit BodyShare(float radius) : h(radius), h2(radius * radius), k(315.0f / (256.0f * std::pow(radius, 9.0f))) {}
+    float F(float z) const {  // antiderivative of (h^2 - z^2)^4
+        const float z2 = z * z, h4 = h2 * h2;
+        return z * (h4 * h4 - z2 * (4.0f / 3.0f * h4 * h2 - z2 * (1.2f * h4 - z2 * (4.0f / 7.0f * h2 - z2 / 9.0f))));
+    }
+    float share(float d) const {
+        if (d >= h) return 0.0f;
+        if (d <= -h) return 1.0f;
+        return k * (F(h) - F(d));
+    }
+    float slope(float d) const {
+        if (d >= h || d <= -h) return 0.0f;
+        const float a = h2 - d * d;
+        return -k * (a * a) * (a * a);
+    }
+};
+
+/// A body's share of a kernel of radius `bs.h` centred at `x` (pbf_bodies.cpp), in [0, 1],
 /// and its gradient w.r.t. x (into `grad`).
-float pbf_body_share(const RigidBody& body, float h, const Vec3& x, Vec3& grad);
+float pbf_body_share(const RigidBody& body, const BodyShare& bs, const Vec3& x, Vec3& grad);
 
 /// Number density of every particle through the grid (after the cell sort: it reorders
 /// the particles) and by brute force over all active pairs: the twin tests compare them.

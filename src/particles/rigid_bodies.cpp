@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <utility>
 
 namespace mr {
 
@@ -144,14 +146,53 @@ bool clear_of_ground(const Terrain& terrain, const RigidBody& b) {
     const float slope = n.y > 1e-3f ? std::sqrt(std::max(0.0f, 1.0f - n.y * n.y)) / n.y : 1e3f;
     return terrain.height_mesh(b.x.x, b.x.z) + 1.5f * r * slope + 0.5f * r < low;
 }
+
+/// Metres added to a body's box of samples: more than the rounding of their world
+/// positions (coordinates up to 10 km) and of the ground's interpolation.
+constexpr float kSampleBoxMargin = 0.01f;
+
+/// The cells' index range along one axis under [lo, hi] (Terrain::height_mesh's cell of a
+/// coordinate, clamped the same way: monotone in the coordinate).
+std::pair<int, int> cell_range(float lo, float hi, float s, int n) {
+    const float extent = float(n - 1) * s;
+    const auto index = [&](float x) {
+        const float c = x < 0.0f ? 0.0f : (x > extent ? extent : x);
+        return std::clamp(int(c / s), 0, n - 2);
+    };
+    return {index(lo), index(hi)};
+}
+
+/// Above this height no sample of the body can be under the ground: the highest grid
+/// sample of the terrain's cells under the box of its samples (the mesh's triangles
+/// interpolate their corners, so the ground under the box is no higher), and the lowest
+/// point of that box. Without a terrain or with a non-finite pose: no bound (+inf, -inf).
+std::pair<float, float> ground_bound(const Terrain& terrain, const RigidBody& b) {
+    constexpr float kInf = std::numeric_limits<float>::infinity();
+    const glm::mat3 R = glm::mat3_cast(b.q);
+    Vec3 half(kSampleBoxMargin);
+    for (int c = 0; c < 3; ++c) half += glm::abs(R[c]) * b.shape.sample_extent[c];
+    const Vec3 lo = b.x - half, hi = b.x + half;
+    if (terrain.columns() < 2 || terrain.rows() < 2 || !std::isfinite(lo.x + lo.y + lo.z + hi.x + hi.y + hi.z))
+        return {kInf, -kInf};
+    const float s = terrain.area_scale();
+    const auto [j0, j1] = cell_range(lo.x, hi.x, s, terrain.columns());
+    const auto [i0, i1] = cell_range(lo.z, hi.z, s, terrain.rows());
+    float top = -kInf;
+    for (int i = i0; i <= i1 + 1; ++i)
+        for (int j = j0; j <= j1 + 1; ++j) top = std::max(top, terrain.sample(i, j));
+    return {top + kSampleBoxMargin, lo.y};
+}
 }  // namespace
 
 void RigidBodies::terrain_contacts(const Terrain& terrain, float dt) {
     for (RigidBody& b : bodies_) {
-        if (clear_of_ground(terrain, b)) continue;
+        // Skipped where no sample can be under the ground (the same contacts, fewer
+        // queries); the bound again after a contact moved the body.
+        auto [top, lowest] = ground_bound(terrain, b);
+        if (lowest >= top || clear_of_ground(terrain, b)) continue;
         for (const Vec3& s : b.shape.samples) {
             const Vec3 p = b.to_world(s);
-            if (!terrain.contains_xz(p.x, p.z)) continue;
+            if (p.y >= top || !terrain.contains_xz(p.x, p.z)) continue;
             const float ground = terrain.height_mesh(p.x, p.z);
             if (p.y >= ground) continue;
             const Vec3 n = terrain.normal_mesh(p.x, p.z);
@@ -164,7 +205,10 @@ void RigidBodies::terrain_contacts(const Terrain& terrain, float dt) {
                 const float old = std::max(0.0f, (terrain.height_mesh(was.x, was.z) - was.y) * n.y);
                 depth -= std::max(0.0f, old - kMaxDepenetration * dt);  // the overlap left this substep
             }
-            if (depth > 0.0f) resolve(Contact{&b, nullptr, s, n, depth}, b.friction);
+            if (depth > 0.0f) {
+                resolve(Contact{&b, nullptr, s, n, depth}, b.friction);
+                top = ground_bound(terrain, b).first;
+            }
         }
     }
 }

@@ -43,6 +43,17 @@ struct RigidBody {
         normal = q * n;
         return d;
     }
+    /// sdf()'s distance alone (the same value, cheaper).
+    float distance(const Vec3& world) const { return shape.distance(to_local(world)); }
+    /// True when the bounding ball alone shows `world` at least `pad` outside the body, so
+    /// that sdf() would give >= pad (the margin outgrows its rounding): a cheap test first.
+    /// Primitives only: a mesh's distance outside is a lower bound (false for them).
+    bool outside_by(const Vec3& world, float pad) const {
+        if (shape.kind == BodyShape::ConvexMesh || shape.kind == BodyShape::TriangleMesh) return false;
+        const Vec3 d = world - x;
+        const float r = (shape.bound + pad) * 1.0001f + 1e-5f;
+        return glm::dot(d, d) > r * r;
+    }
     /// A position-level impulse p (kg m) at world point at.
     void apply(const Vec3& p, const Vec3& at);
     /// Generalized inverse mass along n at world point at.

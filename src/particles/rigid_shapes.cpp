@@ -362,7 +362,26 @@ Result<RigidShape> make_shape(const BodyDef& def) {
             break;
     }
     for (const Vec3& p : s.mesh->positions) s.bound = std::max(s.bound, glm::length(p));
+    for (const Vec3& p : s.samples) s.sample_extent = glm::max(s.sample_extent, glm::abs(p));
     return s;
+}
+
+float RigidShape::distance(const Vec3& p) const {  // sdf's distance, the same operations, no normal
+    switch (kind) {
+        case BodyShape::Box: {
+            const Vec3 q = glm::abs(p) - half;
+            const float lo = glm::length(glm::max(q, Vec3(0.0f)));
+            if (lo > 0.0f) return lo;
+            return q.x > q.y ? (q.x > q.z ? q.x : q.z) : (q.y > q.z ? q.y : q.z);
+        }
+        case BodyShape::Sphere:
+        case BodyShape::Capsule: return glm::length(p - Vec3(std::clamp(p.x, -half.y, half.y), 0.0f, 0.0f)) - half.x;
+        default: {
+            float best = -1e30f;
+            for (const glm::vec4& pl : planes) best = std::max(best, glm::dot(Vec3(pl), p) - pl.w);
+            return best;
+        }
+    }
 }
 
 float RigidShape::sdf(const Vec3& p, Vec3& n) const {

@@ -23,9 +23,12 @@ struct RigidShape {
     std::vector<glm::vec4> planes;
     std::shared_ptr<const BodyMesh> mesh;
     std::vector<Vec3> samples;  ///< surface points for the contacts (corners included)
+    Vec3 sample_extent{0.0f};   ///< the largest |coordinate| of the samples per axis (their box)
 
     /// Signed distance from a point in the body's frame (< 0 inside) and its gradient.
     float sdf(const Vec3& p, Vec3& normal) const;
+    /// sdf()'s distance alone (the same value, cheaper).
+    float distance(const Vec3& p) const;
 };
 
 /// The shape of a valid BodyDef (reads the OBJ of mesh shapes; errors name bodies.mesh and the file).
