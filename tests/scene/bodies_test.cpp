@@ -6,11 +6,13 @@
 #include <metariver/scene.h>
 
 #include "bodies_pool.h"
+#include "body_cells.h"
 #include "pbf_probe.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <cstdio>
@@ -319,6 +321,58 @@ TEST(Bodies, ShapesHaveTheirVolumeAndMass) {
         EXPECT_EQ(b.mesh->positions.size(), b.mesh->normals.size());
     }
     fs::remove(obj);
+}
+
+}  // namespace
+}  // namespace mr
+
+namespace mr {
+namespace {
+
+// The broad phase's cells (body_cells.h) list, for any point, every body whose sphere holds
+// it, in index order, so the coupling meets the same bodies as a loop over all of them:
+// near sphere surfaces, with bodies far apart (wider cells), and with a non-finite sphere.
+TEST(Bodies, CellsListEveryBodyWhoseSphereHoldsAPointInOrder) {
+    std::vector<glm::vec4> spheres;
+    uint32_t seed = 12345;
+    const auto rnd = [&]() { return float((seed = seed * 1664525u + 1013904223u) >> 8) / float(1u << 24); };
+    for (int b = 0; b < 40; ++b) {
+        const float r = 0.2f + 2.0f * rnd();
+        spheres.push_back(glm::vec4(100.0f * rnd(), 5.0f * rnd(), 100.0f * rnd(), r * r));
+    }
+    spheres.push_back(glm::vec4(5000.0f, 0.0f, -3000.0f, 1.0f));  // far away: the cells widen
+    spheres.push_back(glm::vec4(NAN, 0.0f, 0.0f, 1.0f));           // never listed
+    BodyCells cells;
+    cells.build(spheres);
+    int checked = 0, met = 0;
+    for (int k = 0; k < 20000; ++k) {
+        // Half the points just inside or outside a sphere's surface, the rest anywhere.
+        const glm::vec4& s = spheres[size_t(k) % 41];
+        const Vec3 dir = glm::normalize(Vec3(rnd() - 0.5f, rnd() - 0.5f, rnd() - 0.5f) + Vec3(1e-3f));
+        const Vec3 x = k % 2 ? Vec3(s) + dir * std::sqrt(s.w) * (0.999f + 0.002f * rnd())
+                             : Vec3(110.0f * rnd() - 5.0f, 5.0f * rnd(), 110.0f * rnd() - 5.0f);
+        std::vector<size_t> want, got;
+        for (size_t b = 0; b < spheres.size(); ++b) {
+            const Vec3 d = x - Vec3(spheres[b]);
+            if (glm::dot(d, d) <= spheres[b].w) want.push_back(b);
+        }
+        cells.visit(x, [&](size_t b) {
+            const Vec3 d = x - Vec3(spheres[b]);
+            if (glm::dot(d, d) <= spheres[b].w) got.push_back(b);
+            return false;
+        });
+        ASSERT_EQ(want, got) << "point " << x.x << ", " << x.y << ", " << x.z;
+        ++checked;
+        met += !want.empty();
+    }
+    EXPECT_GT(met, checked / 5);  // the points do meet bodies (a quarter: half the surface points)
+    // visit stops where f says so.
+    int calls = 0;
+    cells.visit(Vec3(spheres[0]), [&](size_t) { return ++calls, true; });
+    EXPECT_EQ(calls, 1);
+    // No spheres: no bodies anywhere.
+    cells.build({});
+    cells.visit(Vec3(0.0f), [&](size_t) { return ADD_FAILURE(), true; });
 }
 
 }  // namespace
