@@ -283,6 +283,51 @@ TEST(Bodies, ApplyKeepsTheBodiesItDoesNotChange) {
     EXPECT_EQ(w.bodies()[0].id, dropped);
 }
 
+// Sculpting keeps the bodies (ids and all) and they meet the new ground: a steel box resting
+// on the pool's floor rides a mound raised under it, and goes down again when the stroke is
+// undone; none of it ends under the ground.
+TEST(Bodies, SculptingKeepsTheBodiesAndTheyRestOnTheNewGround) {
+    test::Pool pool = test::still_pool(kSpacing, 2);
+    auto sim = Simulation::create(pool.def, pool.map);
+    ASSERT_TRUE(sim.ok()) << sim.error().message;
+    Simulation& w = *sim.value();
+    const Vec3 size(0.6f, 0.6f, 0.6f);
+    const uint32_t id = w.add_body(BodyDef{.size = size, .density = 7800.0f, .position = Vec3(4.0f, 0.6f, 4.0f)}).value();
+    const auto settle = [&](int frames) {
+        for (int f = 0; f < frames; ++f) w.step(1.0f / 60.0f);
+        EXPECT_EQ(w.bodies().size(), 1u);
+        EXPECT_EQ(w.bodies()[0].id, id) << "the body was made again";
+        return w.bodies()[0];
+    };
+    // The lowest corner of the box over the ground under it (the terrain's mesh).
+    const auto clearance = [&](const BodyState& b) {
+        float lowest = 1e30f;
+        for (int c = 0; c < 8; ++c) {
+            const Vec3 local(c & 1 ? 0.5f : -0.5f, c & 2 ? 0.5f : -0.5f, c & 4 ? 0.5f : -0.5f);
+            const Vec3 x = b.position + b.orientation * (local * size);
+            lowest = std::min(lowest, x.y - w.terrain().height_mesh(x.x, x.z));
+        }
+        return lowest;
+    };
+    const BodyState floor = settle(120);
+    EXPECT_LT(floor.position.y, 0.5f * size.y + 0.1f) << "the box should rest on the floor";
+    auto edit = w.sculpt(Brush{.x = 4.0f, .z = 4.0f, .radius = 1.5f, .strength = 0.5f, .mode = BrushMode::Raise});
+    ASSERT_TRUE(edit.ok()) << edit.error().message;
+    ASSERT_FALSE(edit.value().empty());
+    const float mound = w.terrain().height_mesh(4.0f, 4.0f);
+    ASSERT_GT(mound, 0.3f);
+    const BodyState raised = settle(120);
+    std::printf("sculpt: box centre %.3f m on the floor, %.3f m on the %.3f m mound; lowest corner %+.3f m over the ground\n",
+                floor.position.y, raised.position.y, mound, clearance(raised));
+    EXPECT_GT(raised.position.y, floor.position.y + 0.25f) << "the box did not ride the mound";
+    EXPECT_GT(clearance(raised), -0.05f) << "the box ends under the new ground";
+    w.restore(edit.value());
+    const BodyState back = settle(120);
+    EXPECT_LT(back.position.y, raised.position.y - 0.2f) << "the box stayed up after the mound was undone";
+    EXPECT_GT(clearance(back), -0.05f);
+    EXPECT_EQ(w.counters().inside_bodies, 0u);
+}
+
 // Shapes: the mass and volume of each primitive, and of an OBJ (a unit cube with a vertex
 // inside it: the convex hull leaves it out; the triangle mesh needs the cube's faces).
 TEST(Bodies, ShapesHaveTheirVolumeAndMass) {
