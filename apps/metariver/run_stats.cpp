@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -19,6 +20,35 @@ namespace mr::app {
 namespace {
 
 using json = nlohmann::json;
+
+/// The shallow-water grid of the run: the swe solver itself or the hybrid's; null for the
+/// particle solvers.
+const SweSolver* grid_of(const Simulation& sim) {
+    if (const auto* h = dynamic_cast<const HybridSolver*>(&sim.solver())) return &h->grid();
+    return dynamic_cast<const SweSolver*>(&sim.solver());
+}
+
+/// Volume that left the map so far, m^3: the grid's open edges and sinks, and for the
+/// hybrid the particles lost off the terrain.
+double left_the_map(const SweBalance& b, double lost) { return b.outflow + b.sunk + lost; }
+
+/// The hybrid's outflow, by volume: the grid's edges and sinks and the particles lost, in
+/// m^3 since the start and per second over the second half, and over the second half's
+/// inflow (the swe block's outflow_over_inflow, with the particles lost).
+struct HybridOutflow {
+    double m3 = 0.0, m3_per_s = 0.0, over_inflow = 0.0;
+};
+
+std::optional<HybridOutflow> hybrid_outflow(const Simulation& sim, const RiverMeter& m) {
+    const auto* h = dynamic_cast<const HybridSolver*>(&sim.solver());
+    if (!h) return std::nullopt;
+    const SweBalance b = h->grid().balance();
+    const RiverMeter::SweMark& half = m.swe_half();
+    const double out = left_the_map(b, h->stats().lost), out_half = out - left_the_map(half.balance, half.lost);
+    const double in_half = b.inflow - half.balance.inflow + b.rain - half.balance.rain;
+    const double seconds = h->grid().simulated_s() - half.time_s;
+    return HybridOutflow{out, seconds > 0.0 ? out_half / seconds : 0.0, in_half > 0.0 ? out_half / in_half : 0.0};
+}
 
 /// One entry per outlet: cell [row, col], position [x, z] (metres), drainage cells,
 /// particles over the run, rate over the second half, whether it is the main channel's.
@@ -62,7 +92,7 @@ json plausibility_json(const Simulation& sim, const RiverMeter& m) {
     const FlowMeter::Summary fs = m.flow().summary();
     const OutletMeter::Summary os = m.outlets().summary();
     const Percentiles final_speed = percentiles(sim.active_speeds());
-    return {{"tunneled", c.tunneled},
+    json j = {{"tunneled", c.tunneled},
             {"guarded", c.guarded},
             {"inside_bodies", c.inside_bodies},
             {"respawned", c.respawned},
@@ -85,6 +115,15 @@ json plausibility_json(const Simulation& sim, const RiverMeter& m) {
             {"main_channel", sim.main_channel()},  // [row, column] from the source to the outlet
             {"outlets", outlets_json(m.outlets(), os)},
             {"outlet_other", {{"particles", os.other.particles}, {"rate_per_s", os.other.rate}}}};
+    // The hybrid's water leaves through the grid's edges, not as particles at sinks: its
+    // outflow by volume, and the first outflow and the ratio over inflow by volume too.
+    if (const std::optional<HybridOutflow> h = hybrid_outflow(sim, m)) {
+        j["outflow_m3"] = h->m3;
+        j["outflow_m3_per_s"] = h->m3_per_s;
+        j["outflow_over_inflow"] = h->over_inflow;
+        j["first_outflow_s"] = m.first_grid_outflow_s();
+    }
+    return j;
 }
 
 /// Diffuse particles at the last frame ([foam], issue 11), and the potentials of the
@@ -125,11 +164,12 @@ json stage_ms_json(const Simulation& sim, const Checkpoints& stage_ms) {
     return j;
 }
 
-/// The shallow-water solver's numbers (solver = "swe"); null for other solvers. Volumes in
-/// m^3 since the start; balance_error_relative: (initial + inflow + rain - outflow - stored)
-/// over what came in (initial + inflow + rain).
+/// The shallow-water grid's numbers (solver = "swe", and the hybrid's grid); null for the
+/// particle solvers. Volumes in m^3 since the start (exchanged: net volume the hybrid's
+/// particles gave the grid, negative: taken); balance_error_relative: (initial + inflow +
+/// rain + exchanged - outflow - sunk - stored) over what came in (initial + inflow + rain).
 json swe_json(const Simulation& sim, const RiverMeter& m, long long frames) {
-    const auto* swe = dynamic_cast<const SweSolver*>(&sim.solver());
+    const SweSolver* swe = grid_of(sim);
     if (!swe) return nullptr;
     const HeightfieldWater& w = *swe->water_heightfield();
     const float dry = swe->def().dry_depth;
@@ -161,7 +201,8 @@ json swe_json(const Simulation& sim, const RiverMeter& m, long long frames) {
             {"wet_cells", wet},
             {"wet_fraction", w.size() ? double(wet) / double(w.size()) : 0.0},
             {"volume_m3", {{"initial", b.initial}, {"inflow", b.inflow}, {"rain", b.rain},
-                           {"outflow", b.outflow}, {"sunk", b.sunk}, {"stored", b.stored}}},
+                           {"outflow", b.outflow}, {"sunk", b.sunk}, {"stored", b.stored},
+                           {"exchanged", b.exchanged}}},
             {"balance_error_m3", b.error()},
             {"balance_error_relative", in > 0.0 ? std::abs(b.error()) / in : 0.0},
             {"substeps", c.substeps},
@@ -172,7 +213,7 @@ json swe_json(const Simulation& sim, const RiverMeter& m, long long frames) {
             {"max_speed_m_s", c.max_speed}};
 }
 
-/// run's line for solver = "swe" (from swe_json): empty for other solvers.
+/// run's line for the grid (from swe_json): empty for the particle solvers.
 std::string swe_summary(const Simulation& sim, const RiverMeter& m, long long frames) {
     const json j = swe_json(sim, m, frames);
     if (j.is_null()) return {};
@@ -182,12 +223,15 @@ std::string swe_summary(const Simulation& sim, const RiverMeter& m, long long fr
                                  ? fmt::format(", spun up {:.4g} s before frame 0 in {:.0f} ms ({})", init["simulated_s"].get<double>(),
                                                init["wall_ms"].get<double>(), init["converged"].get<bool>() ? "steady" : "at its cap")
                                  : std::string();
+    const double exchanged = v["exchanged"].get<double>();
+    const std::string with_particles =
+        dynamic_cast<const HybridSolver*>(&sim.solver()) ? fmt::format(" {:+.4g} exchanged with the particles", exchanged) : std::string();
     return fmt::format("\nswe: {} wet cells ({:.1f} %), stored {:.4g} m^3 of initial {:.4g} + inflow {:.4g} + rain {:.4g} "
-                       "- outflow {:.4g} - sunk {:.4g}, balance error {:.2e} of what came in, {:.2f} substeps a frame (max {}), "
+                       "- outflow {:.4g} - sunk {:.4g}{}, balance error {:.2e} of what came in, {:.2f} substeps a frame (max {}), "
                        "{:.2f} M cell updates/s, {:.3g} m^3/s at the source, time scale {:.4g}, channel coverage {:.0f} %{}",
                        j["wet_cells"].get<long long>(), 100.0 * j["wet_fraction"].get<double>(),
                        v["stored"].get<double>(), v["initial"].get<double>(), v["inflow"].get<double>(),
-                       v["rain"].get<double>(), v["outflow"].get<double>(), v["sunk"].get<double>(), j["balance_error_relative"].get<double>(),
+                       v["rain"].get<double>(), v["outflow"].get<double>(), v["sunk"].get<double>(), with_particles, j["balance_error_relative"].get<double>(),
                        j["substeps_per_frame"]["mean"].get<double>(), j["substeps_per_frame"]["max"].get<uint64_t>(),
                        j["cell_updates_per_s"].get<double>() / 1e6, j["discharge_m3_s"].get<double>(),
                        j["time_scale"].get<double>(), 100.0 * m.channel_coverage(), spun);
@@ -219,14 +263,17 @@ json hybrid_json(const Simulation& sim, long long frames, double dt) {
 }
 
 /// run's line for solver = "hybrid" (from hybrid_json): empty for other solvers.
-std::string hybrid_summary(const Simulation& sim, long long frames) {
+std::string hybrid_summary(const Simulation& sim, const RiverMeter& m, long long frames) {
     const json j = hybrid_json(sim, frames, 0.0);
     if (j.is_null()) return {};
+    const HybridOutflow out = hybrid_outflow(sim, m).value_or(HybridOutflow{});
     return fmt::format("\nhybrid: {:.3f} m^3 to particles ({} particles), {:.3f} m^3 to the grid ({} particles), "
-                       "{:.4f} m^3 lost off the terrain; total {:.4g} m^3 (grid balance error {:.2e} m^3)",
+                       "{:.4f} m^3 lost off the terrain; total {:.4g} m^3 (grid balance error {:.2e} m^3); "
+                       "outflow {:.4g} m^3 ({:.3g} m^3/s = {:.2f} of inflow over the second half, first at {:.2f} s)",
                        j["to_particles_m3"].get<double>(), j["particles_made"].get<uint64_t>(), j["to_grid_m3"].get<double>(),
                        j["particles_absorbed"].get<uint64_t>(), j["lost_m3"].get<double>(),
-                       j["total_volume_m3"].get<double>(), j["grid_balance_error_m3"].get<double>());
+                       j["total_volume_m3"].get<double>(), j["grid_balance_error_m3"].get<double>(), out.m3, out.m3_per_s,
+                       out.over_inflow, m.first_grid_outflow_s());
 }
 
 }  // namespace
@@ -265,10 +312,14 @@ void RiverMeter::record(const Simulation& sim, long long f, double time_s) {
     max_speed_ = std::max(max_speed_, sim.counters().max_speed);
     density_max_ = std::max(density_max_, sim.counters().density_error_max);
     simulate_ms_total_ += sim.last_timings().simulate_ms;
-    if (const auto* swe = dynamic_cast<const SweSolver*>(&sim.solver())) {
+    if (const SweSolver* swe = grid_of(sim)) {
+        const auto* h = dynamic_cast<const HybridSolver*>(&sim.solver());
+        const double lost = h ? h->stats().lost : 0.0;
+        const SweBalance b = swe->balance();
         max_substeps_ = std::max(max_substeps_, swe->last_substeps());
-        if (f == frames_ / 2 - 1) swe_half_ = {swe->balance(), swe->simulated_s()};
-        if (f == 3 * frames_ / 4 - 1) swe_quarter_ = {swe->balance(), swe->simulated_s()};
+        if (f == frames_ / 2 - 1) swe_half_ = {b, swe->simulated_s(), lost};
+        if (f == 3 * frames_ / 4 - 1) swe_quarter_ = {b, swe->simulated_s(), lost};
+        if (h && first_grid_outflow_s_ < 0.0 && left_the_map(b, lost) > 0.0) first_grid_outflow_s_ = time_s;
     }
     const bool sampled = 2 * f >= frames_ && f % 10 == 0;
     if (sampled) {
@@ -353,7 +404,7 @@ std::string run_summary(const Simulation& sim, const RiverMeter& meter, const Ch
                        c.respawned, fs.rate, fs.steady ? "steady" : "not steady", os.main.rate,
                        outflow_over_inflow(sim, os), os.main.first_s, 100.0 * meter.channel_coverage(),
                        100.0 * meter.wet_fraction(), 100.0 * meter.spray_fraction(), final_speed.p95, with_bodies, tot.median,
-                       tot.p95) + swe_summary(sim, meter, frames) + hybrid_summary(sim, frames);
+                       tot.p95) + swe_summary(sim, meter, frames) + hybrid_summary(sim, meter, frames);
 }
 
 }  // namespace mr::app

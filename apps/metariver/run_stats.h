@@ -38,14 +38,19 @@ public:
     double simulate_ms_total() const { return simulate_ms_total_; }
     /// Time steps of the busiest frame (a heightfield solver's CFL substeps; 0 for others).
     uint64_t max_substeps() const { return max_substeps_; }
-    /// swe: the balance and simulated time at the start of the second half and of the
-    /// last quarter of the run (the rates of outflow over inflow and of storage).
+    /// swe and the hybrid's grid: the balance and simulated time at the start of the second
+    /// half and of the last quarter of the run (the rates of outflow over inflow and of
+    /// storage); `lost`: the hybrid's particle volume lost off the terrain by then, m^3.
     struct SweMark {
         SweBalance balance;
         double time_s = 0.0;
+        double lost = 0.0;
     };
     const SweMark& swe_half() const { return swe_half_; }
     const SweMark& swe_quarter() const { return swe_quarter_; }
+    /// The hybrid: simulated seconds at the end of the first frame whose water left the map
+    /// (the grid's edges and sinks, particles lost); -1 while none has.
+    double first_grid_outflow_s() const { return first_grid_outflow_s_; }
 
 private:
     long long frames_;
@@ -57,6 +62,7 @@ private:
     double simulate_ms_total_ = 0.0;
     uint64_t max_substeps_ = 0;
     SweMark swe_half_, swe_quarter_;
+    double first_grid_outflow_s_ = -1.0;
 };
 
 /// The bodies after the last frame (bodies.h, from SceneView::bodies): count, mean
