@@ -93,6 +93,9 @@ public:
     bool set_params(const HybridDef& def, const SweDef& swe, Vec3 resolved_source);
 
 private:
+    /// The cells with a face whose bed drops by more than def_.drop (the only cells that
+    /// can shed), in row-major order, with a bit per face (kDi/kDj's order).
+    void find_edges();
     void shed(float frame_dt);
     void shed_cell(int i, int j, int dir, double volume, float frame_dt);
     void absorb(float frame_dt);
@@ -109,6 +112,11 @@ private:
     double particle_volume_ = 0.0;
     std::vector<double> owed_;       ///< per cell: volume due over its edges not yet a whole particle
     std::vector<uint8_t> sheds_;     ///< per cell: shed over an edge this frame (absorbs nothing)
+    struct EdgeCell {
+        int i, j;
+        uint8_t faces;  ///< bit d: the bed drops by more than def_.drop towards face d
+    };
+    std::vector<EdgeCell> edges_;    ///< from find_edges(): the every-cell scan done once
     std::vector<float> rest_time_;   ///< per particle id: seconds at rest on the ground
     std::vector<Vec3> new_pos_, new_vel_;
     uint64_t shed_count_ = 0;        ///< particles made so far (their placement's sequence)

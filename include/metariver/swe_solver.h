@@ -164,6 +164,9 @@ public:
     const swe::ShallowWater& core() const { return *core_; }
     /// Shows the core's current state in water_heightfield().
     void refresh() { publish(); }
+    /// step_frame without showing the new state: for a solver that changes the core after
+    /// the step and calls refresh() (the hybrid; publishing twice cost it 5 us a frame).
+    void advance_frame(float frame_dt);
     /// swe.discharge and swe.time_scale with "auto" resolved.
     float discharge() const { return discharge_; }
     float time_scale() const { return time_scale_; }

@@ -51,6 +51,7 @@ HybridSolver::HybridSolver(const Terrain& terrain, const Bvh& bvh, const HybridD
     sheds_.assign(owed_.size(), 0);
     rest_time_.assign(static_cast<size_t>(std::max(def.max_particles, 1)), 0.0f);
     counters_ = pbf_->counters();
+    find_edges();
 }
 
 HybridSolver::~HybridSolver() = default;
@@ -63,8 +64,31 @@ std::vector<std::string> HybridSolver::warnings() const { return grid_->warnings
 bool HybridSolver::set_params(const HybridDef& def, const SweDef& swe, Vec3 resolved_source) {
     if (def.max_particles != def_.max_particles) return false;
     if (!grid_->set_params(swe, resolved_source)) return false;
+    const bool new_drop = def.drop != def_.drop;
     def_ = def;
+    if (new_drop) find_edges();
     return true;
+}
+
+void HybridSolver::find_edges() {
+    const swe::ShallowWater& core = grid_->core();
+    edges_.clear();
+    for (int j = 0; j < core.ny(); ++j)
+        for (int i = 0; i < core.nx(); ++i) {
+            uint8_t faces = 0;
+            for (int d = 0; d < 4; ++d) {
+                const int ni = i + kDi[d], nj = j + kDj[d];
+                if (ni < 0 || nj < 0 || ni >= core.nx() || nj >= core.ny()) continue;
+                if (core.bed(i, j) - core.bed(ni, nj) > def_.drop) faces |= uint8_t(1u << d);
+            }
+            if (faces) edges_.push_back({i, j, faces});
+        }
+    // A cell that cannot shed owes nothing and sheds nothing (what the every-cell scan
+    // set each frame); one that still can keeps what it owes.
+    std::vector<uint8_t> edge(owed_.size(), 0);
+    for (const EdgeCell& e : edges_) edge[static_cast<size_t>(e.j) * core.nx() + e.i] = 1;
+    for (size_t c = 0; c < owed_.size(); ++c)
+        if (!edge[c]) owed_[c] = 0.0, sheds_[c] = 0;
 }
 
 double HybridSolver::exchange(int i, int j, double volume, double momentum_x, double momentum_z) {
@@ -77,34 +101,34 @@ void HybridSolver::shed(float frame_dt) {
     const double dx = core.dx(), area = dx * dx;
     const size_t free = pbf_->water().pool.free();
     size_t budget = free;
-    for (int j = 0; j < core.ny(); ++j)
-        for (int i = 0; i < core.nx(); ++i) {
-            const size_t c = static_cast<size_t>(j) * core.nx() + i;
-            const double h = core.depth(i, j);
-            if (h < def_.min_depth) {
-                owed_[c] = 0.0;
-                sheds_[c] = 0;
-                continue;
-            }
-            const double vel[2] = {core.discharge_x(i, j) / h, core.discharge_y(i, j) / h};
-            bool edge = false;
-            for (int d = 0; d < 4; ++d) {
-                const int ni = i + kDi[d], nj = j + kDj[d];
-                if (ni < 0 || nj < 0 || ni >= core.nx() || nj >= core.ny()) continue;
-                const double along = kDi[d] != 0 ? kDi[d] * vel[0] : kDj[d] * vel[1];
-                if (along < def_.min_speed || core.bed(i, j) - core.bed(ni, nj) <= def_.drop) continue;
-                edge = true;
-                owed_[c] += along * h * dx * frame_dt;  // what flows over the face this frame
-                const double whole = std::floor(std::min(owed_[c], core.depth(i, j) * area) / particle_volume_);
-                const size_t n = std::min(static_cast<size_t>(std::max(whole, 0.0)), budget);
-                if (n == 0) continue;
-                owed_[c] -= double(n) * particle_volume_;
-                budget -= n;
-                shed_cell(i, j, d, double(n), frame_dt);
-            }
-            if (!edge) owed_[c] = 0.0;
-            sheds_[c] = edge ? 1 : 0;
+    // Only the cells find_edges() found: every other cell's owed_ and sheds_ stay 0.
+    for (const EdgeCell& e : edges_) {
+        const int i = e.i, j = e.j;
+        const size_t c = static_cast<size_t>(j) * core.nx() + i;
+        const double h = core.depth(i, j);
+        if (h < def_.min_depth) {
+            owed_[c] = 0.0;
+            sheds_[c] = 0;
+            continue;
         }
+        const double vel[2] = {core.discharge_x(i, j) / h, core.discharge_y(i, j) / h};
+        bool edge = false;
+        for (int d = 0; d < 4; ++d) {
+            if (!(e.faces & (1u << d))) continue;
+            const double along = kDi[d] != 0 ? kDi[d] * vel[0] : kDj[d] * vel[1];
+            if (along < def_.min_speed) continue;
+            edge = true;
+            owed_[c] += along * h * dx * frame_dt;  // what flows over the face this frame
+            const double whole = std::floor(std::min(owed_[c], core.depth(i, j) * area) / particle_volume_);
+            const size_t n = std::min(static_cast<size_t>(std::max(whole, 0.0)), budget);
+            if (n == 0) continue;
+            owed_[c] -= double(n) * particle_volume_;
+            budget -= n;
+            shed_cell(i, j, d, double(n), frame_dt);
+        }
+        if (!edge) owed_[c] = 0.0;
+        sheds_[c] = edge ? 1 : 0;
+    }
 }
 
 void HybridSolver::shed_cell(int i, int j, int dir, double count, float frame_dt) {
@@ -182,7 +206,7 @@ void HybridSolver::absorb(float frame_dt) {
 void HybridSolver::step_frame(float frame_dt) {
     const bool ok = frame_dt > 0.0f && std::isfinite(frame_dt);
     if (ok) shed(frame_dt);
-    grid_->step_frame(frame_dt);
+    grid_->advance_frame(frame_dt);  // shown by refresh() below, after the absorbed water
     pbf_->step_frame(frame_dt);
     if (ok) absorb(frame_dt);
     grid_->refresh();

@@ -329,13 +329,17 @@ void SweSolver::publish() {
 }
 
 void SweSolver::step_frame(float frame_dt) {
+    advance_frame(frame_dt);
+    publish();
+}
+
+void SweSolver::advance_frame(float frame_dt) {
     const uint64_t before = core_->stats().substeps;
     if (frame_dt > 0.0f && std::isfinite(frame_dt)) core_->advance(double(frame_dt) * time_scale_);
     last_substeps_ = core_->stats().substeps - before;
     counters_.substeps = core_->stats().substeps - init_substeps_;
     counters_.cell_updates = core_->stats().cell_updates;
     ++frame_;
-    publish();
 }
 
 SweBalance SweSolver::balance() const {
