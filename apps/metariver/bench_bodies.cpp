@@ -2,6 +2,8 @@
 // 44's cost bound: the logs add at most 20 % to the frame).
 #include "bench_scenarios.h"
 
+#include <metariver/io.h>
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -13,12 +15,8 @@ namespace mr::app {
 
 namespace {
 
-/// The median (robust to the other processes of a shared machine).
-double median(std::vector<double> v) {
-    if (v.empty()) return 0.0;
-    std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(v.size() / 2), v.end());
-    return v[v.size() / 2];
-}
+/// The median (robust to the other processes of a shared machine): the one cmd_bench prints.
+double median(std::vector<double> v) { return percentiles(std::move(v)).median; }
 
 /// n round logs (capsules 0.2 m x 1.6 m, 500 kg/m^3) on the water along the main channel.
 void drop_logs(Simulation& s, int n) {

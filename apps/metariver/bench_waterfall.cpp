@@ -4,6 +4,7 @@
 #include "bench_scenarios.h"
 
 #include <metariver/hybrid_solver.h>
+#include <metariver/io.h>
 
 #include <fmt/format.h>
 
@@ -13,11 +14,8 @@ namespace mr::app {
 
 namespace {
 
-double median(std::vector<double> v) {
-    if (v.empty()) return 0.0;
-    std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(v.size() / 2), v.end());
-    return v[v.size() / 2];
-}
+/// The median (robust to the other processes of a shared machine): the one cmd_bench prints.
+double median(std::vector<double> v) { return percentiles(std::move(v)).median; }
 
 /// One row: `def` after `warmup` frames, `frames` measured; the mean active particles.
 ScenarioResult measure(const std::string& name, const SceneDef& def, int warmup, int frames, double& mean_particles) {
