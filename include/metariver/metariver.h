@@ -243,7 +243,12 @@ typedef struct mr_body_state {
 MR_API mr_status mr_world_bodies(const mr_world* world, mr_body_state* out, size_t capacity, size_t* count);
 
 /* Water queries on the latest frame (the first query after a step builds their grids).
- * Batches of count points; outputs are arrays the caller owns. */
+ * Batches of count points; outputs are arrays the caller owns. Each point is answered on
+ * its own: a point with a NaN or infinite coordinate (in xz, points, origins or
+ * directions) is answered as dry (wet 0, surface_y 0, depth 0, velocity 0), zero velocity
+ * or no hit, as WaterQuery answers it, and the call still returns MR_OK with every other
+ * point answered; check your inputs with isfinite() where a NaN means a bug of yours.
+ * Arguments of the whole call (NULL pointers, max_distance) are refused as usual. */
 typedef struct mr_water_sample {
     float surface_y;   /* the highest water surface over/under (x, z), metres; the ground when dry */
     float depth;       /* surface_y minus the ground, >= 0 */

@@ -50,7 +50,8 @@ struct WaterRayHit {
 /// Measured on the default river at frame 600 (27,604 triangles, 1,487 particles; one
 /// thread of a 2-vCPU AMD EPYC guest, docs/benchmarks.md "Water queries"): update() 1.1 ms;
 /// a query: sample 76 ns, velocity_at 16 ns, raycast 0.84 us (the twins: 272 us, 2.4 us,
-/// 361 us). A non-finite input answers "not wet" (surface_y 0), zero velocity, no hit.
+/// 361 us). A non-finite input answers "not wet" (surface_y 0), zero velocity, no hit;
+/// in a batch only that point does (the C API and Python answer so too, with no error).
 class WaterQuery {
 public:
     WaterQuery();

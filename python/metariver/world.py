@@ -130,13 +130,12 @@ def _vec3(name: str, value: Any) -> np.ndarray:
 
 
 def _points(name: str, value: Any, width: int) -> np.ndarray:
-    """A (..., width) array of finite numbers as C-contiguous float32."""
+    """A (..., width) array of real numbers as C-contiguous float32. NaN and infinity pass:
+    the queries answer such a point alone as dry / zero velocity / no hit (as C and C++ do)."""
     v = np.asarray(value)
     if v.dtype.kind not in "fiu" or v.ndim < 1 or v.shape[-1] != width:
         raise ValueError(f"{name}: expected an array of shape (..., {width}) of real numbers, "
                          f"got shape {v.shape} dtype {v.dtype}")
-    if not np.all(np.isfinite(v)):
-        raise ValueError(f"{name}: every value must be finite (no NaN or infinity)")
     return np.ascontiguousarray(v, dtype=np.float32)
 
 
@@ -494,14 +493,16 @@ class World:
     # -- queries --------------------------------------------------------------------------
     def sample(self, xz: Any) -> np.ndarray:
         """Water at points (x, z): xz of shape (..., 2) -> a record array of shape (...) with
-        fields surface_y (m; the ground where dry), depth (m), velocity (3,) m/s and wet (0/1)."""
+        fields surface_y (m; the ground where dry), depth (m), velocity (3,) m/s and wet (0/1).
+        A point with a NaN or infinite coordinate is answered as dry (all 0); the others as usual."""
         p = _points("xz", xz, 2)
         out = np.zeros(p.shape[:-1], _capi.WATER_SAMPLE_DTYPE)
         self._check(_capi.lib().mr_world_sample_water(self._h(), f32p(p), out.size, out.ctypes.data))
         return out
 
     def velocity_at(self, points: Any) -> np.ndarray:
-        """The water's velocity (m/s) at 3D points: (..., 3) -> (..., 3) float32 (0 away from water)."""
+        """The water's velocity (m/s) at 3D points: (..., 3) -> (..., 3) float32 (0 away from
+        water, and at a point with a NaN or infinite coordinate)."""
         p = _points("points", points, 3)
         out = np.zeros(p.shape, np.float32)
         self._check(_capi.lib().mr_world_water_velocity(self._h(), f32p(p), p.size // 3, f32p(out)))
@@ -510,7 +511,8 @@ class World:
     def raycast(self, origins: Any, directions: Any, max_distance: float = 1.0e6) -> np.ndarray:
         """First hits of rays on the water surface: origins, directions (..., 3) (broadcast
         together) -> a record array of shape (...) with fields t (distance along the
-        normalised direction), point (3,), normal (3,) facing the origin, and hit (0/1)."""
+        normalised direction), point (3,), normal (3,) facing the origin, and hit (0/1). A ray
+        with a NaN or infinite origin or direction does not hit; max_distance must be >= 0."""
         o, d = np.broadcast_arrays(_points("origins", origins, 3), _points("directions", directions, 3))
         o, d = np.ascontiguousarray(o), np.ascontiguousarray(d)
         out = np.zeros(o.shape[:-1], _capi.RAY_HIT_DTYPE)

@@ -66,8 +66,28 @@ def test_sample_keeps_the_batch_shape(world):
     assert s.shape == (4, 5)
     with pytest.raises(ValueError, match="xz"):
         world.sample(np.zeros((3, 3)))
-    with pytest.raises(ValueError, match="xz"):
-        world.sample([[np.nan, 1.0]])
+
+
+def test_a_non_finite_point_is_answered_alone(world, upward_centroids):
+    """NaN or infinity in one point: that point is dry / still / missed, the others as without it
+    (the rule of the C and C++ queries too)."""
+    centroids, _, _ = upward_centroids
+    xz = centroids[:, [0, 2]].copy()
+    origins = centroids + np.array([0.0, 50.0, 0.0])
+    good_s, good_v = world.sample(xz), world.velocity_at(centroids)
+    good_h = world.raycast(origins, [0.0, -1.0, 0.0], max_distance=200.0)
+    k = int(np.flatnonzero(good_s["wet"] & good_h["hit"].astype(bool) & (good_v[:, 0] != 0))[0])
+    xz[k, 1], centroids[k, 0], origins[k, 2] = np.nan, np.inf, -np.inf
+    bad_s, bad_v = world.sample(xz), world.velocity_at(centroids)
+    bad_h = world.raycast(origins, [0.0, -1.0, 0.0], max_distance=200.0)
+    others = np.arange(len(xz)) != k
+    assert bad_s[k]["wet"] == 0 and bad_s[k]["surface_y"] == 0 and bad_s[k]["depth"] == 0
+    assert np.all(bad_v[k] == 0) and bad_h[k]["hit"] == 0
+    np.testing.assert_array_equal(bad_s[others], good_s[others])
+    np.testing.assert_array_equal(bad_v[others], good_v[others])
+    np.testing.assert_array_equal(bad_h[others], good_h[others])
+    with pytest.raises(metariver.Error, match="max_distance"):
+        world.raycast(origins, [0.0, -1.0, 0.0], max_distance=np.nan)
 
 
 def test_a_ray_down_hits_the_highest_crossing(world, upward_centroids):

@@ -1,6 +1,8 @@
 // The C API's water queries (include/metariver/metariver.h) over mr::WaterQuery
 // (water_query.h): the world keeps one, updated on the first query after a step or an
-// edit, and answers batches of points into the caller's arrays.
+// edit, and answers batches of points into the caller's arrays. A non-finite point is
+// answered as WaterQuery answers it (dry, zero velocity, no hit), never refused: one bad
+// point does not cost the batch its other answers.
 #include "capi_internal.h"
 
 #include <cmath>
@@ -11,23 +13,6 @@ using mr::capi::guarded;
 using mr::capi::null_argument;
 
 namespace {
-
-/// The first of `n` floats of `p` that is not finite, or n.
-size_t first_not_finite(const float* p, size_t n) {
-    for (size_t i = 0; i < n; ++i)
-        if (!std::isfinite(p[i])) return i;
-    return n;
-}
-
-/// MR_ERROR_INVALID_ARGUMENT naming the point of `name` (`per` floats each) that is not
-/// finite, or MR_OK.
-mr_status check_finite(const mr_world* w, const char* function, const char* name, const float* p, size_t count,
-                       size_t per) {
-    const size_t bad = first_not_finite(p, count * per);
-    if (bad == count * per) return MR_OK;
-    return fail(w, MR_ERROR_INVALID_ARGUMENT,
-                fmt::format("{}: {}[{}] (point {}): must be finite (got {})", function, name, bad, bad / per, p[bad]));
-}
 
 std::vector<mr::Vec3> vec3s(const float* p, size_t count) {
     std::vector<mr::Vec3> v(count);
@@ -54,7 +39,6 @@ mr_status mr_world_sample_water(mr_world* world, const float* xz, size_t count, 
         if (!xz && count > 0) return null_argument(world, kName, "xz");
         if (!out && count > 0) return null_argument(world, kName, "out");
         if (count == 0) return MR_OK;
-        if (mr_status s = check_finite(world, kName, "xz", xz, count, 2); s != MR_OK) return s;
         std::vector<mr::WaterSample> samples(count);
         fresh_query(world).sample(std::span<const float>(xz, 2 * count), samples);
         for (size_t i = 0; i < count; ++i) {
@@ -71,7 +55,6 @@ mr_status mr_world_water_velocity(mr_world* world, const float* points, size_t c
         if (!points && count > 0) return null_argument(world, kName, "points");
         if (!velocities && count > 0) return null_argument(world, kName, "velocities");
         if (count == 0) return MR_OK;
-        if (mr_status s = check_finite(world, kName, "points", points, count, 3); s != MR_OK) return s;
         const std::vector<mr::Vec3> p = vec3s(points, count);
         std::vector<mr::Vec3> v(count);
         fresh_query(world).velocity_at(p, v);
@@ -95,8 +78,6 @@ mr_status mr_world_raycast_water(mr_world* world, const float* origins, const fl
             return fail(world, MR_ERROR_INVALID_ARGUMENT,
                         fmt::format("{}: max_distance: must be finite and >= 0 metres (got {})", kName, max_distance));
         if (count == 0) return MR_OK;
-        if (mr_status s = check_finite(world, kName, "origins", origins, count, 3); s != MR_OK) return s;
-        if (mr_status s = check_finite(world, kName, "directions", directions, count, 3); s != MR_OK) return s;
         std::vector<mr::WaterRayHit> hits(count);
         fresh_query(world).raycast(vec3s(origins, count), vec3s(directions, count), max_distance, hits);
         for (size_t i = 0; i < count; ++i) {

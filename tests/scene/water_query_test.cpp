@@ -260,6 +260,49 @@ TEST(WaterQuery, NonFiniteInputsAreDryAndMissAndAnEmptyQueryAnswersDry) {
     for (const WaterSample& w : out) EXPECT_FALSE(w.wet);
 }
 
+// One rule in every binding (the C API and Python answer so too): a non-finite point in a
+// batch is answered alone as dry / zero / no hit, and its neighbours exactly as without it.
+TEST(WaterQuery, ANonFinitePointInABatchLeavesTheOthersAnswered) {
+    const auto s = run(default_scene(), 120);
+    ASSERT_TRUE(s);
+    WaterQuery q;
+    q.update(*s);
+    const auto& v = s->surface().positions;
+    ASSERT_GT(v.size(), 100u);
+    std::vector<float> xz;
+    std::vector<Vec3> points, origins, directions;
+    for (size_t i = 0; i < 64; ++i) {  // surface vertices: wet points, moving water, rays that hit
+        const Vec3 p = v[i * (v.size() / 64)];
+        xz.insert(xz.end(), {p.x, p.z});
+        points.push_back(p - Vec3(0.0f, 0.1f, 0.0f));
+        origins.push_back(p + Vec3(0.01f, 20.0f, 0.01f));
+        directions.emplace_back(0.0f, -1.0f, 0.0f);
+    }
+    const size_t n = points.size();
+    std::vector<WaterSample> good_s(n), bad_s(n);
+    std::vector<Vec3> good_v(n), bad_v(n);
+    std::vector<WaterRayHit> good_h(n), bad_h(n);
+    q.sample(xz, good_s);
+    q.velocity_at(points, good_v);
+    q.raycast(origins, directions, 100.0f, good_h);
+    size_t k = 0;  // the first point that is wet, moving and hit: made bad below
+    while (k < n && !(good_s[k].wet && good_h[k].hit && good_v[k] != Vec3(0.0f))) ++k;
+    ASSERT_LT(k, n);
+    xz[2 * k + 1] = kNaN;
+    points[k].x = std::numeric_limits<float>::infinity();
+    directions[k].y = kNaN;
+    q.sample(xz, bad_s);
+    q.velocity_at(points, bad_v);
+    q.raycast(origins, directions, 100.0f, bad_h);
+    for (size_t i = 0; i < n; ++i) {
+        EXPECT_EQ(bad_s[i].wet, i != k && good_s[i].wet) << i;
+        EXPECT_EQ(bad_s[i].surface_y, i == k ? 0.0f : good_s[i].surface_y) << i;
+        EXPECT_EQ(bad_v[i], i == k ? Vec3(0.0f) : good_v[i]) << i;
+        EXPECT_EQ(bad_h[i].hit, i != k && good_h[i].hit) << i;
+        EXPECT_EQ(bad_h[i].t, i == k ? 0.0f : good_h[i].t) << i;
+    }
+}
+
 constexpr SolverKind kStillLake{"test-still-lake"};
 constexpr float kLakeRise = 0.4f;             ///< metres above the lowest sample
 const Vec3 kLakeFlow(0.75f, 0.0f, -0.25f);    ///< the lake's velocity everywhere, m/s
