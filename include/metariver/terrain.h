@@ -223,6 +223,11 @@ public:
     uint32_t triangle_at(float x, float z) const;
     /// What TerrainDef::condition changed (mode None: nothing).
     const ConditionReport& condition_report() const { return condition_; }
+    /// Which heights these are: a number unique in the process, new each time build(),
+    /// carve_channel(), sculpt() or restore() writes the heights; a copy keeps
+    /// it. Two terrains with the same revision have the same heights, so a reader holding a
+    /// copy (WaterQuery) copies again only when it changed. 0: a default-constructed terrain.
+    uint64_t revision() const { return revision_; }
 
     /// Carves a river bed along `path` (grid cells (row, column), source to outlet,
     /// neighbours 8-connected): the bed under path cell k is the lower of its ground
@@ -269,8 +274,11 @@ private:
     Aabb mesh_bounds_;
     ConditionReport condition_;
     std::vector<float> given_heights_;  ///< the heights before conditioning (when conditioned)
+    uint64_t revision_ = 0;
 
     void update_condition_report();
+    /// After every change of the heights (each mutator ends here): the bounds, and a new
+    /// revision().
     void recompute_bounds();
 };
 

@@ -44,8 +44,10 @@ struct WaterRayHit {
 /// Queries over one frame of a Simulation's water: the surface mesh (Simulation::surface())
 /// and the particles (Simulation::particles()) or the heightfield water. Build it once per
 /// frame with update() (its cost: a grid of the surface's triangles and one of the active
-/// particles, linear in both, plus a copy of the terrain (its height_mesh gives the depth); buffers
-/// are reused from frame to frame); then every query is const and safe to call from several
+/// particles, linear in both, and a copy of a heightfield water's grid; the terrain (its
+/// height_mesh gives the depth) is copied only when its Terrain::revision() changed: the
+/// first update, a sculpt or undo, another Simulation; buffers are reused from frame to
+/// frame); then every query is const and safe to call from several
 /// threads at once. Results describe the frame update() saw until the next update().
 /// Measured on the default river at frame 600 (27,604 triangles, 1,487 particles; one
 /// thread of a 2-vCPU AMD EPYC guest, docs/benchmarks.md "Water queries"): update() 1.1 ms;

@@ -225,7 +225,7 @@ void parallel_each(size_t n, F&& f) {
 /// One frame's copy of what the queries read (update()).
 struct WaterQuery::Impl {
     TriangleGrid triangles;
-    Terrain terrain;                  ///< for the depth (Terrain::height_mesh)
+    Terrain terrain;                  ///< for the depth (Terrain::height_mesh); copied when its revision() changes
     bool has_heightfield = false;
     HeightfieldWater heightfield;
     float radius = 0.0f;              ///< flow_radius(def)
@@ -244,7 +244,7 @@ void WaterQuery::update(const Simulation& sim) {
     if (!impl_) impl_ = std::make_unique<Impl>();
     Impl& q = *impl_;
     q.triangles.build(sim.surface());
-    q.terrain = sim.terrain();
+    if (q.terrain.revision() != sim.terrain().revision()) q.terrain = sim.terrain();  // a sculpt, another sim
     q.has_heightfield = sim.heightfield() != nullptr;
     if (q.has_heightfield) q.heightfield = *sim.heightfield();
     q.radius = flow_radius(sim.def());

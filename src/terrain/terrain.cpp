@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 namespace mr {
@@ -20,6 +21,8 @@ float resolved_area_scale(const TerrainDef& def, int columns, int rows) {
 }
 
 void Terrain::recompute_bounds() {
+    static std::atomic<uint64_t> revisions{0};  // process-wide: revisions of different terrains never meet
+    revision_ = revisions.fetch_add(1, std::memory_order_relaxed) + 1;
     // The paper's terrain box: the mesh's bounds grown by 1 m up and down.
     Aabb b;
     for (const Vec3& v : vertices_) b.grow(v);

@@ -303,6 +303,39 @@ TEST(WaterQuery, ANonFinitePointInABatchLeavesTheOthersAnswered) {
     }
 }
 
+// update() copies the terrain only when its revision changed: after a sculpt, an undo, or
+// on another Simulation the depth is measured from the new ground, and between them the
+// revision (and so the copy) stays.
+TEST(WaterQuery, AfterASculptOrOnAnotherSimulationTheGroundIsTheNewOne) {
+    auto a = run(default_scene(), 30);
+    auto b = run(default_scene(), 30);
+    ASSERT_TRUE(a && b);
+    WaterQuery q;
+    q.update(*a);
+    const float x = 3.0f, z = 3.0f;  // the valley's rim: dry
+    const WaterSample before = q.sample(x, z);
+    ASSERT_FALSE(before.wet);
+    ASSERT_EQ(before.surface_y, a->terrain().height_mesh(x, z));
+    const uint64_t revision = a->terrain().revision();
+    a->step(1.0f / 60.0f);
+    EXPECT_EQ(a->terrain().revision(), revision) << "a step leaves the heights' revision";
+    auto edit = a->sculpt(Brush{.x = x, .z = z, .radius = 2.0f, .strength = 1.5f, .mode = BrushMode::Raise});
+    ASSERT_TRUE(edit.ok()) << edit.error().message;
+    EXPECT_NE(a->terrain().revision(), revision);
+    q.update(*a);
+    const float raised = a->terrain().height_mesh(x, z);
+    EXPECT_GT(raised, before.surface_y + 1.0f);
+    EXPECT_EQ(q.sample(x, z).surface_y, raised) << "the sculpted ground";
+    a->restore(edit.value());
+    q.update(*a);
+    EXPECT_EQ(q.sample(x, z).surface_y, before.surface_y) << "the ground after undo";
+    ASSERT_TRUE(b->sculpt(Brush{.x = x, .z = z, .radius = 2.0f, .strength = 0.7f, .mode = BrushMode::Lower}).ok());
+    q.update(*b);
+    EXPECT_EQ(q.sample(x, z).surface_y, b->terrain().height_mesh(x, z)) << "another Simulation's ground";
+    EXPECT_LT(q.sample(x, z).surface_y, before.surface_y - 0.5f);
+    EXPECT_NE(a->terrain().revision(), b->terrain().revision()) << "revisions are unique across terrains";
+}
+
 constexpr SolverKind kStillLake{"test-still-lake"};
 constexpr float kLakeRise = 0.4f;             ///< metres above the lowest sample
 const Vec3 kLakeFlow(0.75f, 0.0f, -0.25f);    ///< the lake's velocity everywhere, m/s
