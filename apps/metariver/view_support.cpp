@@ -68,6 +68,7 @@ void install_input_callbacks(GLFWwindow* window, Input& input) {
         if (action == GLFW_PRESS) {
             in->press_x = x;
             in->press_y = y;
+            ++in->left_presses;
         } else if (action == GLFW_RELEASE && std::abs(x - in->press_x) + std::abs(y - in->press_y) <= 4.0) {
             in->clicks.push_back({x, y});
         }

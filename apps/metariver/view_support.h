@@ -38,6 +38,30 @@ struct Input {
     std::vector<int> keys;           ///< keys pressed since the last frame
     double press_x = 0.0, press_y = 0.0;
     std::vector<std::array<double, 2>> clicks;  ///< left press+release without moving, window coordinates
+    int left_presses = 0;  ///< left presses since the last frame (a click between frames is one)
+};
+
+/// One mouse button as the viewer's frames see it. GLFW's polled state misses a click that
+/// fits between two frames (at a few frames per second a quick click does), and the
+/// cursor's motion since the last frame is a drag only when the button was held then too:
+/// the motion before a press is not (it panned the view by the whole jump).
+class FrameButton {
+public:
+    /// The next frame: `down` the polled state, `pressed` whether a press was queued since
+    /// the last frame. Returns whether the button counts as held this frame.
+    bool next(bool down, bool pressed) {
+        was_ = now_;
+        now_ = down || pressed;
+        return now_;
+    }
+    bool held() const { return now_; }
+    /// Held this frame and the one before: the cursor's motion between them is a drag.
+    bool dragging() const { return now_ && was_; }
+    /// The UI took the mouse: not held.
+    void release() { now_ = was_ = false; }
+
+private:
+    bool now_ = false, was_ = false;
 };
 
 /// Points the window's user pointer at `input` and installs the callbacks that fill it

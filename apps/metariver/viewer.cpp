@@ -146,20 +146,20 @@ void Viewer::mouse(double elapsed, int win_w, int win_h) {
     double mx = 0, my = 0;
     glfwGetCursorPos(window_, &mx, &my);
     if (!ImGui::GetIO().WantCaptureMouse) {
-        const bool left = glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS;
-        const bool right = glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS ||
-                           glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_MIDDLE) == GLFW_PRESS;
+        // A left click between two frames counts as held for one (the tools see it).
+        const bool left = left_.next(glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS,
+                                     input_.left_presses > 0);
+        right_.next(glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS ||
+                        glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_MIDDLE) == GLFW_PRESS,
+                    false);
         const float dx = static_cast<float>(mx - last_x_), dy = static_cast<float>(my - last_y_);
-        if (left && !left_down_) {
-            left_down_ = true;
+        if (left && !left_.dragging()) {  // the press
             dragged_ = false;
             press_x_ = mx;
             press_y_ = my;
-        } else if (left && left_down_) {
+        } else if (left_.dragging()) {
             if (std::abs(mx - press_x_) + std::abs(my - press_y_) > 4.0) dragged_ = true;
             if (dragged_ && !tools_.active()) camera_.orbit(-0.3f * dx, 0.3f * dy);
-        } else if (!left) {
-            left_down_ = false;
         }
         // A tool: every frame the left button is held, where the cursor meets the terrain.
         std::optional<Vec3> hit;
@@ -189,13 +189,16 @@ void Viewer::mouse(double elapsed, int win_w, int win_h) {
                 fmt::print("{}\n", status_);
             }
         }
-        if (right) camera_.pan(dx / static_cast<float>(std::max(win_h, 1)), dy / static_cast<float>(std::max(win_h, 1)));
+        if (right_.dragging())  // not the motion before the press
+            camera_.pan(dx / static_cast<float>(std::max(win_h, 1)), dy / static_cast<float>(std::max(win_h, 1)));
         if (input_.scroll != 0.0f) camera_.zoom(std::pow(0.88f, input_.scroll));
     } else {
-        left_down_ = false;
+        left_.release();
+        right_.release();
     }
     input_.scroll = 0.0f;
     input_.clicks.clear();
+    input_.left_presses = 0;
     last_x_ = mx;
     last_y_ = my;
 }

@@ -92,7 +92,8 @@ private:
     std::deque<double> recent_ms_;  ///< for the fps readout
     std::vector<double> frame_ms_;  ///< every frame, for the summary
     double press_x_ = 0, press_y_ = 0, last_x_ = 0, last_y_ = 0;
-    bool left_down_ = false, dragged_ = false;
+    FrameButton left_, right_;  ///< right: the right or middle button (pan)
+    bool dragged_ = false;
     bool show_markers_ = true;
 };
 
