@@ -79,6 +79,22 @@ void install_input_callbacks(GLFWwindow* window, Input& input) {
     });
 }
 
+std::vector<MarkerBox> scene_markers(const Simulation& sim) {
+    const SceneDef& d = sim.def();
+    const SpawnDef& sp = d.spawn;
+    const auto source = [&](const Vec3& c, const Vec3& h, int number) {
+        const Vec3 e = glm::max(source_half_size(sp.shape, h), Vec3(0.2f));
+        return MarkerBox{.lo = c - e, .hi = c + e, .sink = false, .number = number};
+    };
+    std::vector<MarkerBox> out{source(sp.center, sp.half_extent, 0)};
+    for (size_t k = 0; k < sp.sources.size(); ++k)
+        out.push_back(source(sp.sources[k].center, sp.sources[k].half_extent, int(k) + 1));
+    if (d.sink.kind == SinkKind::Box) out.push_back({.lo = d.sink.min, .hi = d.sink.max, .sink = true, .number = 0});
+    for (size_t k = 0; k < d.sink.boxes.size(); ++k)
+        out.push_back({.lo = d.sink.boxes[k].min, .hi = d.sink.boxes[k].max, .sink = true, .number = int(k) + 1});
+    return out;
+}
+
 /// What decides whether a scene edit needs the terrain (and tree) rebuilt and uploaded.
 std::string terrain_key(const SceneDef& d) {
     return fmt::format("{}|{}|{}|{}|{}|{}|{}|{}|{}|{}", to_string(d.source.kind), d.source.heightmap, d.source.width,

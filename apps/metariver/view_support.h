@@ -64,6 +64,18 @@ private:
     bool now_ = false, was_ = false;
 };
 
+/// A box the viewer outlines over the scene: a source or a sink box, in metres.
+struct MarkerBox {
+    Vec3 lo{0.0f}, hi{0.0f};
+    bool sink = false;
+    int number = 0;  ///< 0: the main source / sink; k: the scene's k-th extra one
+};
+/// The sources and sink boxes of the running scene, where they are: from sim.def() (the
+/// automatic centre resolved, a moved source where it went), not the scene as requested
+/// (whose "channel" or "auto" centre is the unresolved (0, 0, 0): the outline sat on the
+/// terrain's corner). At least 0.2 m each way, as the emitters read the size.
+std::vector<MarkerBox> scene_markers(const Simulation& sim);
+
 /// Points the window's user pointer at `input` and installs the callbacks that fill it
 /// (before ImGui's backend, which chains to them).
 void install_input_callbacks(GLFWwindow* window, Input& input);

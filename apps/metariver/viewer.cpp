@@ -376,19 +376,12 @@ void Viewer::markers(int win_w, int win_h) {
         for (const auto& e : kEdges) dl->AddLine(q[e[0]], q[e[1]], colour, 2.0f);
         dl->AddText(q[6], colour, label.c_str());
     };
-    const SpawnDef& sp = def_.spawn;
-    auto extent = [&](const Vec3& h) {  // as the emitters read it, at least 0.2 m (a point is drawn as a small box)
-        return glm::max(source_half_size(sp.shape, h), Vec3(0.2f));
-    };
-    box(sp.center - extent(sp.half_extent), sp.center + extent(sp.half_extent), IM_COL32(80, 230, 255, 255), "source");
-    for (size_t k = 0; k < sp.sources.size(); ++k) {
-        const SourceDef& s = sp.sources[k];
-        box(s.center - extent(s.half_extent), s.center + extent(s.half_extent), IM_COL32(90, 140, 255, 255),
-            fmt::format("source {}", k + 1));
+    for (const MarkerBox& b : scene_markers(*sim_)) {  // where the running scene has them
+        const ImU32 colour = b.sink ? IM_COL32(255, 90, 70, 255)
+                                    : b.number == 0 ? IM_COL32(80, 230, 255, 255) : IM_COL32(90, 140, 255, 255);
+        const std::string name = b.sink ? "sink" : "source";
+        box(b.lo, b.hi, colour, b.number == 0 ? name : fmt::format("{} {}", name, b.number));
     }
-    if (def_.sink.kind == SinkKind::Box) box(def_.sink.min, def_.sink.max, IM_COL32(255, 90, 70, 255), "sink");
-    for (size_t k = 0; k < def_.sink.boxes.size(); ++k)
-        box(def_.sink.boxes[k].min, def_.sink.boxes[k].max, IM_COL32(255, 90, 70, 255), fmt::format("sink {}", k + 1));
 }
 
 void Viewer::draw(int fb_w, int fb_h, bool last) {

@@ -1,10 +1,15 @@
-// The viewer's mouse buttons frame by frame (apps/metariver/view_support.h, FrameButton),
-// without a window: found by driving `metariver view` under Xvfb with xdotool, where a
-// quick click with the drop-body tool dropped nothing and a right press after a fast
-// cursor move panned the view by the whole move.
+// The viewer's mouse buttons frame by frame (apps/metariver/view_support.h, FrameButton)
+// and the source outlines (scene_markers), without a window: found by driving `metariver
+// view` under Xvfb with xdotool, where a quick click with the drop-body tool dropped
+// nothing, a right press after a fast cursor move panned the view by the whole move, and
+// the default river's source was outlined on the terrain's corner, away from its water.
 #include "view_support.h"
 
+#include <metariver/scene.h>
+
 #include <gtest/gtest.h>
+
+#include <glm/geometric.hpp>
 
 namespace mr::app {
 namespace {
@@ -31,6 +36,29 @@ TEST(ViewInput, TheMotionBeforeAPressIsNoDrag) {
     EXPECT_FALSE(b.held());
     b.next(true, false);
     EXPECT_FALSE(b.dragging()) << "back from the UI: a new press";
+}
+
+TEST(ViewInput, TheSourceIsOutlinedWhereTheRunningSceneHasIt) {
+    auto sim = Simulation::create(default_scene());  // spawn_center = "channel": resolved at create
+    ASSERT_TRUE(sim.ok()) << sim.error().message;
+    Simulation& s = *sim.value();
+    const auto outline = [&] {
+        const std::vector<MarkerBox> m = scene_markers(s);
+        EXPECT_FALSE(m.empty());
+        EXPECT_FALSE(m.front().sink);
+        return (m.front().lo + m.front().hi) * 0.5f;
+    };
+    EXPECT_EQ(outline(), s.def().spawn.center);
+    EXPECT_NE(s.requested().spawn.center, s.def().spawn.center) << "the requested centre is unresolved";
+    // Over the main channel's head, where the water starts (not the terrain's corner).
+    const auto [i, j] = s.main_channel().front();
+    const float as = s.terrain().area_scale();
+    const Vec3 c = outline();
+    EXPECT_LT(glm::length(glm::vec2(c.x - float(j) * as, c.z - float(i) * as)), 4.0f * as) << c.x << " " << c.z;
+    // A moved source is outlined where it went.
+    const Vec3 to = c + Vec3(3.0f, 0.0f, 3.0f);
+    ASSERT_TRUE(s.move_source(to).ok());
+    EXPECT_EQ(outline(), to);
 }
 
 }  // namespace
