@@ -15,6 +15,7 @@
 #include <metariver/field.h>
 
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <string_view>
 #include <vector>
@@ -125,6 +126,18 @@ public:
     /// padding 0s count: a safe bound for the in-grid samples).
     float block_min(int32_t slot) const { return block_min_[static_cast<size_t>(slot)]; }
     float block_max(int32_t slot) const { return block_max_[static_cast<size_t>(slot)]; }
+
+    /// Where a level: for a column (x, z) of samples, the height of a surface there
+    /// (true), or false (no term in that column). Called from several threads at once.
+    using LevelAt = std::function<bool(float x, float z, float& level)>;
+    /// Adds a water surface's term to the stored blocks (those no ball reaches stay
+    /// absent, 0): in each column (x, z) whose `level` gives s, a sample at height y gets
+    /// amplitude * clamp(1 + (s - y) / width, 0, 2): `amplitude` at s, 0 from `width`
+    /// above, twice it from `width` below. Linear in y between, so marching cubes puts
+    /// the iso surface (threshold = amplitude) of the term alone exactly at s on vertical
+    /// edges, and where balls add, it rises smoothly around them (issue 46's seam,
+    /// join_heightfield_to_field in surface.h). Updates the blocks' min and max.
+    void add_level_term(const LevelAt& level, float amplitude, float width);
 
     /// Sample (i, j, k), 0 <= i < nx...; 0 where no ball reaches.
     float value(int i, int j, int k) const;

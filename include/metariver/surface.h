@@ -114,9 +114,43 @@ struct HeightfieldScratch {
 /// samples alone. `velocity` (optional, one per sample) gives `vertex_velocity` (appended,
 /// one per new vertex): a sample's own, a cut's its wet end's. Nothing is appended when
 /// the sizes do not match rows x columns or either is < 2.
+/// `skip_cells` (optional, (rows - 1) x (columns - 1), row-major): a cell whose entry is
+/// non-zero gets no triangles (join_heightfield_to_field's cells, drawn by the field).
 void append_heightfield_surface(std::span<const Vec3> bed, std::span<const float> depth, int rows, int columns,
                                 SurfaceMesh& out, HeightfieldScratch* scratch = nullptr,
-                                std::span<const Vec3> velocity = {}, std::vector<Vec3>* vertex_velocity = nullptr);
+                                std::span<const Vec3> velocity = {}, std::vector<Vec3>* vertex_velocity = nullptr,
+                                std::span<const uint8_t> skip_cells = {});
+
+/// Where a heightfield's water and a particle field meet: join_heightfield_to_field's
+/// result, reused from frame to frame.
+struct HeightfieldSeam {
+    /// Per cell ((rows - 1) x (columns - 1), row-major): 1 where the field draws the water
+    /// and the heightfield mesh leaves the cell out; 0 elsewhere.
+    std::vector<uint8_t> cell;
+    size_t cells = 0;           ///< cells with cell = 1
+    void clear() {
+        cell.clear();
+        cells = 0;
+    }
+};
+
+/// One surface where a heightfield's water and a particle field meet (issue 46's seam;
+/// docs/waterfalls.md). The grid's water becomes a term of the field wherever the field
+/// stores samples (near the particles): in the columns over a fully wet cell (4 samples
+/// deeper than 5 mm) the field gets threshold * clamp(1 + (s - y) / width, 0, 2), s the
+/// water's level on the heightfield mesh's triangles less 5 mm (so that where both are
+/// drawn the heightfield shows, without z-fighting; SparseField::add_level_term).
+/// Marching cubes then puts the water's surface at s where no particle is near, and where
+/// particles are, the metaballs rise out of it with a smooth skirt: no crease, and no
+/// metaball under the water's surface. A cell is the field's (`seam.cell`) when the field
+/// stores every sample around it, from a sample under its lowest level to one over its
+/// highest: the heightfield mesh leaves it out (append_heightfield_surface's skip_cells).
+/// Around those cells both are drawn, the field's surface on or over the heightfield's,
+/// and the field's ends at its stored blocks' edge, where the particles add (almost) 0.
+/// `bed`, `depth`, rows and columns as append_heightfield_surface's (a regular grid).
+/// Nothing is joined (seam cleared) when the sizes do not match or the field is empty.
+void join_heightfield_to_field(std::span<const Vec3> bed, std::span<const float> depth, int rows, int columns,
+                               float threshold, float width, SparseField& field, HeightfieldSeam& seam);
 
 /// extract_surface on a SparseField, block-parallel (oneTBB) and skipping blocks whose
 /// value range cannot cross the threshold. Gives the mesh extract_surface gives on

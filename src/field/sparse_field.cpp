@@ -19,6 +19,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -160,6 +161,13 @@ __attribute__((target("avx2"))) void splat_block_avx2(const SampleGrid& g, const
 }
 
 #endif
+
+/// Block (bi, bj, bk) of directory index blk, in a directory bx blocks wide and by high.
+std::array<int, 3> block_coords(size_t blk, int bx, int by) {
+    return {static_cast<int>(blk % static_cast<size_t>(bx)),
+            static_cast<int>((blk / static_cast<size_t>(bx)) % static_cast<size_t>(by)),
+            static_cast<int>(blk / (static_cast<size_t>(bx) * static_cast<size_t>(by)))};
+}
 
 /// Smallest and largest of a block's 512 samples.
 void block_range(const float* v, float& lo, float& hi) {
@@ -354,9 +362,7 @@ void SparseField::splat_blocks(std::span<const Vec3> balls, const KernelDef& kde
     tbb::parallel_for(tbb::blocked_range<size_t>(0, slots), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t s = r.begin(); s != r.end(); ++s) {
             const size_t blk = block_of_slot_[s];
-            const int bi = static_cast<int>(blk % static_cast<size_t>(bx_));
-            const int bj = static_cast<int>((blk / static_cast<size_t>(bx_)) % static_cast<size_t>(by_));
-            const int bk = static_cast<int>(blk / (static_cast<size_t>(bx_) * by_));
+            const auto [bi, bj, bk] = block_coords(blk, bx_, by_);
             const int i0 = bi * B, j0 = bj * B, k0 = bk * B;
             float* out = pool_.data() + s * kBlockSamples;
             const uint32_t* list = lists_.data() + list_start_[blk];
@@ -384,6 +390,31 @@ void SparseField::splat_blocks(std::span<const Vec3> balls, const KernelDef& kde
         }
     });
     stats_.ms_splat = ms_since(t1);
+}
+
+void SparseField::add_level_term(const LevelAt& level, float amplitude, float width) {
+    if (!(width > 0.0f) || allocated_ == 0) return;
+    const float inv_width = 1.0f / width, h = grid_.spacing;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, allocated_), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t s = r.begin(); s != r.end(); ++s) {
+            const size_t blk = block_of_slot_[s];
+            const auto [bi, bj, bk] = block_coords(blk, bx_, by_);
+            float* out = pool_.data() + s * kBlockSamples;
+            const int nx = std::min(B, grid_.nx - bi * B), ny = std::min(B, grid_.ny - bj * B),
+                      nz = std::min(B, grid_.nz - bk * B);
+            for (int z = 0; z < nz; ++z)
+                for (int x = 0; x < nx; ++x) {
+                    const Vec3 p = grid_.position(bi * B + x, bj * B, bk * B + z);
+                    float lv = 0.0f;
+                    if (!level(p.x, p.z, lv)) continue;
+                    for (int y = 0; y < ny; ++y) {
+                        const float sy = grid_.origin.y + h * static_cast<float>(bj * B + y);
+                        out[x + B * (y + B * z)] += amplitude * std::clamp(1.0f + (lv - sy) * inv_width, 0.0f, 2.0f);
+                    }
+                }
+            block_range(out, block_min_[s], block_max_[s]);
+        }
+    });
 }
 
 Status SparseField::from_dense(const ScalarGrid& d) {
@@ -422,11 +453,13 @@ Status SparseField::from_dense(const ScalarGrid& d) {
         block_min_.resize(slots);
         block_max_.resize(slots);
     }
+    if (block_of_slot_.size() < slots) block_of_slot_.resize(slots);
     for (int bk = 0; bk < bz_; ++bk)
         for (int bj = 0; bj < by_; ++bj)
             for (int bi = 0; bi < bx_; ++bi) {
                 const int32_t s = directory_[block_index(bi, bj, bk)];
                 if (s == kNoBlock) continue;
+                block_of_slot_[static_cast<size_t>(s)] = static_cast<uint32_t>(block_index(bi, bj, bk));
                 float* out = pool_.data() + static_cast<size_t>(s) * kBlockSamples;
                 std::fill(out, out + kBlockSamples, 0.0f);
                 for (int k = 0; k < block_extent(bk, d.nz); ++k)

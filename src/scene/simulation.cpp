@@ -18,6 +18,11 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+/// The seam's term (join_heightfield_to_field) goes from the threshold at the grid's level
+/// to 0 this many field radii above it: the height of the skirt around a metaball that
+/// rises out of the grid's water (docs/waterfalls.md).
+constexpr float kSeamWidth = 1.0f / 3.0f;
+
 double ms_since(Clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
@@ -369,6 +374,7 @@ void Simulation::Impl::step(float frame_dt) {
         return;
     }
     // The surface from what the solver gives: particles, a heightfield, or both (one mesh).
+    seam_.clear();
     if (const Particles* p = solver_->water_particles()) {
         build_particle_surface(*p);
     } else {
@@ -400,6 +406,10 @@ void Simulation::Impl::build_particle_surface(const Particles& p) {
             ++field_overflows_;
             field_overflow_message_ = b.error().message;
         }
+        // Both kinds of water (hybrid): the grid's surface joins the metaballs' in the field.
+        if (const HeightfieldWater* w = solver_->water_heightfield())
+            join_heightfield_to_field(terrain_.vertices(), w->depth, w->rows, w->columns, def_.field.threshold,
+                                      kSeamWidth * def_.field.radius, sparse_, seam_);
         timings_.field_ms = ms_since(t0);
         t0 = Clock::now();
         extract_surface_sparse(sparse_, def_.field.threshold, surface_, surface_ws_);
@@ -432,7 +442,7 @@ void Simulation::Impl::append_heightfield(const HeightfieldWater& w) {
     const auto t0 = Clock::now();
     heightfield_velocity_.clear();
     append_heightfield_surface(terrain_.vertices(), w.depth, w.rows, w.columns, surface_, &heightfield_scratch_,
-                               w.velocity, &heightfield_velocity_);
+                               w.velocity, &heightfield_velocity_, seam_.cell);
     timings_.surface_ms += ms_since(t0);
 }
 

@@ -127,11 +127,12 @@ private:
 
 void append_heightfield_surface(std::span<const Vec3> bed, std::span<const float> depth, int rows, int columns,
                                 SurfaceMesh& out, HeightfieldScratch* scratch, std::span<const Vec3> velocity,
-                                std::vector<Vec3>* vertex_velocity) {
+                                std::vector<Vec3>* vertex_velocity, std::span<const uint8_t> skip_cells) {
     if (rows < 2 || columns < 2) return;
     const size_t n = size_t(rows) * size_t(columns), w = size_t(columns);
     if (bed.size() != n || depth.size() != n) return;
     if (!velocity.empty() && velocity.size() != n) velocity = {};
+    if (skip_cells.size() != size_t(rows - 1) * size_t(columns - 1)) skip_cells = {};
     HeightfieldScratch own;
     HeightfieldScratch& s = scratch ? *scratch : own;
     water_levels(bed, depth, rows, columns, s.level);
@@ -147,6 +148,7 @@ void append_heightfield_surface(std::span<const Vec3> bed, std::span<const float
     for (int i = 0; i + 1 < rows; ++i)
         for (int j = 0; j + 1 < columns; ++j) {
             const size_t c = size_t(i) * w + size_t(j);
+            if (!skip_cells.empty() && skip_cells[size_t(i) * (w - 1) + size_t(j)]) continue;
             if (!build.wet(c) && !build.wet(c + 1) && !build.wet(c + w) && !build.wet(c + w + 1)) continue;
             build.triangle(c, c + w, c + 1);
             build.triangle(c + 1, c + w, c + w + 1);

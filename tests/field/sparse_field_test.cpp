@@ -310,6 +310,41 @@ TEST(SparseField, NoBallsGiveAnEmptyOrZeroField) {
     EXPECT_TRUE(std::all_of(d.values.begin(), d.values.end(), [](float v) { return v == 0.0f; }));
 }
 
+TEST(SparseField, ALevelTermIsAddedToTheStoredBlocksOnlyLinearInHeight) {
+    // One ball in a fixed box of 2 x 2 x 2 blocks (16^3 samples, 0.25 m apart): it reaches
+    // the blocks at x, y, z < 4 m only. A level at y = 1.3 m over x < 2 m.
+    const SampleGrid box{.origin = Vec3(0.0f), .spacing = 0.25f, .nx = 16, .ny = 16, .nz = 16};
+    SparseField f;
+    ASSERT_TRUE(f.build(std::vector<Vec3>{Vec3(0.9f)}, {.kernel = poly6_kernel(0.5f, 1.0f),
+                                                        .domain = DomainMode::FixedBox, .box = box}));
+    ASSERT_EQ(f.allocated_blocks(), 1u);
+    const std::vector<float> before = dense_values(f);
+    f.add_level_term(
+        [](float x, float, float& s) {
+            s = 1.3f;
+            return x < 2.0f;
+        },
+        0.3f, 0.5f);
+    for (int k = 0; k < 16; ++k)
+        for (int j = 0; j < 16; ++j)
+            for (int i = 0; i < 16; ++i) {
+                const float y = 0.25f * float(j), added = f.value(i, j, k) - before[box.index(i, j, k)];
+                const bool stored = i < 8 && j < 8 && k < 8;
+                const float want = stored && 0.25f * float(i) < 2.0f ? 0.3f * std::clamp(1.0f + (1.3f - y) / 0.5f, 0.0f, 2.0f)
+                                                                   : 0.0f;
+                ASSERT_NEAR(added, want, 1e-6f) << i << " " << j << " " << k;
+            }
+    // The block's range follows: its largest value is now at least 2 x 0.3 (deep under the level).
+    EXPECT_GE(f.block_max(f.slot(0, 0, 0)), 0.6f);
+    // The same on a field copied from a dense grid (its slots' blocks are known there too).
+    ScalarGrid d;
+    f.to_dense(d);
+    SparseField g;
+    ASSERT_TRUE(g.from_dense(d));
+    g.add_level_term([](float, float, float& s) { s = 0.0f; return true; }, 1.0f, 1.0f);
+    EXPECT_NEAR(g.value(1, 0, 1) - f.value(1, 0, 1), 1.0f, 1e-6f);  // y = 0 is at the level
+}
+
 TEST(SparseField, SteadyStateBuildsReuseStorage) {
     const std::vector<Vec3> balls = w1_balls(1000);
     const SparseFieldDef def{.kernel = w1_kernel_for(1000), .domain = DomainMode::FixedBox, .box = w1_grid(64)};
