@@ -40,6 +40,16 @@ struct HybridDef {
     /// The particle budget; water that would exceed it stays on the grid. PBF steps every
     /// slot of it (sorting, sleeping), active or not: keep it near what the falls hold.
     int max_particles = 5000;
+    /// A pump (0: none): each frame pump_rate x dt m^3 (at most what the cells hold) is
+    /// taken from the cells whose centres lie within pump_radius of pump_from (the cell
+    /// under it at least), in proportion to their water, with its velocity, and put at
+    /// rest into the cell under pump_to (x and z, metres; y unused), through the grid's
+    /// exchange: the total water is unchanged and a closed waterfall keeps falling
+    /// (docs/waterfalls.md).
+    float pump_rate = 0.0f;    ///< m^3/s
+    float pump_radius = 0.0f;  ///< metres
+    Vec3 pump_from{0.0f};
+    Vec3 pump_to{0.0f};
 };
 
 /// Water handed over since the solver was made: volumes in m^3, horizontal momenta in
@@ -48,6 +58,7 @@ struct HybridStats {
     double to_particles = 0.0;  ///< volume taken from cells into particles
     double to_grid = 0.0;       ///< volume of particles absorbed into cells
     double lost = 0.0;          ///< volume of particles that left the terrain (PBF's respawns)
+    double pumped = 0.0;        ///< volume the pump moved (HybridDef::pump_rate)
     uint64_t particles_made = 0, particles_absorbed = 0;
     double cell_momentum_out[2] = {0.0, 0.0};       ///< taken from cells with that volume
     double particle_momentum_in[2] = {0.0, 0.0};    ///< given to the new particles
@@ -99,6 +110,8 @@ private:
     void shed(float frame_dt);
     void shed_cell(int i, int j, int dir, double volume, float frame_dt);
     void absorb(float frame_dt);
+    /// Moves HybridDef::pump_rate x frame_dt from pump_from's cell to pump_to's.
+    void pump(float frame_dt);
     /// Adds (volume > 0) or takes (volume < 0) water with horizontal momentum (m^4/s) at
     /// cell (i, j) of the grid; returns the volume moved.
     double exchange(int i, int j, double volume, double momentum_x, double momentum_z);

@@ -203,12 +203,47 @@ void HybridSolver::absorb(float frame_dt) {
     }
 }
 
+void HybridSolver::pump(float frame_dt) {
+    if (!(def_.pump_rate > 0.0f)) return;
+    swe::ShallowWater& core = grid_->core();
+    const HeightfieldWater& w = *grid_->water_heightfield();
+    const auto cell = [&](Vec3 p, int& i, int& j) {
+        i = static_cast<int>(std::lround((p.x - w.origin.x) / w.spacing));
+        j = static_cast<int>(std::lround((p.z - w.origin.z) / w.spacing));
+        return i >= 0 && j >= 0 && i < core.nx() && j < core.ny();
+    };
+    int fi = 0, fj = 0, ti = 0, tj = 0;
+    if (!cell(def_.pump_from, fi, fj) || !cell(def_.pump_to, ti, tj)) return;
+    // The cells within the radius (the one under pump_from at least) and the water they hold.
+    const int r = static_cast<int>(std::floor(def_.pump_radius / w.spacing));
+    const double area = core.dx() * core.dx(), r2 = double(def_.pump_radius) * def_.pump_radius;
+    const auto each = [&](auto f) {
+        for (int j = std::max(0, fj - r); j <= std::min(core.ny() - 1, fj + r); ++j)
+            for (int i = std::max(0, fi - r); i <= std::min(core.nx() - 1, fi + r); ++i) {
+                const double ex = double(i - fi) * w.spacing, ez = double(j - fj) * w.spacing;
+                if ((i != fi || j != fj) && ex * ex + ez * ez > r2) continue;
+                if (core.depth(i, j) > 0.0) f(i, j, core.depth(i, j) * area);
+            }
+    };
+    double held = 0.0;
+    each([&](int, int, double v) { held += v; });
+    const double want = std::min(double(def_.pump_rate) * double(frame_dt), held);
+    if (!(want > 0.0)) return;
+    double taken = 0.0;
+    each([&](int i, int j, double v) {
+        const double part = want * v / held, h = core.depth(i, j);
+        taken -= exchange(i, j, -part, -part * core.discharge_x(i, j) / h, -part * core.discharge_y(i, j) / h);
+    });
+    stats_.pumped += exchange(ti, tj, taken, 0.0, 0.0);
+}
+
 void HybridSolver::step_frame(float frame_dt) {
     const bool ok = frame_dt > 0.0f && std::isfinite(frame_dt);
     if (ok) shed(frame_dt);
     grid_->advance_frame(frame_dt);  // shown by refresh() below, after the absorbed water
     pbf_->step_frame(frame_dt);
     if (ok) absorb(frame_dt);
+    if (ok) pump(frame_dt);
     grid_->refresh();
     const SolverCounters& c = pbf_->counters();
     stats_.lost += double(c.respawned - respawned_seen_) * particle_volume_;

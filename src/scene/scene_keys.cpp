@@ -535,6 +535,22 @@ const SceneKey kKeys[] = {
      .field = MR_FIELD(hybrid.rest_time)},
     {.name = "hybrid.max_particles", .type = K::Int, .range = closed(1, 10000000), .readers = kHybrid, .edit = E::Rebuild,
      .help = "The particle budget; while it is spent the grid keeps its water.", .field = MR_FIELD(hybrid.max_particles)},
+    {.name = "hybrid.pump_rate", .type = K::Float, .unit = "m^3/s", .range = closed(0, 1e6), .readers = kHybrid,
+     .edit = E::Solver, .help = "A pump (0: none): each frame this rate x dt (at most what they hold) is taken from the "
+                                "cells around hybrid.pump_from (hybrid.pump_radius) and put into the cell under "
+                                "hybrid.pump_to, so the falls of a closed scene keep running and its total water stays "
+                                "the same (docs/waterfalls.md).",
+     .field = MR_FIELD(hybrid.pump_rate)},
+    {.name = "hybrid.pump_radius", .type = K::Float, .unit = "m", .range = closed(0, 1e6), .readers = kHybrid,
+     .edit = E::Solver, .help = "The pump takes from every cell whose centre lies within this of hybrid.pump_from (the "
+                                "cell under it at least), in proportion to the water each holds.",
+     .field = MR_FIELD(hybrid.pump_radius)},
+    {.name = "hybrid.pump_from", .type = K::Vec3, .unit = "m", .range = big_vec(-1e6), .readers = kHybrid, .edit = E::Solver,
+     .help = "Where the pump takes its water (x and z; y unused): the cell under it, e.g. in the plunge pool.",
+     .field = MR_FIELD(hybrid.pump_from)},
+    {.name = "hybrid.pump_to", .type = K::Vec3, .unit = "m", .range = big_vec(-1e6), .readers = kHybrid, .edit = E::Solver,
+     .help = "Where the pump puts the water (x and z; y unused), at rest: the cell under it, e.g. above the falls.",
+     .field = MR_FIELD(hybrid.pump_to)},
 };
 #undef MR_FIELD
 
