@@ -31,6 +31,8 @@ class SlotState {
 public:
     virtual void reset(size_t i) = 0;
     virtual void swap(size_t i, size_t j) = 0;
+    /// Slots [0, perm.size()) reordered (new slot k = old perm[k], perm a permutation of
+    /// them); the slots past it keep their state.
     virtual void permute(std::span<const uint32_t> perm) = 0;
 
 protected:
@@ -52,6 +54,8 @@ struct ParticlePool {
     SlotState* slots = nullptr;   ///< the solver's per-slot state, if any
 
     size_t size() const { return particles.size(); }
+    /// The active prefix's length: per-slot passes stop there (the idle budget costs nothing).
+    size_t active() const { return next_to_activate; }
     /// Inactive particles left.
     size_t free() const { return particles.size() - next_to_activate; }
     /// Particle i (re)starts at `x` with velocity `v`, born this frame.
@@ -162,8 +166,9 @@ public:
     Sinks(const Terrain& terrain, SinkDef def, size_t n);
     void set_def(const SinkDef& def) { def_ = def; }
     Exit exit_of(const Vec3& p) const;
-    /// Flags every particle (inactive ones Stay); parallel.
-    void flag_exits(const Particles& p);
+    /// Flags the first `count` particles (the active prefix; inactive ones Stay); parallel.
+    /// Only those flags are read (ParticleWater::finish_step).
+    void flag_exits(const Particles& p, size_t count);
     Exit flag(size_t i) const { return Exit(flags_[i]); }
     /// Counts a particle at `x` as sunk; one over an edge is recorded (last_exits).
     void record_sunk(SolverCounters& counters, const Vec3& x, bool over_an_edge);
@@ -205,9 +210,10 @@ public:
     ContactResponse response() const { return response_; }
     const Terrain& terrain() const { return terrain_; }
 
-    /// The one contact loop: collides every active particle that moved last_position
-    /// -> position in a step of dt (parallel; counts tunneled before any correction).
-    ContactCounts collide_active(Particles& p, float dt) const;
+    /// The one contact loop: collides every active particle of the first `count` (the
+    /// active prefix) that moved last_position -> position in a step of dt (parallel;
+    /// counts tunneled before any correction).
+    ContactCounts collide_active(Particles& p, float dt, size_t count) const;
     /// Collide particle i (touches only particle i).
     void collide(Particles& p, size_t i, float dt, ContactCounts& c) const;
     /// Moves a predicted position out of the lifted terrain along the triangle normal

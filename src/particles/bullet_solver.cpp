@@ -288,9 +288,9 @@ void BulletSolver::Impl::reset(size_t i) {
 }
 
 void BulletSolver::Impl::permute(std::span<const uint32_t> perm) {
-    std::vector<std::unique_ptr<btRigidBody>> sorted(perm.size());
+    std::vector<std::unique_ptr<btRigidBody>> sorted(perm.size());  // the prefix; the rest keep theirs
     for (size_t k = 0; k < perm.size(); ++k) sorted[k] = std::move(bodies[perm[k]]);
-    bodies.swap(sorted);
+    std::move(sorted.begin(), sorted.end(), bodies.begin());
 }
 
 void BulletSolver::Impl::pre_tick() {

@@ -82,27 +82,26 @@ void ParticlePool::record_max_speed() {
 
 void SortedGrid::sort(ParticlePool& pool, float cell) {
     Particles& p = pool.particles;
-    const size_t n = p.size();
-    grid_.build(p.position, p.active, std::max(cell, 1e-3f));
-    // New order: binned (active) particles by cell, then the inactive suffix unchanged.
+    // The active prefix only: the idle slots past it are neither binned nor moved.
+    const size_t n = std::min(pool.active(), p.size());
+    grid_.build(std::span<const Vec3>(p.position).first(n), std::span<const uint8_t>(p.active).first(n),
+                std::max(cell, 1e-3f));
+    // New order: binned (active) particles by cell (all of the prefix), the rest unchanged.
     const auto order = grid_.order();
     perm_.assign(order.begin(), order.end());
     for (size_t i = order.size(); i < n; ++i) perm_.push_back(static_cast<uint32_t>(i));
-    auto permute = [&](std::vector<Vec3>& v) {
-        scratch_vec_.resize(n);
-        for (size_t k = 0; k < n; ++k) scratch_vec_[k] = v[perm_[k]];
-        v.swap(scratch_vec_);
+    auto permute = [&](auto& v, auto& scratch) {
+        scratch.resize(n);
+        for (size_t k = 0; k < n; ++k) scratch[k] = v[perm_[k]];
+        std::copy_n(scratch.begin(), n, v.begin());
     };
-    permute(p.position);
-    permute(p.last_position);
-    permute(p.velocity);
+    permute(p.position, scratch_vec_);
+    permute(p.last_position, scratch_vec_);
+    permute(p.velocity, scratch_vec_);
     // Not p.force: every step that reads it writes it first, after this sort (springs fill
     // it with gravity; PBF does not use it).
-    scratch_id_.resize(n);
-    for (size_t k = 0; k < n; ++k) scratch_id_[k] = p.id[perm_[k]];
-    p.id.swap(scratch_id_);
-    for (size_t k = 0; k < n; ++k) scratch_id_[k] = p.birth_frame[perm_[k]];  // same scratch: no allocation
-    p.birth_frame.swap(scratch_id_);
+    permute(p.id, scratch_id_);
+    permute(p.birth_frame, scratch_id_);  // same scratch: no allocation
     if (pool.slots) pool.slots->permute(perm_);
     // active stays a prefix of the same length: nothing to move.
     grid_.relabel_identity();

@@ -30,8 +30,8 @@ Sinks::Exit Sinks::exit_of(const Vec3& p) const {
     return Respawn;
 }
 
-void Sinks::flag_exits(const Particles& p) {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, p.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+void Sinks::flag_exits(const Particles& p, size_t count) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, std::min(count, p.size()), 1024), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t i = r.begin(); i != r.end(); ++i) flags_[i] = p.active[i] ? exit_of(p.position[i]) : Stay;
     });
 }
@@ -77,7 +77,7 @@ void ParticleWater::finish_step(const ContactCounts& c) {
     counters.guarded += c.guarded;
     counters.tunneled += c.tunneled;
     const Particles& p = pool.particles;
-    const size_t n = p.size();
+    const size_t n = pool.active();  // the flagged prefix (the slots past it are idle)
     const bool by_rate = emitters.by_rate();
     if (emitters.uses_lattice()) {
         // PBF: out of bounds or sunk, every particle goes back to the pool; without a

@@ -143,12 +143,13 @@ void PbfSolver::State::Sleep::swap(size_t i, size_t j) {
 }
 
 void PbfSolver::State::Sleep::permute(std::span<const uint32_t> perm) {
-    scratch_slow.resize(perm.size());
-    for (size_t k = 0; k < perm.size(); ++k) scratch_slow[k] = slow_steps[perm[k]];
-    slow_steps.swap(scratch_slow);
-    scratch_mean.resize(perm.size());
-    for (size_t k = 0; k < perm.size(); ++k) scratch_mean[k] = mean_velocity[perm[k]];
-    mean_velocity.swap(scratch_mean);
+    const size_t n = perm.size();  // the prefix reordered; the slots past it keep theirs
+    scratch_slow.resize(n);
+    for (size_t k = 0; k < n; ++k) scratch_slow[k] = slow_steps[perm[k]];
+    std::copy_n(scratch_slow.begin(), n, slow_steps.begin());
+    scratch_mean.resize(n);
+    for (size_t k = 0; k < n; ++k) scratch_mean[k] = mean_velocity[perm[k]];
+    std::copy_n(scratch_mean.begin(), n, mean_velocity.begin());
 }
 
 PbfSolver::~PbfSolver() = default;
@@ -223,7 +224,7 @@ void PbfSolver::step(float dt) {
         count_inside_bodies(s);
         st.bodies_.update_states();
     }
-    water_.sinks.flag_exits(water_.pool.particles);
+    water_.sinks.flag_exits(water_.pool.particles, water_.pool.active());
     record_density_error();
     water_.finish_step(contacts);
 }
@@ -233,7 +234,7 @@ void PbfSolver::predict(const Stage& s) {
     Particles& p = water_.pool.particles;
     const Vec3 g(0.0f, -water_.integrator.gravity, 0.0f);
     if (s.bodies) st_->bodies_.predict(s.dt, water_.integrator.gravity);
-    for_each_slot(p.size(), 1024, [&](size_t i) {
+    for_each_slot(water_.pool.active(), 1024, [&](size_t i) {
         if (!p.active[i]) return;
         p.velocity[i] += g * s.dt;
         p.last_position[i] = p.position[i];
@@ -246,11 +247,16 @@ void PbfSolver::predict(const Stage& s) {
 void PbfSolver::bin() {
     State& st = *st_;
     water_.grid.sort(water_.pool, pbf_.kernel_radius);
-    const size_t n = water_.pool.size();
-    st.lambda_.assign(n, 0.0f);
-    st.contact_.assign(n, 0);
-    st.density_.assign(n, 0.0f);
-    st.delta_.assign(n, Vec3(0.0f));
+    // Sized for every slot; only the active prefix is read, so only it is cleared.
+    const size_t size = water_.pool.size(), n = water_.pool.active();
+    st.lambda_.resize(size);
+    st.contact_.resize(size);
+    st.density_.resize(size);
+    st.delta_.resize(size);
+    std::fill_n(st.lambda_.begin(), n, 0.0f);
+    std::fill_n(st.contact_.begin(), n, uint8_t(0));
+    std::fill_n(st.density_.begin(), n, 0.0f);
+    std::fill_n(st.delta_.begin(), n, Vec3(0.0f));
     if (st.pbf_lists_on_) st.pbf_lists_.build(water_.grid.grid(), water_.pool.particles.position, pbf_.kernel_radius + list_skin());
 }
 
@@ -273,11 +279,10 @@ void PbfSolver::measure_walls() {
     State& st = *st_;
     const Particles& p = water_.pool.particles;
     const Terrain& terrain = water_.collider.terrain();
-    const size_t n = p.size();
-    st.wall_share_.resize(n);
-    st.wall_grad_.resize(n);
-    st.wall_at_.resize(n);
-    for_each_slot(n, 256, [&](size_t i) {
+    st.wall_share_.resize(p.size());  // sized for every slot, set for the active prefix (the one read)
+    st.wall_grad_.resize(p.size());
+    st.wall_at_.resize(p.size());
+    for_each_slot(water_.pool.active(), 256, [&](size_t i) {
         st.wall_at_[i] = p.position[i];
         st.wall_share_[i] = p.active[i] ? pbf_.wall_density * pbf_terrain_share(terrain, pbf_.kernel_radius, p.position[i], st.wall_grad_[i]) : 0.0f;
         st.wall_grad_[i] = p.active[i] ? pbf_.wall_density * st.wall_grad_[i] : Vec3(0.0f);
@@ -298,7 +303,7 @@ void PbfSolver::bed_friction(const Stage& s) {
     const CollisionDef& col = water_.collider.def();
     if (pbf_.contact_band > 0.0f) {
         const float band = pbf_.contact_band * pbf_.spacing;
-        for_each_slot(p.size(), 1024, [&](size_t i) {
+        for_each_slot(water_.pool.active(), 1024, [&](size_t i) {
             const Vec3 x = p.position[i];
             if (p.active[i] && !st.contact_[i] && terrain.contains_xz(x.x, x.z) && x.y - terrain.height_mesh(x.x, x.z) < band)
                 st.contact_[i] = 1;
@@ -308,7 +313,7 @@ void PbfSolver::bed_friction(const Stage& s) {
     // |dx_t| / (dt friction_speed), the step's speed along the ground over the law's.
     const bool quadratic = col.friction_speed > 0.0f;
     const float per_speed = quadratic ? 1.0f / (s.dt * col.friction_speed) : 0.0f;
-    for_each_slot(p.size(), 1024, [&](size_t i) {
+    for_each_slot(water_.pool.active(), 1024, [&](size_t i) {
         if (!st.contact_[i]) return;
         const Vec3 x = p.position[i];
         if (!terrain.contains_xz(x.x, x.z)) return;
@@ -324,10 +329,10 @@ void PbfSolver::bed_friction(const Stage& s) {
 ContactCounts PbfSolver::collide(const Stage& s) {
     Particles& p = water_.pool.particles;
     const float inv_dt = 1.0f / s.dt;
-    for_each_slot(p.size(), 1024, [&](size_t i) {
+    for_each_slot(water_.pool.active(), 1024, [&](size_t i) {
         if (p.active[i]) p.velocity[i] = (p.position[i] - p.last_position[i]) * inv_dt;
     });
-    return water_.collider.collide_active(p, s.dt);
+    return water_.collider.collide_active(p, s.dt, water_.pool.active());
 }
 
 // 6. Slow-water damping: exp(-damping s dt), s = 1 below damping_speed, linearly to
@@ -336,7 +341,7 @@ ContactCounts PbfSolver::collide(const Stage& s) {
 void PbfSolver::damp(const Stage& s) {
     Particles& p = water_.pool.particles;
     const float inv_speed = 1.0f / pbf_.damping_speed;
-    for_each_slot(p.size(), 1024, [&](size_t i) {
+    for_each_slot(water_.pool.active(), 1024, [&](size_t i) {
         if (!p.active[i]) return;
         const float sp = std::clamp(2.0f - glm::length(p.velocity[i]) * inv_speed, 0.0f, 1.0f);
         if (sp > 0.0f) p.velocity[i] *= std::exp(-pbf_.damping * sp * s.dt);
@@ -370,7 +375,7 @@ void PbfSolver::sleep(const Stage& s) {
     const auto covered = [&](int32_t b, const Vec3& x) {  // a body took its place
         return b >= 0 && st.bodies_.all()[size_t(b)].distance(x) < 0.0f;
     };
-    for_each_slot(p.size(), 1024, [&](size_t i) {
+    for_each_slot(water_.pool.active(), 1024, [&](size_t i) {
         if (!p.active[i]) return;
         bool asleep = slow[i] >= after;
         if (asleep && near_bodies && (covered(st.body_of_[i], p.last_position[i]) || covered(st.body2_of_[i], p.last_position[i])))
@@ -398,7 +403,7 @@ void PbfSolver::record_density_error() {
     double sum = 0.0;
     float mx = 0.0f;
     size_t cnt = 0;
-    for (size_t i = 0; i < p.size(); ++i) {
+    for (size_t i = 0; i < water_.pool.active(); ++i) {
         if (!p.active[i]) continue;
         sum += std::max(st.density_[i], 0.0f);
         mx = std::max(mx, st.density_[i]);

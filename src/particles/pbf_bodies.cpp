@@ -68,7 +68,7 @@ void PbfSolver::clear_body_volume(uint32_t id) {
     if (it == bodies.end()) return;
     Particles& p = water_.pool.particles;
     const float skin = kBodySkin * pbf_.spacing;
-    for_each_slot(p.size(), 1024, [&](size_t i) {
+    for_each_slot(water_.pool.active(), 1024, [&](size_t i) {
         if (!p.active[i]) return;
         const Vec3 d = p.position[i] - it->x;
         if (glm::dot(d, d) > it->shape.bound * it->shape.bound) return;
@@ -99,7 +99,7 @@ void PbfSolver::assign_bodies(const Stage& s) {
     const Particles& p = water_.pool.particles;
     const std::vector<RigidBody>& bodies = st.bodies_.all();
     // Sized for every slot; only the active prefix is read (particles.h), so only it is set.
-    const size_t n = p.active_count();
+    const size_t n = water_.pool.active();
     st.body_of_.resize(p.size());
     st.body2_of_.resize(p.size());
     st.body_grad_.resize(p.size());
@@ -292,7 +292,7 @@ void PbfSolver::count_inside_bodies(const Stage&) {
     State& st = *st_;
     Particles& p = water_.pool.particles;
     const std::vector<RigidBody>& bodies = st.bodies_.all();
-    const size_t active = p.active_count();  // the active prefix (particles.h)
+    const size_t active = water_.pool.active();  // the active prefix (particles.h)
     std::vector<uint8_t> inside(active, 0);
     bounding_spheres(bodies, 0.0f, st.body_reach_);  // every particle against every body (binned): honest
     st.body_cells_.build(st.body_reach_);

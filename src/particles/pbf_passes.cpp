@@ -31,7 +31,7 @@ void PbfSolver::iterate(const Stage& s) {
     correction_pass(s, nl, simd);
     Particles& p = water_.pool.particles;
     const TerrainCollider& collider = water_.collider;
-    for_each_slot(p.size(), 1024, [&](size_t i) {
+    for_each_slot(water_.pool.active(), 1024, [&](size_t i) {
         if (!p.active[i]) return;
         Vec3 x = p.position[i] + st.delta_[i];
         if (s.terrain && collider.push_out(x, p.last_position[i])) st.contact_[i] = 1;
@@ -158,7 +158,8 @@ void PbfSolver::viscosity(const Stage& s) {
     const PbfDef& d = pbf_;
     const NeighborLists* const nl = lists(d.vorticity > 0.0f ? 2 : 1);
     if (d.vorticity > 0.0f) {
-        st.omega_.assign(p.size(), Vec3(0.0f));
+        st.omega_.resize(p.size());  // sized for every slot; the active prefix is read
+        std::fill_n(st.omega_.begin(), water_.pool.active(), Vec3(0.0f));
         for_each_binned(water_.grid.grid(), nl, [&](uint32_t i, auto&& each) {
             Vec3 w(0.0f);
             each([&](uint32_t j, uint32_t) {
@@ -191,7 +192,7 @@ void PbfSolver::viscosity(const Stage& s) {
             st.delta_[i] = v;
         });
     }
-    for_each_slot(p.size(), 1024, [&](size_t i) {
+    for_each_slot(water_.pool.active(), 1024, [&](size_t i) {
         if (p.active[i]) p.velocity[i] = st.delta_[i];
     });
 }

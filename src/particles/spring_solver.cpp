@@ -43,8 +43,8 @@ void SpringSolver::step(float dt) {
             p.position[i] += p.velocity[i] * dt;
         }
     });
-    const ContactCounts c = water_.collider.collide_active(p, dt);
-    water_.sinks.flag_exits(p);
+    const ContactCounts c = water_.collider.collide_active(p, dt, water_.pool.active());
+    water_.sinks.flag_exits(p, water_.pool.active());
     water_.finish_step(c);
 }
 

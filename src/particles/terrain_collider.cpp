@@ -56,9 +56,9 @@ void TerrainCollider::set_def(const CollisionDef& def) {
     response_ = contact_response(def.mode, fluid_);
 }
 
-ContactCounts TerrainCollider::collide_active(Particles& p, float dt) const {
+ContactCounts TerrainCollider::collide_active(Particles& p, float dt, size_t count) const {
     std::atomic<uint64_t> steps{0}, collisions{0}, guarded{0}, tunneled{0};
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, p.size(), 512), [&](const tbb::blocked_range<size_t>& range) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, std::min(count, p.size()), 512), [&](const tbb::blocked_range<size_t>& range) {
         ContactCounts c;
         for (size_t i = range.begin(); i != range.end(); ++i) {
             if (!p.active[i]) continue;
