@@ -31,7 +31,7 @@ void PbfSolver::iterate(const Stage& s) {
     correction_pass(s, nl, simd);
     Particles& p = water_.pool.particles;
     const TerrainCollider& collider = water_.collider;
-    for_each_slot(water_.pool.active(), 1024, [&](size_t i) {
+    for_each_slot(water_.pool.active(), 128, [&](size_t i) {  // a terrain query each: small blocks
         if (!p.active[i]) return;
         Vec3 x = p.position[i] + st.delta_[i];
         if (s.terrain && collider.push_out(x, p.last_position[i])) st.contact_[i] = 1;
