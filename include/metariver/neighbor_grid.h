@@ -91,6 +91,9 @@ public:
     }
 
     float cell_size() const { return cell_; }
+    /// Tells builds apart: unique over every grid's builds (0 before the first), so a
+    /// cache of something derived from the cells can tell that it still holds.
+    uint64_t build_id() const { return build_id_; }
     bool hashed() const { return layout_ == Layout::Hashed; }
     /// The layout the last build() chose.
     Layout layout() const { return layout_; }
@@ -247,6 +250,7 @@ private:
         return size_t(bx) + size_t(nblocks_[0]) * (size_t(by) + size_t(nblocks_[1]) * size_t(bz));
     }
     float cell_ = 1.0f, inv_cell_ = 1.0f;
+    uint64_t build_id_ = 0;
     Vec3 origin_{0.0f};
     int dims_[3] = {0, 0, 0};
     Layout layout_ = Layout::Dense;
@@ -312,6 +316,11 @@ private:
     std::vector<uint32_t> run_blocks_;
     std::vector<size_t> run_slot_;
     std::vector<uint32_t> words_, listed_;
+    // Per cell run its neighbour ranges (its count, then the starts and ends at a fixed
+    // stride), kept for the grid build they came from (ranges_grid_: its build_id()): a
+    // rebuild over the same grid (a PBF step's stale lists) does not gather them again.
+    std::vector<uint32_t> run_ranges_;
+    uint64_t ranges_grid_ = 0;
     uint64_t builds_ = 0;
     bool simd_ = true;
 };

@@ -1,6 +1,7 @@
 #include <metariver/neighbor_grid.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 
@@ -23,6 +24,8 @@ void NeighborGrid::relabel_identity() {
 }
 
 void NeighborGrid::build(std::span<const Vec3> positions, std::span<const uint8_t> active, float cell_size) {
+    static std::atomic<uint64_t> builds{0};
+    build_id_ = ++builds;
     const size_t n = positions.size();
     cell_ = cell_size;
     inv_cell_ = 1.0f / cell_size;

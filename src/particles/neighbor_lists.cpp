@@ -130,6 +130,23 @@ uint32_t blocks_of(const Ranges& rg) {
     return b;
 }
 
+/// A run's ranges in NeighborLists::run_ranges_: the count, then the starts, then the ends.
+constexpr size_t kRangesStride = 1 + 2 * 27;
+
+void store_ranges(const Ranges& rg, uint32_t* out) {
+    out[0] = uint32_t(rg.n);
+    std::memcpy(out + 1, rg.s, size_t(rg.n) * sizeof(uint32_t));
+    std::memcpy(out + 28, rg.e, size_t(rg.n) * sizeof(uint32_t));
+}
+
+Ranges load_ranges(const uint32_t* in) {
+    Ranges rg;
+    rg.n = int(in[0]);
+    std::memcpy(rg.s, in + 1, size_t(rg.n) * sizeof(uint32_t));
+    std::memcpy(rg.e, in + 28, size_t(rg.n) * sizeof(uint32_t));
+    return rg;
+}
+
 /// f(run) for every cell run of g, in parallel (for_each_run's split).
 template <class F>
 void for_each_run_index(const NeighborGrid& g, F&& f) {
@@ -168,16 +185,24 @@ void NeighborLists::build(const NeighborGrid& grid, std::span<const Vec3> positi
     // run's block words take (its blocks) x (its particles) slots from a prefix over runs.
     if (avx2 && count_ < (size_t(1) << 24)) {
         const size_t runs = grid.run_count();
-        run_blocks_.resize(runs);
-        run_slot_.resize(runs + 1);
-        for_each_run_index(grid, [&](size_t run) { run_blocks_[run] = blocks_of(ranges_of(grid, run)); });
-        run_slot_[0] = 0;
-        for (size_t r = 0; r < runs; ++r)
-            run_slot_[r + 1] = run_slot_[r] + size_t(run_blocks_[r]) * (grid.run_start(r + 1) - grid.run_start(r));
+        if (ranges_grid_ != grid.build_id() || run_blocks_.size() != runs) {  // else all three still hold
+            run_blocks_.resize(runs);
+            run_slot_.resize(runs + 1);
+            run_ranges_.resize(runs * kRangesStride);
+            for_each_run_index(grid, [&](size_t run) {
+                const Ranges rg = ranges_of(grid, run);
+                store_ranges(rg, run_ranges_.data() + run * kRangesStride);
+                run_blocks_[run] = blocks_of(rg);
+            });
+            run_slot_[0] = 0;
+            for (size_t r = 0; r < runs; ++r)
+                run_slot_[r + 1] = run_slot_[r] + size_t(run_blocks_[r]) * (grid.run_start(r + 1) - grid.run_start(r));
+            ranges_grid_ = grid.build_id();
+        }
         words_.resize(run_slot_[runs]);
         listed_.resize(count_);
         for_each_run_index(grid, [&](size_t run) {
-            const Ranges rg = ranges_of(grid, run);
+            const Ranges rg = load_ranges(run_ranges_.data() + run * kRangesStride);
             const uint32_t b = grid.run_start(run), blocks = run_blocks_[run];
             uint32_t* w = words_.data() + run_slot_[run];
             for (uint32_t i = b; i < grid.run_start(run + 1); ++i, w += blocks)
