@@ -211,9 +211,9 @@ public:
     const Terrain& terrain() const { return terrain_; }
 
     /// The one contact loop: collides every active particle of the first `count` (the
-    /// active prefix) that moved last_position -> position in a step of dt (parallel;
-    /// counts tunneled before any correction).
-    ContactCounts collide_active(Particles& p, float dt, size_t count) const;
+    /// solvers pass their active prefix; default: every slot) that moved last_position ->
+    /// position in a step of dt (parallel; counts tunneled before any correction).
+    ContactCounts collide_active(Particles& p, float dt, size_t count = SIZE_MAX) const;
     /// Collide particle i (touches only particle i).
     void collide(Particles& p, size_t i, float dt, ContactCounts& c) const;
     /// Moves a predicted position out of the lifted terrain along the triangle normal
