@@ -205,7 +205,7 @@ SceneDef hybrid_base(std::string name, TerrainSource kind, float discharge) {
     d.spawn.center = Vec3(19.5f, 15.0f, 77.0f);
     d.sink.kind = SinkKind::None;
     d.foam.enabled = false;
-    d.hybrid.max_particles = 2000;  // about 4x what the falls hold (PBF steps every slot)
+    d.hybrid.max_particles = 2000;  // about 4x what the falls hold
     d.swe.discharge = discharge;
     d.swe.auto_source = false;
     d.swe.source_center = Vec3(19.5f, 0.0f, 77.0f);
