@@ -78,6 +78,10 @@ struct SweDef {
     /// Metres (x, z): with rain_radius > 0, rain falls only within rain_radius of it.
     Vec3 rain_center{0.0f};
     float rain_radius = 0.0f;      ///< metres; 0: the whole map
+    /// A grayscale PNG (path; "" none) over the whole map: each cell's rain is swe.rain times
+    /// the image's value there (0 black .. 1 white, the first channel), the image stretched
+    /// over the grid (bilinear) when its size differs. With rain_radius too: both apply.
+    std::string rain_mask;
     /// Simulated seconds per second of frame time; kSweAuto: area_scale (1 at 1 m per
     /// sample; a km-cell DEM runs hours a second).
     float time_scale = 1.0f;
@@ -109,6 +113,11 @@ struct SweBalance {
     /// initial + inflow + rain + exchanged - outflow - sunk - stored (round-off).
     double error() const { return initial + inflow + rain + exchanged - outflow - sunk - stored; }
 };
+
+/// swe.rain_mask read and stretched over a grid of `columns` x `rows` cells: a weight in
+/// [0, 1] per cell (row-major, column fastest); an error naming the key and the file when
+/// the image cannot be read.
+Result<std::vector<double>> load_rain_mask(const std::string& path, int columns, int rows);
 
 /// What the steady spin-up (swe.init = "steady") did before frame 0.
 struct SweInitReport {
@@ -200,6 +209,9 @@ private:
     double start_time_ = 0.0;  ///< the core's time at frame 0
     SweInitReport init_;
     double poured_ = 0.0;  ///< m^3 pour() added (inflow)
+    std::string mask_path_;           ///< the swe.rain_mask mask_ was read from
+    std::vector<double> mask_;        ///< its weight per cell (empty: none, or unreadable)
+    std::string mask_error_;          ///< why it could not be read (a warning)
 };
 
 }  // namespace mr

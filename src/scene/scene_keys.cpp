@@ -480,11 +480,17 @@ const SceneKey kKeys[] = {
      .edit = E::Solver, .help = "Where the source pours (x, z; y unused); auto: particles.spawn_center's resolved place.",
      .field = MR_FIELD(swe.source_center)},
     {.name = "swe.rain", .type = K::Float, .unit = "mm/h", .range = closed(0, 1e4), .readers = kSwe, .edit = E::Solver,
-     .help = "Rain over the whole map, or within swe.rain_radius of swe.rain_center.", .field = MR_FIELD(swe.rain)},
+     .help = "Rain over the whole map, or within swe.rain_radius of swe.rain_center, or weighed by swe.rain_mask.",
+     .field = MR_FIELD(swe.rain)},
     {.name = "swe.rain_center", .type = K::Vec3, .unit = "m", .range = big_vec(-1e6), .readers = kSwe, .edit = E::Solver,
      .help = "The centre (x, z; y unused) of the circle swe.rain falls in when swe.rain_radius > 0.", .field = MR_FIELD(swe.rain_center)},
     {.name = "swe.rain_radius", .type = K::Float, .unit = "m", .range = closed(0, 1e7), .readers = kSwe, .edit = E::Solver,
      .help = "Rain only on the cells within this distance of swe.rain_center; 0: over the whole map.", .field = MR_FIELD(swe.rain_radius)},
+    {.name = "swe.rain_mask", .type = K::String, .readers = kSwe, .edit = E::Solver,
+     .help = "A grayscale PNG over the whole map, relative to the scene file: each cell's rain is swe.rain times the "
+             "image's value there (black 0, white 1; the first channel), the image stretched over the grid (bilinear) "
+             "when its size differs; with swe.rain_radius the circle applies too. \"\": none.",
+     .field = MR_FIELD(swe.rain_mask)},
     {.name = "swe.sea_level", .type = K::Float, .unit = "m", .range = closed(-1e6, 1e6), .words = kSeaWords, .readers = kSwe,
      .edit = E::Solver,
      .help = "Cells whose bed lies below this height are the sea: a sink taking all the water that reaches them (counted as "

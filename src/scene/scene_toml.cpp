@@ -354,6 +354,11 @@ Result<SceneDef> parse_scene_toml_lines(std::string_view text, const std::string
                 if (mp.is_relative() && !mp.empty())
                     b.mesh = (std::filesystem::path(origin).parent_path() / mp).lexically_normal().string();
             }
+        if (s.name == "swe" && t->get("rain_mask") && !r.failed()) {  // as the heightmap: relative to the scene file
+            const std::filesystem::path rp(d.swe.rain_mask);
+            if (rp.is_relative() && !rp.empty())
+                d.swe.rain_mask = (std::filesystem::path(origin).parent_path() / rp).lexically_normal().string();
+        }
         if (s.name == "terrain" && t->get("heightmap") && !r.failed()) {
             if (!t->get("source")) d.source.kind = TerrainSource::File;
             std::filesystem::path hp(d.source.heightmap);

@@ -1,5 +1,6 @@
 // The orchestrator of one frame: solver step -> field -> marching cubes.
 #include <metariver/scene.h>
+#include <metariver/swe_solver.h>
 
 #include "simulation_impl.h"
 #include "simulation_internal.h"
@@ -259,6 +260,12 @@ SmoothingGround smoothing_ground(const Terrain& t) {
 }
 
 namespace detail {
+Status rain_mask_readable(const SceneDef& d) {
+    if ((d.solver != SolverKind::Swe && d.solver != SolverKind::Hybrid) || d.swe.rain_mask.empty()) return Ok{};
+    if (auto m = load_rain_mask(d.swe.rain_mask, 1, 1); !m) return m.error();
+    return Ok{};
+}
+
 /// field.bounds = "terrain": the fixed field box spans the terrain, and its samples per
 /// axis must fit an int (4096 samples x 1e4 m x 64 per metre would not).
 Status field_box_fits(const FieldDef& f, const Terrain& t) {
@@ -279,6 +286,7 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, cons
     const auto entry = solvers.find(def.solver);
     if (!entry) return entry.error();
     if (auto v = validate(def); !v) return v.error();
+    if (auto m = detail::rain_mask_readable(def); !m) return m.error();
     SceneDef resolved = def;
     resolved.terrain.condition = resolved_condition(def);
     resolved.pbf.sleep_threshold = resolved_sleep_threshold(def);

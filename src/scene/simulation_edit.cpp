@@ -55,6 +55,8 @@ Result<ApplyResult> Simulation::Impl::apply(const SceneDef& next) {
     if (!r.rebuild_key.empty()) return r;
     if (auto f = detail::field_box_fits(edited.field, terrain_); !f) return f.error();
     if (auto v = validate_on_terrain(edited, terrain_); !v) return v.error();
+    if (requested_.swe.rain_mask != next.swe.rain_mask)
+        if (auto m = detail::rain_mask_readable(edited); !m) return m.error();
     // The solver takes the keys it reads by its registry entry's rule (the budget's key
     // asks for a rebuild above, so a refusal is not reached).
     const bool bodies_changed = requested_.bodies != next.bodies;

@@ -20,5 +20,8 @@ float carve_spacing_of(const SceneDef& def);
 /// field.bounds = "terrain": an error when the fixed field box's samples per axis would
 /// not fit (kMaxFieldAxisSamples).
 Status field_box_fits(const FieldDef& f, const Terrain& t);
+/// swe.rain_mask of a swe or hybrid scene: an error naming the key and the file when the
+/// image cannot be read (the solver itself only warns).
+Status rain_mask_readable(const SceneDef& d);
 
 }  // namespace mr::detail

@@ -71,6 +71,29 @@ std::vector<std::pair<int, int>> disc_cells(const HeightfieldWater& w, Vec3 c, f
 }
 }  // namespace
 
+Result<std::vector<double>> load_rain_mask(const std::string& path, int columns, int rows) {
+    auto image = load_heightmap_png(path);
+    if (!image) return Error{fmt::format("swe.rain_mask: {}", image.error().message)};
+    const Heightmap& m = image.value();
+    if (m.width < 1 || m.height < 1 || m.samples.size() < static_cast<size_t>(m.width) * m.height)
+        return Error{fmt::format("swe.rain_mask: '{}' has no pixels", path)};
+    // Bilinear over the image stretched to the grid: cell (i, j) at pixel
+    // (i (width - 1) / (columns - 1), j (height - 1) / (rows - 1)).
+    const auto px = [&](int c, int r) { return double(std::clamp(m.samples[static_cast<size_t>(r) * m.width + c], 0.0f, 1.0f)); };
+    std::vector<double> w(static_cast<size_t>(std::max(columns, 0)) * std::max(rows, 0), 0.0);
+    for (int j = 0; j < rows; ++j)
+        for (int i = 0; i < columns; ++i) {
+            const double u = columns > 1 ? double(i) * (m.width - 1) / (columns - 1) : 0.0;
+            const double v = rows > 1 ? double(j) * (m.height - 1) / (rows - 1) : 0.0;
+            const int c0 = std::min(static_cast<int>(u), m.width - 1), r0 = std::min(static_cast<int>(v), m.height - 1);
+            const int c1 = std::min(c0 + 1, m.width - 1), r1 = std::min(r0 + 1, m.height - 1);
+            const double fu = u - c0, fv = v - r0;
+            w[static_cast<size_t>(j) * columns + i] = (1 - fv) * ((1 - fu) * px(c0, r0) + fu * px(c1, r0)) +
+                                                      fv * ((1 - fu) * px(c0, r1) + fu * px(c1, r1));
+        }
+    return w;
+}
+
 SweSolver::SweSolver(const Terrain& terrain, const SweDef& def, Vec3 resolved_source, float gravity)
     : def_(def), source_(resolved_source) {
     const int nx = std::max(terrain.columns(), 1), ny = std::max(terrain.rows(), 1);
@@ -127,14 +150,27 @@ SweSolver::~SweSolver() = default;
 void SweSolver::apply_def() {
     core_->set_def(core_def(def_, core_->def().gravity));
     const double rain = std::max(static_cast<double>(def_.rain), 0.0) * kMmPerHour;
-    if (def_.rain_radius > 0.0f) {  // rain only within the circle
+    if (def_.rain_mask != mask_path_) {  // read once per path
+        mask_path_ = def_.rain_mask;
+        mask_.clear();
+        mask_error_.clear();
+        if (!mask_path_.empty()) {
+            auto m = load_rain_mask(mask_path_, water_.columns, water_.rows);
+            if (m) mask_ = std::move(m.value());
+            else mask_error_ = m.error().message;
+        }
+    }
+    if (def_.rain_radius > 0.0f || !def_.rain_mask.empty()) {  // rain within the circle, weighed by the mask
         std::vector<double> mask(water_.size(), 0.0);
         const float r2 = def_.rain_radius * def_.rain_radius;
         for (int j = 0; j < water_.rows; ++j)
             for (int i = 0; i < water_.columns; ++i) {
                 const float dx = water_.origin.x + float(i) * water_.spacing - def_.rain_center.x;
                 const float dz = water_.origin.z + float(j) * water_.spacing - def_.rain_center.z;
-                if (dx * dx + dz * dz <= r2) mask[static_cast<size_t>(j) * water_.columns + i] = rain;
+                const size_t k = static_cast<size_t>(j) * water_.columns + i;
+                const bool in_circle = def_.rain_radius <= 0.0f || dx * dx + dz * dz <= r2;
+                const double weight = def_.rain_mask.empty() ? 1.0 : k < mask_.size() ? mask_[k] : 0.0;
+                if (in_circle) mask[k] = rain * weight;
             }
         core_->set_rain(0.0);
         core_->set_rain_mask(std::move(mask));
@@ -266,7 +302,7 @@ void SweSolver::fill_depressions(const std::vector<std::pair<int, int>>& starts)
     const auto low = [&](int k) { return f.level[size_t(k)] - core_->bed(k % nx, k / nx) > 1e-3; };
     std::vector<uint8_t> seen(static_cast<size_t>(nx) * ny, 0);
     std::vector<int> seeds, stack;
-    if (def_.rain > 0.0f && def_.rain_radius <= 0.0f) {  // rain over the whole map fills every one
+    if (def_.rain > 0.0f && def_.rain_radius <= 0.0f && def_.rain_mask.empty()) {  // rain over the whole map fills every one
         for (int k = 0; k < nx * ny; ++k) seeds.push_back(k);
     } else {
         for (const auto& [i, j] : starts)  // each source's route to the edge, through the spill points
@@ -362,6 +398,7 @@ std::vector<std::string> SweSolver::warnings() const {
     for (size_t k = 0; k < def_.sinks.size(); ++k)
         if (disc_cells(water_, def_.sinks[k].center, def_.sinks[k].radius).empty())
             w.push_back(fmt::format("swe.sinks[{}]: lies outside the terrain; it takes nothing", k + 1));
+    if (!mask_error_.empty()) w.push_back(mask_error_ + "; no rain falls");
     if (init_.ran && !init_.converged)
         w.push_back(fmt::format("swe.init: the steady spin-up stopped at its cap ({:.4g} s simulated, {} substeps) with "
                                 "outflow {:.3f} of inflow; raise swe.init_max_time",

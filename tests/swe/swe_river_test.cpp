@@ -1,6 +1,7 @@
 // The "swe" river on any map (issue 45): sinks, line sources, rain within a circle, the sea,
 // the steady spin-up, the mass balance on a real DEM at its scale, nothing carved, and the
 // keys' errors.
+#include <metariver/io.h>
 #include <metariver/scene.h>
 #include <metariver/scene_keys.h>
 #include <metariver/swe_solver.h>
@@ -9,6 +10,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <string>
 
 namespace mr {
@@ -101,6 +104,53 @@ TEST(SweRiver, RainWithinACircleRainsOnlyInside) {
     EXPECT_EQ(outside, 0);
     // 3600 mm/h = 1 mm/s over the 81 cells' 81 m^2 for one frame.
     EXPECT_NEAR(swe_of(*s).balance().rain, 81.0 * 1e-3 * double(kFrame), 1e-9);
+}
+
+TEST(SweRiver, RainFromAMaskImageRainsItsIntegralTimesTheRate) {
+    // A 2 x 3 image, black in its left column and white in its right, stretched over the
+    // 65 x 97 valley: the weight is i / 64 in column i (bilinear), so the mask's integral is
+    // 97 rows x 32.5 m^2 and the rain volume that x the rate x the time.
+    const auto dir = std::filesystem::temp_directory_path() / "mr_swe_rain_mask";
+    std::filesystem::create_directories(dir);
+    const std::string png = (dir / "ramp.png").string();
+    std::vector<uint8_t> rgb;
+    for (int r = 0; r < 3; ++r)
+        for (const uint8_t v : {uint8_t(0), uint8_t(255)}) rgb.insert(rgb.end(), {v, v, v});
+    ASSERT_TRUE(write_png(png, rgb, 2, 3, 3).ok());
+    auto s = valley("discharge = 0\nrain = 3600\nrain_mask = \"" + png + "\"\n");
+    ASSERT_TRUE(s);
+    const HeightfieldWater& h = *s->heightfield();
+    ASSERT_EQ(h.columns, 65);
+    const auto weights = load_rain_mask(png, h.columns, h.rows);
+    ASSERT_TRUE(weights.ok());
+    double integral = 0.0;
+    for (const double w : weights.value()) integral += w * double(h.spacing) * double(h.spacing);
+    EXPECT_NEAR(integral, 97.0 * 32.5, 1e-9);
+    s->step(kFrame);
+    int wet_left = 0, wet_right = 0;  // column 0 has weight 0, column 64 weight 1
+    for (int j = 0; j < h.rows; ++j) {
+        wet_left += h.depth[size_t(j) * h.columns] > 0.0f;
+        wet_right += h.depth[size_t(j) * h.columns + 64] > 0.0f;
+    }
+    EXPECT_EQ(wet_left, 0);
+    EXPECT_EQ(wet_right, h.rows);
+    for (int f = 1; f < 30; ++f) s->step(kFrame);
+    const double t = 30.0 * double(kFrame), rate = 1e-3;  // 3600 mm/h = 1 mm/s
+    EXPECT_NEAR(swe_of(*s).balance().rain, integral * rate * t, 1e-9 * integral * rate * t);
+    // A missing or broken image is an error naming the key and the file.
+    const auto error_of = [](const std::string& path) {
+        auto d = parse_scene_toml("solver = \"swe\"\n[swe]\nrain = 1\nrain_mask = \"" + path + "\"\n", "m.toml", default_scene());
+        if (!d.ok()) return d.error().message;
+        auto sim = Simulation::create(d.value());
+        return sim.ok() ? std::string() : sim.error().message;
+    };
+    const std::string missing = (dir / "missing.png").string(), broken = (dir / "broken.png").string();
+    std::ofstream(broken) << "not a png";
+    for (const std::string& bad : {missing, broken}) {
+        const std::string e = error_of(bad);
+        EXPECT_NE(e.find("swe.rain_mask"), std::string::npos) << e;
+        EXPECT_NE(e.find(bad), std::string::npos) << e;
+    }
 }
 
 TEST(SweRiver, SteadyInitStartsWithOutflowEqualToInflow) {
