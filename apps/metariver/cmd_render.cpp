@@ -7,6 +7,7 @@
 #include "commands.h"
 #include "driver.h"
 #include "export_options.h"
+#include "run_stats.h"
 
 #include <metariver/checkpoints.h>
 #include <metariver/gl_context.h>
@@ -297,10 +298,11 @@ std::vector<double> write_ms(const Driver& d, const Checkpoints& times) {
     return write;
 }
 
-/// What render --stats writes: the GL, the renderer's counts and the stage times.
+/// What render --stats writes: the GL, the renderer's counts, the stage times and, for
+/// a shallow-water grid (swe, hybrid), run --stats' swe and hybrid blocks (null otherwise).
 /// `times`: render and the image's write per frame.
 nlohmann::json render_stats_json(const Driver& d, const render::Renderer& renderer, const RenderSetup& setup,
-                                 const Checkpoints& times, double total_s) {
+                                 const Checkpoints& times, const RiverMeter& meter, double total_s) {
     nlohmann::json j;
     j["scene"] = d.scene().name;
     j["frames"] = d.def().frames;
@@ -314,14 +316,17 @@ nlohmann::json render_stats_json(const Driver& d, const render::Renderer& render
                      {"render", stage_json(times.column(0))},
                      {"write", stage_json(write_ms(d, times))}};
     j["total_s"] = total_s;
+    j["swe"] = swe_stats_json(d.sim(), meter, d.def().frames);
+    j["hybrid"] = hybrid_stats_json(d.sim(), d.def().frames, d.def().dt);
     return j;
 }
 
 /// After the warm-up: every image rendered, written and timed (render, write).
 bool render_frames(Driver& d, Shot& shot, FrameSink& sink, const RenderOptions& o, const RenderSetup& setup,
-                   Checkpoints& times) {
+                   Checkpoints& times, RiverMeter& meter) {
     shot.renderer.set_scene(d.sim().view());
     return d.loop([&](long long f) {
+        meter.record(d.sim(), f, d.time_s(f));  // before the clock: not the render's time
         auto t0 = Clock::now();
         shot.camera.yaw_deg =
             shot.yaw0 + static_cast<float>(o.orbit_deg * static_cast<double>(f) / static_cast<double>(o.drive.frames));
@@ -364,10 +369,11 @@ int render(const RenderOptions& o) {
     Shot shot = make_shot(*renderer.value(), o, setup, d.sim());
     d.warm_up();
     Checkpoints times(kTimingSamples, 2);  // render, write: constant memory however many frames
-    if (!render_frames(d, shot, sink, o, setup, times) || !sink.close(d)) return d.exit_code();
+    RiverMeter meter(d.sim(), o.drive.frames);
+    if (!render_frames(d, shot, sink, o, setup, times, meter) || !sink.close(d)) return d.exit_code();
     const double total_s = d.elapsed_s();
     const render::Renderer& r = shot.renderer;
-    if (!d.finish([&] { return render_stats_json(d, r, setup, times, total_s); })) return d.exit_code();
+    if (!d.finish([&] { return render_stats_json(d, r, setup, times, meter, total_s); })) return d.exit_code();
     fmt::print("{}: {} frames {}x{} in {:.1f} s; per frame median: render {:.2f} ms (draw + read back), "
                "simulate {:.2f} ms, write {:.2f} ms; water {} triangles (surface velocities {:.2f} ms, last frame); {}\n",
                d.scene().name, o.drive.frames, setup.width, setup.height, total_s, percentiles(times.column(0)).median,

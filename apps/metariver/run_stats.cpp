@@ -303,6 +303,9 @@ json bodies_json(std::span<const BodyState> bodies, uint64_t inside) {
             {"bodies", each}};
 }
 
+json swe_stats_json(const Simulation& sim, const RiverMeter& meter, long long frames) { return swe_json(sim, meter, frames); }
+json hybrid_stats_json(const Simulation& sim, long long frames, double dt) { return hybrid_json(sim, frames, dt); }
+
 RiverMeter::RiverMeter(const Simulation& sim, long long frames)
     : frames_(frames), outlets_(sim.terrain(), sim.channel(), sim.main_channel().back()) {}
 

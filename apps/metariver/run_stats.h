@@ -75,6 +75,12 @@ nlohmann::json bodies_json(std::span<const BodyState> bodies, uint64_t inside);
 nlohmann::json run_stats_json(const Simulation& sim, const RiverMeter& meter, const Checkpoints& stage_ms,
                               long long frames, double dt);
 
+/// The shallow-water grid's block of the stats (solver = "swe", and the hybrid's grid: the
+/// balance, wet cells, substeps, the spin-up) and the hybrid's hand-over block; null for the
+/// particle solvers. `run --stats` and `render --stats` write both.
+nlohmann::json swe_stats_json(const Simulation& sim, const RiverMeter& meter, long long frames);
+nlohmann::json hybrid_stats_json(const Simulation& sim, long long frames, double dt);
+
 /// The line `run` prints at the end: counts, plausibility and the frame time.
 std::string run_summary(const Simulation& sim, const RiverMeter& meter, const Checkpoints& stage_ms, long long frames);
 

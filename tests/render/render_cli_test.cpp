@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 #include "cli_fixture.h"
+#include <nlohmann/json.hpp>
 #include "small_disk.h"
 
 #include <cstdlib>
@@ -106,6 +107,33 @@ TEST_F(RenderCli, PngSequenceHasCountAndSizeAndFramesDiffer) {
         for (size_t k = 0; k < frames[0].pixels.size(); ++k) changed += frames[i].pixels[k] != frames[i - 1].pixels[k];
         EXPECT_GT(changed, 10u) << "frame " << i << " equals frame " << i - 1 << ": the water did not move";
     }
+}
+
+// render --stats of a shallow-water scene writes run --stats' swe block: the same volumes,
+// substeps and balance as run on the same scene and frames (the same simulation), and a
+// particle scene's is null as in run.
+TEST_F(RenderCli, StatsOfASweRenderHaveRunsSweBlock) {
+    REQUIRE_GL();
+    const fs::path scene = dir_ / "swe.toml", rs = dir_ / "render.json", us = dir_ / "run.json";
+    std::ofstream(scene) << "solver = \"swe\"\n\n[swe]\ndischarge = 5.0\nrain = 50.0\ninitial_level = 3.0\n";
+    const std::string frames = " --frames 30 --no-progress --scene " + scene.string();
+    CliResult r = run("render --size 64x40 --out " + (dir_ / "frames").string() + frames + " --stats " + rs.string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    r = run("run" + frames + " --stats " + us.string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto rendered = nlohmann::json::parse(slurp(rs))["swe"], ran = nlohmann::json::parse(slurp(us))["swe"];
+    ASSERT_TRUE(rendered.is_object()) << rendered.dump();
+    EXPECT_EQ(rendered["volume_m3"], ran["volume_m3"]);
+    EXPECT_EQ(rendered["substeps"], ran["substeps"]);
+    EXPECT_EQ(rendered["wet_cells"], ran["wet_cells"]);
+    EXPECT_EQ(rendered["balance_error_m3"], ran["balance_error_m3"]);
+    EXPECT_GT(rendered["volume_m3"]["inflow"].get<double>(), 0.0);
+    EXPECT_LE(rendered["balance_error_relative"].get<double>(), 1e-5);
+    EXPECT_GE(rendered["substeps_per_frame"]["mean"].get<double>(), 1.0);
+    r = run("render --preset paper-bowl --frames 2 --size 32x32 --no-progress --out " + (dir_ / "p").string() +
+            " --stats " + rs.string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_TRUE(nlohmann::json::parse(slurp(rs))["swe"].is_null());
 }
 
 TEST_F(RenderCli, Mp4WhenFfmpegIsThere) {
