@@ -30,8 +30,13 @@ inline constexpr float kSweLeastSlope = 1e-3f;
 /// swe.init_max_time = "auto": this many times the main channel's length (at least half the
 /// map's diagonal) over 0.5 m/s.
 inline constexpr float kSweInitCrossings = 8.0f;
-/// The steady spin-up stops after this many substeps whatever its time cap (a warning).
+/// swe.init_max_time = "auto" is also at least this many residence times: the volume the
+/// map holds over the inflow per second (a lake's level or a sheet settles over it).
+inline constexpr double kSweInitResidences = 12.0;
+/// The steady spin-up stops after this many substeps or cell updates whatever its time cap
+/// (a warning; the cell updates bound its wall time: about a minute on two cores).
 inline constexpr uint64_t kSweInitMaxSubsteps = 400000;
+inline constexpr uint64_t kSweInitMaxCellUpdates = 6'000'000'000;
 
 /// How the water starts (swe.init).
 enum class SweInit {
@@ -191,8 +196,8 @@ private:
     void apply_def();
     void publish();
     void spin_up();
-    /// swe.init = "steady": the depressions the rivers run through (every one under rain
-    /// over the whole map) start full to their spill level, as a steady river leaves them.
+    /// swe.init = "steady": the depressions the sources' water can reach (every one under
+    /// rain over the whole map) start full to their spill level, as a steady river leaves them.
     /// `starts`: the sources' cells (column, row).
     void fill_depressions(const std::vector<std::pair<int, int>>& starts);
     void add_sources(std::vector<swe::PointSource>& out) const;

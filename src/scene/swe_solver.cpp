@@ -216,7 +216,12 @@ void SweSolver::add_sources(std::vector<swe::PointSource>& out) const {
 // swe.init = "steady": first order at the largest CFL, in windows, until what leaves (the
 // edges and the sinks) is what comes in (sources and rain) within init_tolerance over two
 // windows running; then the scheme asked for (second order holds less water than the first
-// order's diffusion) until it is calm again; or the time cap.
+// order's diffusion) until it is calm again; or the cap: the time cap, and at most
+// kSweInitMaxSubsteps substeps and kSweInitMaxCellUpdates cell updates (the work, whatever
+// the time asked). The automatic time cap is the larger of kSweInitCrossings channel
+// crossings and kSweInitResidences residence times (what the map holds over what comes in
+// a second, measured as it fills): a sheet over a flat map or a lake's level settles over
+// its residence time, not over the time the water takes to cross.
 void SweSolver::spin_up() {
     const auto t0 = std::chrono::steady_clock::now();
     const swe::ShallowWaterDef asked = core_->def();
@@ -225,14 +230,19 @@ void SweSolver::spin_up() {
     fast.cfl = 0.5;
     // The channel, or half the map's diagonal where the route is shorter (a flat map's).
     const double reach = std::max(double(channel_length_), 0.5 * water_.spacing * std::hypot(double(water_.columns), double(water_.rows)));
-    const double cap = def_.init_max_time == kSweAuto ? kSweInitCrossings * reach / 0.5 : def_.init_max_time;
-    const double window = std::max(cap / 40.0, 1e-3);
-    const uint64_t steps0 = core_->stats().substeps;
+    const bool auto_cap = def_.init_max_time == kSweAuto;
+    const double crossings = auto_cap ? kSweInitCrossings * reach / 0.5 : def_.init_max_time;
+    const double window = std::max(crossings / 40.0, 1e-3);
+    const uint64_t steps0 = core_->stats().substeps, updates0 = core_->stats().cell_updates;
+    double cap = crossings;
+    const auto work_left = [&] {
+        return core_->stats().substeps - steps0 < kSweInitMaxSubsteps && core_->stats().cell_updates - updates0 < kSweInitMaxCellUpdates;
+    };
     const auto calm_under = [&](const swe::ShallowWaterDef& scheme) {
         core_->set_def(scheme);
         int calm = 0;
         swe::MassBalance prev = core_->balance();
-        while (core_->time() < cap && core_->stats().substeps - steps0 < kSweInitMaxSubsteps) {
+        while (core_->time() < cap && work_left()) {
             core_->advance(window);
             const swe::MassBalance b = core_->balance();
             const double in = (b.inflow - prev.inflow) + (b.rain - prev.rain);
@@ -241,6 +251,7 @@ void SweSolver::spin_up() {
             init_.outflow_over_inflow = in > 0.0 ? out / in : 0.0;
             calm = std::abs(out - in) <= tol && std::abs(b.stored - prev.stored) <= tol ? calm + 1 : 0;
             prev = b;
+            if (auto_cap && in > 0.0) cap = std::max(cap, kSweInitResidences * b.stored / (in / window));
             if (calm >= 2) return true;
         }
         return false;
@@ -256,16 +267,14 @@ void SweSolver::spin_up() {
 namespace {
 /// The priority flood (Barnes et al. 2014) over the solver's 4-neighbour faces: each cell's
 /// spill level (the lowest surface from which water reaches the map's edge through faces,
-/// flat over a depression) and the neighbour it was reached from (towards the edge; -1 on
-/// the edge). D8's flood (ChannelMap) crosses diagonal passes the faces do not have.
+/// flat over a depression). D8's flood (ChannelMap) crosses diagonal passes the faces do not have.
 struct Flood4 {
     std::vector<double> level;
-    std::vector<int> from;
 };
 Flood4 flood4(const swe::ShallowWater& core, double sea_level) {
     const int nx = core.nx(), ny = core.ny();
     const size_t n = static_cast<size_t>(nx) * ny;
-    Flood4 f{std::vector<double>(n, 0.0), std::vector<int>(n, -1)};
+    Flood4 f{std::vector<double>(n, 0.0)};
     std::vector<uint8_t> done(n, 0);
     using Item = std::pair<double, int>;  // level, cell: lowest first, ties by index
     std::priority_queue<Item, std::vector<Item>, std::greater<>> open;
@@ -287,7 +296,6 @@ Flood4 flood4(const swe::ShallowWater& core, double sea_level) {
             const int q = b * nx + a;
             done[size_t(q)] = 1;
             f.level[size_t(q)] = std::max(core.bed(a, b), lv);
-            f.from[size_t(q)] = k;
             open.emplace(f.level[size_t(q)], q);
         }
     }
@@ -305,8 +313,32 @@ void SweSolver::fill_depressions(const std::vector<std::pair<int, int>>& starts)
     if (def_.rain > 0.0f && def_.rain_radius <= 0.0f && def_.rain_mask.empty()) {  // rain over the whole map fills every one
         for (int k = 0; k < nx * ny; ++k) seeds.push_back(k);
     } else {
-        for (const auto& [i, j] : starts)  // each source's route to the edge, through the spill points
-            for (int k = j * nx + i; k >= 0; k = f.from[size_t(k)]) seeds.push_back(k);
+        // Every cell the sources' water can reach: from a cell, the water runs to each
+        // neighbour whose flooded level is not higher (on the bed, or over a full lake), so
+        // any depression it reaches holds water at the steady state and must be full (the
+        // flood's own route to the edge is one such path, not always the one water takes:
+        // andes_peru's water ran past it into a 194 km^3 lake). It stops at the sea.
+        const double sea = std::isfinite(def_.sea_level) ? double(def_.sea_level) : -HUGE_VAL;
+        std::vector<uint8_t> reached(static_cast<size_t>(nx) * ny, 0);
+        for (const auto& [i, j] : starts)
+            if (!reached[size_t(j) * nx + i]) {
+                reached[size_t(j) * nx + i] = 1;
+                stack.push_back(j * nx + i);
+            }
+        while (!stack.empty()) {
+            const int k = stack.back();
+            stack.pop_back();
+            seeds.push_back(k);
+            const int i = k % nx, j = k / nx;
+            if (core_->bed(i, j) < sea) continue;
+            const int next[4][2] = {{i - 1, j}, {i + 1, j}, {i, j - 1}, {i, j + 1}};
+            for (const auto& [a, b] : next) {
+                const int q = b * nx + a;
+                if (a < 0 || b < 0 || a >= nx || b >= ny || reached[size_t(q)] || f.level[size_t(q)] > f.level[size_t(k)]) continue;
+                reached[size_t(q)] = 1;
+                stack.push_back(q);
+            }
+        }
     }
     // The head over a spill point that passes the sources' discharge (a broad-crested weir
     // one cell wide, q = 1.705 h^(3/2) m^2/s): each depression starts that much above its
@@ -401,8 +433,10 @@ std::vector<std::string> SweSolver::warnings() const {
     if (!mask_error_.empty()) w.push_back(mask_error_ + "; no rain falls");
     if (init_.ran && !init_.converged)
         w.push_back(fmt::format("swe.init: the steady spin-up stopped at its cap ({:.4g} s simulated, {} substeps) with "
-                                "outflow {:.3f} of inflow; raise swe.init_max_time",
-                                init_.simulated_s, init_.substeps, init_.outflow_over_inflow));
+                                "outflow {:.3f} of inflow; raise swe.init_max_time (the work is capped at {} substeps "
+                                "and {:.3g} cell updates)",
+                                init_.simulated_s, init_.substeps, init_.outflow_over_inflow, kSweInitMaxSubsteps,
+                                double(kSweInitMaxCellUpdates)));
     return w;
 }
 
