@@ -93,7 +93,7 @@ struct SweDef {
     SweInit init = SweInit::Dry;
     /// Steady spin-up: stops when |outflow + sunk - inflow| over a window is below this share
     /// of the inflow (and the storage's change too).
-    float init_tolerance = 0.02f;
+    float init_tolerance = 0.005f;
     /// Steady spin-up: simulated seconds at most; kSweAuto: kSweInitCrossings x the main
     /// channel's length over 0.5 m/s.
     float init_max_time = kSweAuto;

@@ -267,14 +267,16 @@ void SweSolver::spin_up() {
 namespace {
 /// The priority flood (Barnes et al. 2014) over the solver's 4-neighbour faces: each cell's
 /// spill level (the lowest surface from which water reaches the map's edge through faces,
-/// flat over a depression). D8's flood (ChannelMap) crosses diagonal passes the faces do not have.
+/// flat over a depression) and the neighbour it was reached from (towards the edge; -1 on
+/// the edge). D8's flood (ChannelMap) crosses diagonal passes the faces do not have.
 struct Flood4 {
     std::vector<double> level;
+    std::vector<int> from;
 };
 Flood4 flood4(const swe::ShallowWater& core, double sea_level) {
     const int nx = core.nx(), ny = core.ny();
     const size_t n = static_cast<size_t>(nx) * ny;
-    Flood4 f{std::vector<double>(n, 0.0)};
+    Flood4 f{std::vector<double>(n, 0.0), std::vector<int>(n, -1)};
     std::vector<uint8_t> done(n, 0);
     using Item = std::pair<double, int>;  // level, cell: lowest first, ties by index
     std::priority_queue<Item, std::vector<Item>, std::greater<>> open;
@@ -296,73 +298,96 @@ Flood4 flood4(const swe::ShallowWater& core, double sea_level) {
             const int q = b * nx + a;
             done[size_t(q)] = 1;
             f.level[size_t(q)] = std::max(core.bed(a, b), lv);
+            f.from[size_t(q)] = k;
             open.emplace(f.level[size_t(q)], q);
         }
     }
     return f;
 }
+
+/// Every cell the water from `starts` can reach: from a cell, the water runs to each
+/// neighbour whose flooded level is not higher (on the bed, or over a full lake); it stops
+/// at the sea.
+std::vector<int> reachable(const Flood4& f, const swe::ShallowWater& core, const std::vector<std::pair<int, int>>& starts,
+                           double sea_level) {
+    const int nx = core.nx(), ny = core.ny();
+    std::vector<uint8_t> reached(static_cast<size_t>(nx) * ny, 0);
+    std::vector<int> cells, stack;
+    for (const auto& [i, j] : starts)
+        if (!reached[size_t(j) * nx + i]) {
+            reached[size_t(j) * nx + i] = 1;
+            stack.push_back(j * nx + i);
+        }
+    while (!stack.empty()) {
+        const int k = stack.back();
+        stack.pop_back();
+        cells.push_back(k);
+        const int i = k % nx, j = k / nx;
+        if (core.bed(i, j) < sea_level) continue;
+        const int next[4][2] = {{i - 1, j}, {i + 1, j}, {i, j - 1}, {i, j + 1}};
+        for (const auto& [a, b] : next) {
+            const int q = b * nx + a;
+            if (a < 0 || b < 0 || a >= nx || b >= ny || reached[size_t(q)] || f.level[size_t(q)] > f.level[size_t(k)]) continue;
+            reached[size_t(q)] = 1;
+            stack.push_back(q);
+        }
+    }
+    return cells;
+}
 }  // namespace
 
 void SweSolver::fill_depressions(const std::vector<std::pair<int, int>>& starts) {
     const int nx = water_.columns, ny = water_.rows;
-    const Flood4 f = flood4(*core_, std::isfinite(def_.sea_level) ? double(def_.sea_level) : -HUGE_VAL);
+    const double sea = std::isfinite(def_.sea_level) ? double(def_.sea_level) : -HUGE_VAL;
+    const Flood4 f = flood4(*core_, sea);
     // Depression cells: the spill level more than a millimetre above the bed.
     const auto low = [&](int k) { return f.level[size_t(k)] - core_->bed(k % nx, k / nx) > 1e-3; };
-    std::vector<uint8_t> seen(static_cast<size_t>(nx) * ny, 0);
-    std::vector<int> seeds, stack;
-    if (def_.rain > 0.0f && def_.rain_radius <= 0.0f && def_.rain_mask.empty()) {  // rain over the whole map fills every one
+    // Which depressions hold water at the steady state: every one under rain over the whole
+    // map; else every one the sources' water can reach (the flood's own route to the edge is
+    // one such path, not always the one water takes: andes_peru's water ran past it).
+    const bool rain_everywhere = def_.rain > 0.0f && def_.rain_radius <= 0.0f && def_.rain_mask.empty();
+    std::vector<int> seeds;
+    if (rain_everywhere)
         for (int k = 0; k < nx * ny; ++k) seeds.push_back(k);
-    } else {
-        // Every cell the sources' water can reach: from a cell, the water runs to each
-        // neighbour whose flooded level is not higher (on the bed, or over a full lake), so
-        // any depression it reaches holds water at the steady state and must be full (the
-        // flood's own route to the edge is one such path, not always the one water takes:
-        // andes_peru's water ran past it into a 194 km^3 lake). It stops at the sea.
-        const double sea = std::isfinite(def_.sea_level) ? double(def_.sea_level) : -HUGE_VAL;
-        std::vector<uint8_t> reached(static_cast<size_t>(nx) * ny, 0);
-        for (const auto& [i, j] : starts)
-            if (!reached[size_t(j) * nx + i]) {
-                reached[size_t(j) * nx + i] = 1;
-                stack.push_back(j * nx + i);
-            }
-        while (!stack.empty()) {
-            const int k = stack.back();
-            stack.pop_back();
-            seeds.push_back(k);
-            const int i = k % nx, j = k / nx;
-            if (core_->bed(i, j) < sea) continue;
-            const int next[4][2] = {{i - 1, j}, {i + 1, j}, {i, j - 1}, {i, j + 1}};
-            for (const auto& [a, b] : next) {
-                const int q = b * nx + a;
-                if (a < 0 || b < 0 || a >= nx || b >= ny || reached[size_t(q)] || f.level[size_t(q)] > f.level[size_t(k)]) continue;
-                reached[size_t(q)] = 1;
-                stack.push_back(q);
-            }
-        }
-    }
-    // The head over a spill point that passes the sources' discharge (a broad-crested weir
-    // one cell wide, q = 1.705 h^(3/2) m^2/s): each depression starts that much above its
-    // spill level, so it spills at once instead of approaching the rate over weeks at km cells.
+    else
+        seeds = reachable(f, *core_, starts, sea);
+    // Those on each source's route to the edge (through the spill points) pass its whole
+    // discharge: they start at the head over a spill point that passes it (a broad-crested
+    // weir one cell wide, q = 1.705 h^(3/2) m^2/s), so they spill at once instead of
+    // approaching the rate over weeks at km cells; the others take a share and start at
+    // their spill level (with the whole head, a noisy map's many side pits drained for hours).
+    std::vector<uint8_t> route(static_cast<size_t>(nx) * ny, rain_everywhere ? 1 : 0);
+    for (const auto& [i, j] : starts)
+        for (int k = j * nx + i; k >= 0; k = f.from[size_t(k)]) route[size_t(k)] = 1;
     double q = discharge_;
     for (const SweSource& s : def_.sources) q += s.discharge;
     const double head = std::pow(q / (1.705 * water_.spacing), 2.0 / 3.0);
+    std::vector<uint8_t> seen(static_cast<size_t>(nx) * ny, 0);
+    std::vector<int> stack, lake;
     for (const int k0 : seeds) {
         if (seen[size_t(k0)] || !low(k0)) continue;
         seen[size_t(k0)] = 1;
         stack.assign(1, k0);
-        while (!stack.empty()) {  // one depression (4-connected), full to its spill level
+        lake.clear();
+        bool on_route = false;
+        while (!stack.empty()) {  // one depression (4-connected)
             const int k = stack.back();
             stack.pop_back();
+            lake.push_back(k);
+            on_route = on_route || route[size_t(k)];
             const int i = k % nx, j = k / nx;
-            const double h = f.level[size_t(k)] + head - core_->bed(i, j);
-            if (h > core_->depth(i, j)) core_->set_state(i, j, h);
             const int next[4][2] = {{i - 1, j}, {i + 1, j}, {i, j - 1}, {i, j + 1}};
             for (const auto& [a, b] : next) {
-                const int q = b * nx + a;
-                if (a < 0 || b < 0 || a >= nx || b >= ny || seen[size_t(q)] || !low(q)) continue;
-                seen[size_t(q)] = 1;
-                stack.push_back(q);
+                const int n = b * nx + a;
+                if (a < 0 || b < 0 || a >= nx || b >= ny || seen[size_t(n)] || !low(n)) continue;
+                seen[size_t(n)] = 1;
+                stack.push_back(n);
             }
+        }
+        for (const int k : lake) {  // full to its spill level (plus the head on the route)
+            const int i = k % nx, j = k / nx;
+            const double h = f.level[size_t(k)] + (on_route ? head : 0.0) - core_->bed(i, j);
+            if (h > core_->depth(i, j)) core_->set_state(i, j, h);
         }
     }
 }
