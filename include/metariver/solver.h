@@ -7,10 +7,12 @@
 
 #include <metariver/core.h>
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace mr {
@@ -49,8 +51,20 @@ struct HeightfieldWater {
     float spacing = 1.0f;       ///< metres between neighbouring samples (Terrain::area_scale)
     std::vector<float> depth;   ///< metres of water above the bed per sample, >= 0; 0: dry
     std::vector<Vec3> velocity; ///< depth-averaged velocity per sample, m/s; empty: at rest
+    /// Optional, one per row (empty: not known): row i's samples outside columns
+    /// wet_first[i]..wet_last[i] have depth 0 and velocity 0 (wet_first > wet_last: the
+    /// whole row). A solver that keeps them (swe) lets the readers that use them (the
+    /// mesh, the foam) cost the wet cells, not the grid. Whoever changes depth keeps them true.
+    std::vector<int> wet_first, wet_last;
 
     size_t size() const { return static_cast<size_t>(rows) * static_cast<size_t>(columns); }
+    /// Row i's columns [first, second] outside which it is dry, within [0, columns - 1]
+    /// (first > second: all dry): the spans where they are there, else the whole row.
+    std::pair<int, int> wet_columns(int i) const {
+        if (wet_first.size() != static_cast<size_t>(rows) || wet_last.size() != static_cast<size_t>(rows))
+            return {0, columns - 1};
+        return {std::max(wet_first[size_t(i)], 0), std::min(wet_last[size_t(i)], columns - 1)};
+    }
 };
 
 /// What the Simulation drives: one implementation per `solver` scene value (the paper's

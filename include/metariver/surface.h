@@ -87,10 +87,14 @@ struct SurfaceWorkspace {
 };
 
 /// Scratch of append_heightfield_surface, reused by the caller (no allocation once warm).
+/// vertex and crossing are all none between calls (each call clears what it set), so a
+/// call's cost follows the wet samples, not the grid.
 struct HeightfieldScratch {
     std::vector<uint32_t> vertex;    ///< per sample: its vertex, or none
     std::vector<uint32_t> crossing;  ///< 3 per sample: the shoreline vertex on its +x, +z and diagonal edge
     std::vector<float> level;        ///< per sample: the water's level (wet) or the ring's (below)
+    std::vector<int> first, last;            ///< per row: its wet columns (first > last: none)
+    std::vector<int> ring_first, ring_last;  ///< per row: the wet columns of it and its neighbours, +-1
 };
 
 /// Water given as depths over a heightfield (a solver's HeightfieldWater on the
@@ -116,10 +120,15 @@ struct HeightfieldScratch {
 /// the sizes do not match rows x columns or either is < 2.
 /// `skip_cells` (optional, (rows - 1) x (columns - 1), row-major): a cell whose entry is
 /// non-zero gets no triangles (join_heightfield_to_field's cells, drawn by the field).
+/// `wet_first` and `wet_last` (optional, one per row: HeightfieldWater's) say where each
+/// row may be wet (depth 0 outside): the call then reads only those columns and the ring
+/// around them, and costs the wet samples, not the grid (without them it reads each row's
+/// depths once to find its wet columns); the mesh is the same either way.
 void append_heightfield_surface(std::span<const Vec3> bed, std::span<const float> depth, int rows, int columns,
                                 SurfaceMesh& out, HeightfieldScratch* scratch = nullptr,
                                 std::span<const Vec3> velocity = {}, std::vector<Vec3>* vertex_velocity = nullptr,
-                                std::span<const uint8_t> skip_cells = {});
+                                std::span<const uint8_t> skip_cells = {}, std::span<const int> wet_first = {},
+                                std::span<const int> wet_last = {});
 
 /// Where a heightfield's water and a particle field meet: join_heightfield_to_field's
 /// result, reused from frame to frame.

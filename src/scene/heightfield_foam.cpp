@@ -121,8 +121,9 @@ void HeightfieldFoam::push(const Vec3& position, const Vec3& velocity, float lif
 
 void HeightfieldFoam::emit(const HeightfieldWater& w, std::span<const Vec3> bed, float dt, uint64_t frame) {
     const size_t cap = size_t(std::max(def_.max_particles, 0));
-    for (int i = 1; i + 1 < w.rows; ++i)
-        for (int j = 1; j + 1 < w.columns; ++j) {
+    for (int i = 1; i + 1 < w.rows; ++i) {
+        const auto [lo, hi] = w.wet_columns(i);  // dry cells emit nothing
+        for (int j = std::max(lo, 1); j <= std::min(hi, w.columns - 2); ++j) {
             const float rate = emission_rate(w, bed, i, j);
             if (rate <= 0.0f) continue;
             const uint64_t cell = uint64_t(i) * uint64_t(w.columns) + uint64_t(j);
@@ -137,6 +138,7 @@ void HeightfieldFoam::emit(const HeightfieldWater& w, std::span<const Vec3> bed,
                 push(Vec3(x, s.level + kLift, z), s.velocity, life);
             }
         }
+    }
 }
 
 }  // namespace mr

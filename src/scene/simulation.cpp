@@ -450,7 +450,7 @@ void Simulation::Impl::append_heightfield(const HeightfieldWater& w) {
     const auto t0 = Clock::now();
     heightfield_velocity_.clear();
     append_heightfield_surface(terrain_.vertices(), w.depth, w.rows, w.columns, surface_, &heightfield_scratch_,
-                               w.velocity, &heightfield_velocity_, seam_.cell);
+                               w.velocity, &heightfield_velocity_, seam_.cell, w.wet_first, w.wet_last);
     timings_.surface_ms += ms_since(t0);
 }
 

@@ -106,6 +106,8 @@ SweSolver::SweSolver(const Terrain& terrain, const SweDef& def, Vec3 resolved_so
     water_.spacing = terrain.area_scale();
     water_.depth.assign(water_.size(), 0.0f);
     water_.velocity.assign(water_.size(), Vec3(0.0f));
+    water_.wet_first.assign(size_t(ny), nx);  // all dry
+    water_.wet_last.assign(size_t(ny), -1);
     core_ = std::make_unique<swe::ShallowWater>(nx, ny, water_.spacing, bed, core_def(def_, gravity > 0.0f && std::isfinite(gravity) ? gravity : 9.81));
     // The main channel from the source's cell (the drainage network's D8 path to the edge):
     // the river rule's slope and the spin-up's time cap.
@@ -405,10 +407,14 @@ bool SweSolver::set_params(const SweDef& def, Vec3 resolved_source) {
 }
 
 void SweSolver::publish() {
-    // The float view of the core's doubles (depth and depth-averaged velocity).
+    // The float view of the core's doubles (depth and depth-averaged velocity), row by row
+    // over the core's wet span and the one shown before (which may have dried): outside
+    // both, the view holds zeros already.
     float fastest = 0.0f;
-    for (int j = 0; j < water_.rows; ++j)
-        for (int i = 0; i < water_.columns; ++i) {
+    for (int j = 0; j < water_.rows; ++j) {
+        const auto [lo, hi] = core_->wet_span(j);
+        const int first = std::min(lo, water_.wet_first[size_t(j)]), last = std::max(hi, water_.wet_last[size_t(j)]);
+        for (int i = std::max(first, 0); i <= std::min(last, water_.columns - 1); ++i) {
             const size_t k = static_cast<size_t>(j) * water_.columns + i;
             const double h = core_->depth(i, j);
             water_.depth[k] = static_cast<float>(h);
@@ -418,6 +424,9 @@ void SweSolver::publish() {
                                         : Vec3(0.0f);
             fastest = std::max(fastest, glm::length(water_.velocity[k]));
         }
+        water_.wet_first[size_t(j)] = lo <= hi ? lo : water_.columns;
+        water_.wet_last[size_t(j)] = lo <= hi ? hi : -1;
+    }
     counters_.max_speed = fastest;
 }
 

@@ -7,6 +7,7 @@
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 
@@ -18,6 +19,37 @@ constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
 constexpr float kSnap = 0.05f;  // a cut this close to an edge's end (of its length) moves to the end
 constexpr float kFilm = 0.005f;  // metres: thinner water is drawn as dry (films left on slopes)
 
+/// The rows' wet columns: row i's samples with depth > kFilm lie in [first[i], last[i]]
+/// (first = columns, last = -1: none), narrowed from the caller's spans (a superset of
+/// the wet samples, hint_first/hint_last) or, without them, from a scan of the row. Then
+/// the region each row's work touches: ring_first/ring_last, the wet columns of the row and
+/// its two neighbours widened by one column (the wet samples and the ring around them).
+void wet_rows(std::span<const float> depth, int rows, int columns, std::span<const int> hint_first,
+              std::span<const int> hint_last, HeightfieldScratch& s) {
+    const bool hinted = hint_first.size() == size_t(rows) && hint_last.size() == size_t(rows);
+    s.first.resize(size_t(rows));
+    s.last.resize(size_t(rows));
+    for (int i = 0; i < rows; ++i) {
+        int a = hinted ? std::max(hint_first[size_t(i)], 0) : 0, b = hinted ? std::min(hint_last[size_t(i)], columns - 1) : columns - 1;
+        const float* d = depth.data() + size_t(i) * size_t(columns);
+        while (a <= b && !(d[a] > kFilm)) ++a;
+        while (b >= a && !(d[b] > kFilm)) --b;
+        s.first[size_t(i)] = a <= b ? a : columns;
+        s.last[size_t(i)] = a <= b ? b : -1;
+    }
+    s.ring_first.resize(size_t(rows));
+    s.ring_last.resize(size_t(rows));
+    for (int i = 0; i < rows; ++i) {
+        int a = columns, b = -1;
+        for (int r = std::max(i - 1, 0); r <= std::min(i + 1, rows - 1); ++r) {
+            a = std::min(a, s.first[size_t(r)]);
+            b = std::max(b, s.last[size_t(r)]);
+        }
+        s.ring_first[size_t(i)] = a <= b ? std::max(a - 1, 0) : columns;
+        s.ring_last[size_t(i)] = a <= b ? std::min(b + 1, columns - 1) : -1;
+    }
+}
+
 /// The water's level per sample: bed + depth where wet; on the ring (dry beside a wet
 /// sample, 8 neighbours) from L, the lowest of the wet neighbours' levels: L where the
 /// sample's bed is above it (the cut is the contour), else as far below the bed as L is
@@ -25,14 +57,13 @@ constexpr float kFilm = 0.005f;  // metres: thinner water is drawn as dry (films
 /// continuous in L. A dry sample lower than the water beside it (a front, a steep stream's
 /// bank) then ends the water part way to it, not at it (which drew teeth along such banks).
 /// The lowest, not the mean: upstream neighbours would lift the ring over the banks.
-/// Samples beyond the ring are never read.
-void water_levels(std::span<const Vec3> bed, std::span<const float> depth, int rows, int columns,
-                  std::vector<float>& level) {
-    level.resize(bed.size());
-    for (size_t k = 0; k < bed.size(); ++k) level[k] = bed[k].y + std::max(depth[k], 0.0f);
+/// Only the rows' ring regions are written (samples beyond the ring are never read).
+void water_levels(std::span<const Vec3> bed, std::span<const float> depth, int rows, int columns, HeightfieldScratch& s) {
+    s.level.resize(bed.size());
     for (int i = 0; i < rows; ++i)
-        for (int j = 0; j < columns; ++j) {
+        for (int j = s.ring_first[size_t(i)]; j <= s.ring_last[size_t(i)]; ++j) {
             const size_t k = size_t(i) * size_t(columns) + size_t(j);
+            s.level[k] = bed[k].y + std::max(depth[k], 0.0f);
             if (depth[k] > kFilm) continue;
             float lowest = std::numeric_limits<float>::max();
             for (int di = -1; di <= 1; ++di)
@@ -42,7 +73,7 @@ void water_levels(std::span<const Vec3> bed, std::span<const float> depth, int r
                     const size_t q = size_t(a) * size_t(columns) + size_t(b);
                     if (depth[q] > kFilm) lowest = std::min(lowest, bed[q].y + depth[q]);
                 }
-            if (lowest < std::numeric_limits<float>::max()) level[k] = bed[k].y - std::abs(lowest - bed[k].y);
+            if (lowest < std::numeric_limits<float>::max()) s.level[k] = bed[k].y - std::abs(lowest - bed[k].y);
         }
 }
 
@@ -127,7 +158,8 @@ private:
 
 void append_heightfield_surface(std::span<const Vec3> bed, std::span<const float> depth, int rows, int columns,
                                 SurfaceMesh& out, HeightfieldScratch* scratch, std::span<const Vec3> velocity,
-                                std::vector<Vec3>* vertex_velocity, std::span<const uint8_t> skip_cells) {
+                                std::vector<Vec3>* vertex_velocity, std::span<const uint8_t> skip_cells,
+                                std::span<const int> wet_first, std::span<const int> wet_last) {
     if (rows < 2 || columns < 2) return;
     const size_t n = size_t(rows) * size_t(columns), w = size_t(columns);
     if (bed.size() != n || depth.size() != n) return;
@@ -135,28 +167,40 @@ void append_heightfield_surface(std::span<const Vec3> bed, std::span<const float
     if (skip_cells.size() != size_t(rows - 1) * size_t(columns - 1)) skip_cells = {};
     HeightfieldScratch own;
     HeightfieldScratch& s = scratch ? *scratch : own;
-    water_levels(bed, depth, rows, columns, s.level);
-    s.vertex.assign(n, kNone);
-    s.crossing.assign(3 * n, kNone);
+    wet_rows(depth, rows, columns, wet_first, wet_last, s);
+    water_levels(bed, depth, rows, columns, s);
+    if (s.vertex.size() != n) s.vertex.assign(n, kNone);  // else all none since the last call
+    if (s.crossing.size() != 3 * n) s.crossing.assign(3 * n, kNone);
     const size_t first = out.positions.size();
     out.normals.resize(first, Vec3(0.0f, 1.0f, 0.0f));
     Builder build(bed, depth, columns, out, s, velocity, vertex_velocity);
-    for (size_t k = 0; k < n; ++k)  // the wet samples' vertices first, in sample order
-        if (build.wet(k)) build.sample_vertex(k, k);
+    for (int i = 0; i < rows; ++i)  // the wet samples' vertices first, in sample order
+        for (int j = s.first[size_t(i)]; j <= s.last[size_t(i)]; ++j)
+            if (const size_t k = size_t(i) * w + size_t(j); build.wet(k)) build.sample_vertex(k, k);
     // Two triangles per cell, (c, c + w, c + 1) and (c + 1, c + w, c + w + 1) as the
-    // terrain's, each cut to its wet part.
-    for (int i = 0; i + 1 < rows; ++i)
-        for (int j = 0; j + 1 < columns; ++j) {
+    // terrain's, each cut to its wet part: the cells of rows i and i + 1's wet columns.
+    for (int i = 0; i + 1 < rows; ++i) {
+        const int lo = std::max(std::min(s.first[size_t(i)], s.first[size_t(i) + 1]) - 1, 0);
+        const int hi = std::min(std::max(s.last[size_t(i)], s.last[size_t(i) + 1]), columns - 2);
+        for (int j = lo; j <= hi; ++j) {
             const size_t c = size_t(i) * w + size_t(j);
             if (!skip_cells.empty() && skip_cells[size_t(i) * (w - 1) + size_t(j)]) continue;
             if (!build.wet(c) && !build.wet(c + 1) && !build.wet(c + w) && !build.wet(c + w + 1)) continue;
             build.triangle(c, c + w, c + 1);
             build.triangle(c + 1, c + w, c + w + 1);
         }
+    }
     for (size_t v = first; v < out.normals.size(); ++v) {
         const float len = glm::length(out.normals[v]);
         out.normals[v] = len > 0.0f ? out.normals[v] / len : Vec3(0.0f, 1.0f, 0.0f);
     }
+    // Every vertex and cut lies on a ring region's sample: clear them there for the next call.
+    for (int i = 0; i < rows; ++i)
+        for (int j = s.ring_first[size_t(i)]; j <= s.ring_last[size_t(i)]; ++j) {
+            const size_t k = size_t(i) * w + size_t(j);
+            s.vertex[k] = kNone;
+            std::fill_n(s.crossing.begin() + std::ptrdiff_t(3 * k), 3, kNone);
+        }
 }
 
 }  // namespace mr

@@ -123,7 +123,7 @@ double ShallowWater::volume() const {
     double v = 0.0;
     for (int j = 0; j < ny_; ++j) {
         double row = 0.0;
-        for (int i = 0; i < nx_; ++i) row += h_[at(i, j)];
+        for (int i = wet_lo_[j]; i <= wet_hi_[j]; ++i) row += h_[at(i, j)];  // 0 elsewhere
         v += row;
     }
     return v * dx_ * dx_;
@@ -143,7 +143,7 @@ MassBalance ShallowWater::balance() const {
 double ShallowWater::max_wave_speed() const {
     double s = 0.0;
     for (int j = 0; j < ny_; ++j)
-        for (int i = 0; i < nx_; ++i) {
+        for (int i = wet_lo_[j]; i <= wet_hi_[j]; ++i) {  // dry elsewhere
             const size_t k = at(i, j);
             if (h_[k] <= def_.dry_depth) continue;
             const double c = std::sqrt(def_.gravity * h_[k]);

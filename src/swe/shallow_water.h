@@ -23,6 +23,7 @@
 
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <vector>
 
 namespace mr::swe {
@@ -125,7 +126,12 @@ public:
     MassBalance balance() const;
     /// Starts the balance from the current state.
     void balance_reset();
-    /// Sum of depth x cell area, m^3 (in row order: the same on any number of threads).
+    /// Row j's wet columns (0 <= j < ny): every cell of the row outside [first, second] has
+    /// depth 0 (first > second: the whole row is dry). After a step the span is the wet
+    /// cells' own; set_state(), exchange() and the sources only widen it until the next step.
+    std::pair<int, int> wet_span(int j) const { return {wet_lo_[j], wet_hi_[j]}; }
+    /// Sum of depth x cell area, m^3 (in row order: the same on any number of threads),
+    /// over the wet spans (the dry rest adds exact zeros).
     double volume() const;
     /// Fastest wave |u| + sqrt(g h) over wet cells, m/s.
     double max_wave_speed() const;

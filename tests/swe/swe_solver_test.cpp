@@ -5,7 +5,11 @@
 #include <metariver/scene_keys.h>
 #include <metariver/swe_solver.h>
 
+#include "shallow_water.h"
+
 #include <gtest/gtest.h>
+
+#include <glm/geometric.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -36,6 +40,46 @@ TEST(SweSolver, ASourceOnTheValleyFillsCellsTheSimulationMeshes) {
     EXPECT_GE(s.counters().substeps, 120u);  // at least one step a frame
     EXPECT_GT(s.counters().cell_updates, 0u);
     EXPECT_EQ(s.particles().size(), 0u);
+}
+
+TEST(SweSolver, ItsViewIsTheCoresStateWithEachRowsWetColumnsThroughWettingAndDrying) {
+    // A dam break on the valley, a pour and a push: the published view (written over the
+    // rows' wet spans, old and new, only) holds the core's depth and velocity in every
+    // sample, zeros outside its rows' wet columns, and the fastest speed among them.
+    SceneDef d = swe_scene(0.0f);
+    d.swe.initial_level = 13.0f;
+    d.swe.dam_z = 50.0f;
+    auto sim = Simulation::create(d);
+    ASSERT_TRUE(sim.ok()) << sim.error().message;
+    Simulation& s = *sim.value();
+    const auto& solver = dynamic_cast<const SweSolver&>(s.solver());
+    const swe::ShallowWater& core = solver.core();
+    const HeightfieldWater& w = *s.heightfield();
+    ASSERT_EQ(w.wet_first.size(), size_t(w.rows));
+    ASSERT_EQ(w.wet_last.size(), size_t(w.rows));
+    int dried = 0;
+    for (int f = 0; f < 240; ++f) {
+        if (f == 60) s.pour(Vec3(w.origin.x + 20.0f, 0.0f, w.origin.z + 20.0f), 40);
+        if (f == 90) s.push(Vec3(w.origin.x + 20.0f, 0.0f, w.origin.z + 20.0f), 4.0f, Vec3(2.0f, 0.0f, 0.0f));
+        s.step(1.0f / 60.0f);
+        float fastest = 0.0f;
+        for (int i = 0; i < w.rows; ++i) {
+            const auto [first, last] = w.wet_columns(i);
+            for (int j = 0; j < w.columns; ++j) {
+                const size_t k = size_t(i) * size_t(w.columns) + size_t(j);
+                const double h = core.depth(j, i);
+                const bool moving = h > core.def().dry_depth;
+                const Vec3 u = moving ? Vec3(float(core.discharge_x(j, i) / h), 0.0f, float(core.discharge_y(j, i) / h)) : Vec3(0.0f);
+                ASSERT_EQ(w.depth[k], float(h)) << f << ": " << i << ", " << j;
+                ASSERT_EQ(w.velocity[k], u) << f << ": " << i << ", " << j;
+                if (j < first || j > last) ASSERT_EQ(w.depth[k], 0.0f) << f << ": " << i << ", " << j;
+                fastest = std::max(fastest, glm::length(u));
+                dried += h == 0.0 && j >= first && j <= last;  // dry inside a span: written as zeros
+            }
+        }
+        ASSERT_EQ(solver.counters().max_speed, fastest) << f;
+    }
+    EXPECT_GT(dried, 0);  // spans with dry samples in them (the view wrote their zeros)
 }
 
 TEST(SweSolver, DischargeAndRainAreLiveEditsTheInitialLakeARebuild) {
