@@ -30,6 +30,12 @@ struct SceneView {
     /// heightfield's water: append_heightfield_surface's vertex_velocity), m/s; the
     /// vertices before them take theirs from the particles. Empty: all from the particles.
     std::span<const Vec3> surface_velocity;
+    /// For the vertices before those (the particles' surface), when the producer joined a
+    /// grid's water to it (the hybrid; seam_grid_velocities in surface.h): xyz the grid's
+    /// velocity under the vertex, w the grid's share there (0 .. 1); the vertex takes
+    /// w * xyz + (1 - w) * the particles'. Empty (or not one per such vertex): the
+    /// particles' alone.
+    std::span<const glm::vec4> surface_grid_velocity;
     /// The rigid bodies in the water (their meshes and transforms); empty: none.
     std::span<const BodyState> bodies;
     /// Who made the view and at which of its frames: a reader that saw the same owner

@@ -10,6 +10,8 @@
 #include <metariver/field.h>
 #include <metariver/sparse_field.h>
 
+#include <glm/vec4.hpp>
+
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -137,9 +139,15 @@ struct HeightfieldSeam {
     /// and the heightfield mesh leaves the cell out; 0 elsewhere.
     std::vector<uint8_t> cell;
     size_t cells = 0;           ///< cells with cell = 1
+    /// Per column (i, k) of the field's samples (nx x nz, i fastest): 1 where the field got
+    /// the grid's term (some ball's field reaches the water's level there); 0 elsewhere.
+    std::vector<uint8_t> column;
+    size_t columns = 0;         ///< columns with column = 1
     void clear() {
         cell.clear();
         cells = 0;
+        column.clear();
+        columns = 0;
     }
 };
 
@@ -156,10 +164,27 @@ struct HeightfieldSeam {
 /// highest: the heightfield mesh leaves it out (append_heightfield_surface's skip_cells).
 /// Around those cells both are drawn, the field's surface on or over the heightfield's,
 /// and the field's ends at its stored blocks' edge, where the particles add (almost) 0.
+/// The term goes only into the columns where some ball's field (> 2 % of the threshold)
+/// reaches the band within width + one sample of the water's level (`seam.column`): where no
+/// ball is near the water's surface the heightfield draws it alone, at its own cost, and no
+/// flat water is drawn twice.
 /// `bed`, `depth`, rows and columns as append_heightfield_surface's (a regular grid).
 /// Nothing is joined (seam cleared) when the sizes do not match or the field is empty.
 void join_heightfield_to_field(std::span<const Vec3> bed, std::span<const float> depth, int rows, int columns,
                                float threshold, float width, SparseField& field, HeightfieldSeam& seam);
+
+/// The grid's part in the velocity of a joined field's vertices (the water's flow detail):
+/// per vertex, xyz the grid's velocity under it (its samples' `velocity` interpolated on the
+/// heightfield mesh's triangles, as the heightfield's own vertices' are) and w the grid's
+/// share of the field there, clamp(1 + (s - y) / width, 0, 1) with s as in
+/// join_heightfield_to_field: 1 on the flat water the term draws, falling to 0 up a drop's
+/// skirt. (0, 0, 0, 0) over dry or partly dry cells and beyond the grid. The vertex's
+/// velocity is then w * xyz + (1 - w) * the particles' (render::surface_velocities), so
+/// that the field's flat water flows as the heightfield around it does.
+/// `out` is resized to vertices.size(); all 0 when the sizes do not match rows x columns.
+void seam_grid_velocities(std::span<const Vec3> bed, std::span<const float> depth, std::span<const Vec3> velocity,
+                          int rows, int columns, float width, std::span<const Vec3> vertices,
+                          std::vector<glm::vec4>& out);
 
 /// extract_surface on a SparseField, block-parallel (oneTBB) and skipping blocks whose
 /// value range cannot cross the threshold. Gives the mesh extract_surface gives on

@@ -312,6 +312,11 @@ struct Renderer::Impl {
         const size_t from_particles = m.positions.size() - known;
         surface_velocities(std::span<const Vec3>(m.positions).first(from_particles), *view.particles, view.flow_radius,
                            flow_ws, scratch_velocity);
+        if (view.surface_grid_velocity.size() == from_particles)  // the grid's share (a joined heightfield's)
+            for (size_t i = 0; i < from_particles; ++i) {
+                const glm::vec4 g = view.surface_grid_velocity[i];
+                scratch_velocity[i] = g.w * Vec3(g) + (1.0f - g.w) * scratch_velocity[i];
+            }
         scratch_velocity.insert(scratch_velocity.end(), view.surface_velocity.end() - std::ptrdiff_t(known),
                                 view.surface_velocity.end());
         stats.flow_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

@@ -383,6 +383,7 @@ void Simulation::Impl::step(float frame_dt) {
     }
     // The surface from what the solver gives: particles, a heightfield, or both (one mesh).
     seam_.clear();
+    seam_velocity_.clear();
     if (const Particles* p = solver_->water_particles()) {
         build_particle_surface(*p);
     } else {
@@ -426,6 +427,10 @@ void Simulation::Impl::build_particle_surface(const Particles& p) {
         const auto ts = Clock::now();
         smooth_surface(surface_, def_.smoothing, smooth_ws_, &weights, &ground);
         timings_.smoothing_ms = ms_since(ts);
+        // The flat water the field draws flows as the grid's around it (the flow detail).
+        if (const HeightfieldWater* w = solver_->water_heightfield(); w && seam_.columns > 0)
+            seam_grid_velocities(terrain_.vertices(), w->depth, w->velocity, w->rows, w->columns,
+                                 kSeamWidth * def_.field.radius, surface_.positions, seam_velocity_);
         timings_.surface_ms = ms_since(t0);
         return;
     }

@@ -120,6 +120,7 @@ SceneView Simulation::view() const {
                      .foam = foam,
                      .flow_radius = flow_radius(impl_->def_),
                      .surface_velocity = impl_->heightfield_velocity_,
+                     .surface_grid_velocity = impl_->seam_velocity_,
                      .bodies = bodies(),
                      .owner = this,
                      .frame = frame()};
