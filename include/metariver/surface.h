@@ -173,6 +173,18 @@ struct HeightfieldSeam {
 void join_heightfield_to_field(std::span<const Vec3> bed, std::span<const float> depth, int rows, int columns,
                                float threshold, float width, SparseField& field, HeightfieldSeam& seam);
 
+/// Removes a joined field's triangles that lie under the water's surface, never seen (the
+/// heightfield's surface, or the field's own flat water over `seam.cell`, is in front of
+/// them from above): those whose three vertices lie over fully wet cells, more than 2 mm
+/// under the heightfield's level (where it is drawn) or 2 cm under the field's flat water
+/// (over seam.cell); the term's closing faces under the water, the flat water the
+/// heightfield covers, the balls inside the pool. Vertices no triangle uses are dropped
+/// (kept in order). `mesh` must be the field's surface alone (before the heightfield is
+/// appended); nothing happens when the sizes do not match or seam.columns is 0. `scratch`
+/// is reused from call to call.
+void drop_under_water(std::span<const Vec3> bed, std::span<const float> depth, int rows, int columns,
+                      const HeightfieldSeam& seam, SurfaceMesh& mesh, std::vector<uint32_t>& scratch);
+
 /// The grid's part in the velocity of a joined field's vertices (the water's flow detail):
 /// per vertex, xyz the grid's velocity under it (its samples' `velocity` interpolated on the
 /// heightfield mesh's triangles, as the heightfield's own vertices' are) and w the grid's

@@ -427,10 +427,13 @@ void Simulation::Impl::build_particle_surface(const Particles& p) {
         const auto ts = Clock::now();
         smooth_surface(surface_, def_.smoothing, smooth_ws_, &weights, &ground);
         timings_.smoothing_ms = ms_since(ts);
-        // The flat water the field draws flows as the grid's around it (the flow detail).
-        if (const HeightfieldWater* w = solver_->water_heightfield(); w && seam_.columns > 0)
+        // What lies under the water is never seen; the flat water the field draws flows as
+        // the grid's around it (the flow detail).
+        if (const HeightfieldWater* w = solver_->water_heightfield(); w && seam_.columns > 0) {
+            drop_under_water(terrain_.vertices(), w->depth, w->rows, w->columns, seam_, surface_, seam_scratch_);
             seam_grid_velocities(terrain_.vertices(), w->depth, w->velocity, w->rows, w->columns,
                                  kSeamWidth * def_.field.radius, surface_.positions, seam_velocity_);
+        }
         timings_.surface_ms = ms_since(t0);
         return;
     }

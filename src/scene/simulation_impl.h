@@ -40,6 +40,7 @@ struct Simulation::Impl {
     SurfaceMesh surface_;
     HeightfieldScratch heightfield_scratch_;  ///< append_heightfield_surface's
     std::vector<glm::vec4> seam_velocity_;  ///< the grid's velocity and share at the field's vertices (seam_grid_velocities)
+    std::vector<uint32_t> seam_scratch_;  ///< drop_under_water's
     HeightfieldSeam seam_;  ///< where the field draws the heightfield's water (hybrid: join_heightfield_to_field)
     std::vector<Vec3> heightfield_velocity_;  ///< the velocity at the heightfield's vertices (the mesh's last)
     FrameTimings timings_;

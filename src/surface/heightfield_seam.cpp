@@ -19,6 +19,11 @@ constexpr float kUnder = 0.005f;
 /// share of the threshold: a ball adding less lifts the water's surface by under 2 % of the
 /// term's width (5 mm in the presets), which the heightfield's own surface hides.
 constexpr float kReachShare = 0.02f;
+/// Metres under the heightfield's surface (drop_under_water) a vertex counts as hidden:
+/// 2 mm, where the field's own flat water lies 5 mm under it.
+constexpr float kHiddenUnder = 0.002f;
+/// Metres under the field's own flat water, over the cells it draws.
+constexpr float kHiddenDepth = 0.02f;
 
 /// A regular grid's water (bed + depth per sample): its level on the heightfield mesh's
 /// triangles, (c, c + w, c + 1) and (c + 1, c + w, c + w + 1), over fully wet cells.
@@ -169,6 +174,47 @@ void join_heightfield_to_field(std::span<const Vec3> bed, std::span<const float>
             seam.cell[size_t(i) * (w - 1) + size_t(j)] = 1;
             ++seam.cells;
         }
+}
+
+void drop_under_water(std::span<const Vec3> bed, std::span<const float> depth, int rows, int columns,
+                      const HeightfieldSeam& seam, SurfaceMesh& mesh, std::vector<uint32_t>& scratch) {
+    const Water water(bed, depth, rows, columns);
+    if (!water.ok() || seam.columns == 0) return;
+    const bool cells = seam.cell.size() == size_t(rows - 1) * size_t(columns - 1);
+    // Per vertex: kept (its new index) or under the water (kNone), first as 0 / 1.
+    constexpr uint32_t kHidden = 1, kNone = ~uint32_t{0};
+    std::vector<uint32_t>& map = scratch;
+    map.assign(mesh.positions.size(), 0);
+    for (size_t n = 0; n < mesh.positions.size(); ++n) {
+        const Vec3 p = mesh.positions[n];
+        float s = 0.0f;
+        if (!water.at(p.x, p.z, s)) continue;
+        const int j = std::min(int((p.x - water.x0()) / water.dx()), columns - 2);
+        const int i = std::min(int((p.z - water.z0()) / water.dz()), rows - 2);
+        const bool field_draws = cells && seam.cell[size_t(i) * size_t(columns - 1) + size_t(j)];
+        // Under the heightfield's surface (s + kUnder), or the field's own flat water (s).
+        if (p.y < s + (field_draws ? -kHiddenDepth : kUnder - kHiddenUnder)) map[n] = kHidden;
+    }
+    size_t t = 0;
+    for (size_t k = 0; k + 2 < mesh.indices.size(); k += 3) {
+        const uint32_t a = mesh.indices[k], b = mesh.indices[k + 1], c = mesh.indices[k + 2];
+        if (map[a] == kHidden && map[b] == kHidden && map[c] == kHidden) continue;
+        mesh.indices[t++] = a, mesh.indices[t++] = b, mesh.indices[t++] = c;
+    }
+    mesh.indices.resize(t);
+    std::fill(map.begin(), map.end(), kNone);
+    for (const uint32_t v : mesh.indices) map[v] = 0;
+    uint32_t next = 0;
+    for (size_t n = 0; n < map.size(); ++n) {
+        if (map[n] == kNone) continue;
+        map[n] = next;
+        mesh.positions[next] = mesh.positions[n];
+        mesh.normals[next] = mesh.normals[n];
+        ++next;
+    }
+    mesh.positions.resize(next);
+    mesh.normals.resize(next);
+    for (uint32_t& v : mesh.indices) v = map[v];
 }
 
 void seam_grid_velocities(std::span<const Vec3> bed, std::span<const float> depth, std::span<const Vec3> velocity,
