@@ -45,6 +45,13 @@ enum class SweInit {
 };
 std::string_view to_string(SweInit i);
 
+/// What the map's four edges are (swe.edges).
+enum class SweEdges {
+    Open,     ///< transmissive: the state outside copies the edge cell's
+    Outfall,  ///< a free overfall: the water leaves at its critical depth, nothing comes in
+};
+std::string_view to_string(SweEdges e);
+
 /// [[swe.sources]]: a discharge at a point or spread evenly over the cells of a line.
 enum class SweSourceShape { Point, Line };
 std::string_view to_string(SweSourceShape s);
@@ -91,6 +98,8 @@ struct SweDef {
     /// sample; a km-cell DEM runs hours a second).
     float time_scale = 1.0f;
     SweInit init = SweInit::Dry;
+    /// The map's edges (docs/shallow-water.md, "The map's edges").
+    SweEdges edges = SweEdges::Open;
     /// Steady spin-up: stops when |outflow + sunk - inflow| over a window is below this share
     /// of the inflow (and the storage's change too).
     float init_tolerance = 0.005f;

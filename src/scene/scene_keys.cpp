@@ -131,6 +131,7 @@ constexpr KeyWords kSeaWords{kNone, [](S d) { return std::isnan(d.swe.sea_level)
                                  if (i == 0) d.swe.sea_level = std::nanf("");
                              }};
 constexpr std::string_view kSweInits[] = {"dry", "steady"};
+constexpr std::string_view kSweEdges[] = {"open", "outfall"};
 constexpr std::string_view kSweShapes[] = {"point", "line"};
 constexpr KeyWords kLevelWords{kNone, [](S d) { return std::isnan(d.swe.initial_level) ? 0 : -1; },
                                [](SceneDef& d, int i) {
@@ -506,6 +507,12 @@ const SceneKey kKeys[] = {
              "0.5) until what leaves the map matches what comes in within swe.init_tolerance, or swe.init_max_time: frame 0 "
              "is the river.",
      .field = MR_FIELD(swe.init)},
+    {.name = "swe.edges", .type = K::Choice, .choices = kSweEdges, .readers = kSwe, .edit = E::Solver,
+     .help = "The map's four edges. open: transmissive (the state outside copies the edge cell; a slow river over a flat "
+             "floor running off the map drains slowly and pools); outfall: a free overfall (the map ends in a drop: the "
+             "water leaves at its critical depth, (8/27) sqrt(g) h^1.5 per metre of edge from a lake at rest, and "
+             "nothing comes in).",
+     .field = MR_FIELD(swe.edges)},
     {.name = "swe.init_tolerance", .type = K::Float, .range = closed(1e-6, 1), .readers = kSwe, .edit = E::Rebuild,
      .help = "swe.init = \"steady\": the spin-up stops when, over two windows of a fortieth of its time cap running, "
              "outflow + sinks differ from inflow + rain, and the stored volume changes, by at most this share of the inflow.",

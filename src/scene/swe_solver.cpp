@@ -16,6 +16,7 @@
 namespace mr {
 
 std::string_view to_string(SweInit i) { return i == SweInit::Steady ? "steady" : "dry"; }
+std::string_view to_string(SweEdges e) { return e == SweEdges::Outfall ? "outfall" : "open"; }
 std::string_view to_string(SweSourceShape s) { return s == SweSourceShape::Line ? "line" : "point"; }
 
 namespace {
@@ -31,7 +32,7 @@ swe::ShallowWaterDef core_def(const SweDef& d, double gravity) {
     c.dry_depth = std::max(static_cast<double>(d.dry_depth), 0.0);
     c.manning = std::max(static_cast<double>(d.manning), 0.0);
     c.second_order = d.second_order;
-    c.west = c.east = c.south = c.north = {swe::EdgeKind::Open};
+    c.west = c.east = c.south = c.north = {d.edges == SweEdges::Outfall ? swe::EdgeKind::Outfall : swe::EdgeKind::Open};
     return c;
 }
 

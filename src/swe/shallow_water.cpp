@@ -17,6 +17,8 @@ namespace mr::swe {
 namespace {
 
 constexpr int kDilate = 2;  // columns beyond the wet ones a step may touch (two stages)
+/// Metres an outfall's ghost bed lies below its edge cell's: deeper than any water.
+constexpr double kOutfallDrop = 1e6;
 
 template <class F>
 void for_rows(int ny, F&& f) {
@@ -163,6 +165,13 @@ void ShallowWater::fill_ghosts(std::vector<double>& h, std::vector<double>& hu, 
         switch (e.kind) {
         case EdgeKind::Wall: n[g] = -n[in]; break;
         case EdgeKind::Open: break;
+        case EdgeKind::Outfall:
+            // Dry and far below: the face's hydrostatic reconstruction cuts nothing from the
+            // inside, and at second order the edge cell's slope towards it is the inner one
+            // (minmod with a huge drop) or none (the surface rising to the edge).
+            z_[g] = z_[in] - kOutfallDrop;
+            h[g] = n[g] = t[g] = 0.0;
+            break;
         case EdgeKind::Discharge:
             n[g] = h[in] > def_.dry_depth ? sign * e.value : 0.0;
             t[g] = 0.0;

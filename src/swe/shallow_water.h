@@ -34,6 +34,12 @@ struct FinishRow;
 enum class EdgeKind {
     Wall,       ///< reflective: nothing crosses
     Open,       ///< transmissive: water leaves freely (its volume counted as outflow)
+    /// A free overfall: the map ends in a drop. The ghost is a dry cell far below the edge
+    /// cell, so that the face solves the wet/dry Riemann problem of Audusse's reconstruction:
+    /// the flow leaves at its critical depth (a lake at rest drains at (8/27) sqrt(g) h^1.5
+    /// per metre of edge) and nothing ever flows in. Counted as outflow.
+    Outfall,
+    // The inflow kinds last (update_spans: the whole grid is active).
     Discharge,  ///< inflow of `value` m^2/s per metre of edge (depth extrapolated)
     Depth,      ///< the depth outside held at `value` metres (velocity extrapolated)
 };

@@ -395,3 +395,78 @@ TEST(ShallowWater, EveryCellOutsideARowsWetSpanIsDryAndTheVolumeIsTheWholeGridsS
         EXPECT_GE(dried, 2u) << second;  // the sink emptied its cell, the cell set dry (films elsewhere stay > 0)
     }
 }
+
+namespace {
+
+/// A channel 3 cells wide between walls, flat bed, a lake h0 deep against an outfall at the
+/// east end; the volume that leaves from t0 to t1 seconds per metre of edge and second.
+double outfall_rate(bool second, double h0, double t0, double t1) {
+    const int nx = 400, ny = 3;
+    const std::vector<double> z(static_cast<size_t>(nx) * ny, 0.0);
+    ShallowWaterDef def;
+    def.second_order = second;
+    def.east = {EdgeKind::Outfall};
+    ShallowWater w(nx, ny, 1.0, z, def);
+    for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i) w.set_state(i, j, h0);
+    w.balance_reset();
+    w.advance(t0);
+    const double out0 = w.balance().outflow;
+    w.advance(t1 - t0);
+    const auto b = w.balance();
+    EXPECT_EQ(b.inflow, 0.0);
+    EXPECT_LT(std::abs(b.error()), 1e-12 * b.initial);
+    return (b.outflow - out0) / ((t1 - t0) * ny);
+}
+
+}  // namespace
+
+TEST(ShallowWater, OutfallDrainsALakeAtItsCriticalDepth) {
+    // A lake at rest against a free overfall: the rarefaction leaves the edge at the critical
+    // state h = 4/9 h0, u = sqrt(g h) (Ritter's dam break at x = 0), q = (8/27) sqrt(g) h0^1.5,
+    // until the wave reflected from the far wall (400 m at 3.1 m/s) comes back.
+    const double g = 9.81, h0 = 1.0, q = 8.0 / 27.0 * std::sqrt(g) * std::pow(h0, 1.5);
+    for (bool second : {false, true}) {
+        const double measured = outfall_rate(second, h0, 20.0, 100.0);
+        EXPECT_NEAR(measured / q, 1.0, 0.01) << "second order: " << second << ", q " << measured << " (critical " << q << ")";
+    }
+}
+
+TEST(ShallowWater, OutfallLeavesALakeBehindARimAtRest) {
+    // Well balanced away from the edge: a lake over bumps held by a rim two cells before an
+    // outfall stays at rest to round-off, and nothing leaves (the cells beyond the rim dry).
+    const int n = 48;
+    std::vector<double> z(static_cast<size_t>(n) * n);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i)
+            z[static_cast<size_t>(j) * n + i] = i == n - 3 ? 2.0 : 0.3 * std::sin(0.4 * i) * std::cos(0.3 * j) - 0.01 * i;
+    for (bool second : {false, true}) {
+        ShallowWaterDef def;
+        def.second_order = second;
+        def.west = def.south = def.north = {EdgeKind::Wall};
+        def.east = {EdgeKind::Outfall};
+        ShallowWater w(n, n, 1.0, z, def);
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n - 3; ++i) w.set_state(i, j, 1.0 - w.bed(i, j));
+        w.balance_reset();
+        for (int f = 0; f < 120; ++f) w.advance(1.0 / 30.0);
+        double fastest = 0.0;
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) fastest = std::max({fastest, std::abs(w.discharge_x(i, j)), std::abs(w.discharge_y(i, j))});
+        EXPECT_LT(fastest, 1e-12) << "second order: " << second;
+        EXPECT_EQ(w.balance().outflow, 0.0) << "second order: " << second;
+    }
+}
+
+TEST(ShallowWater, MassBalanceHoldsWithOutfallEdges) {
+    ShallowWater w = valley(64, 50e-3 / 3600.0);
+    ShallowWaterDef def = w.def();
+    def.west = def.east = def.south = def.north = {EdgeKind::Outfall};
+    w.set_def(def);
+    for (int f = 0; f < 600; ++f) w.advance(1.0 / 60.0);
+    const auto b = w.balance();
+    EXPECT_GT(b.outflow, 0.0);
+    EXPECT_NEAR(b.inflow, 5.0 * w.time(), 1e-9 * b.inflow);  // the source only: an outfall lets nothing in
+    EXPECT_LT(std::abs(b.error()), 1e-9 * (b.inflow + b.rain));
+    EXPECT_EQ(w.stats().clipped, 0u);
+}
