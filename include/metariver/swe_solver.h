@@ -98,8 +98,9 @@ struct SweDef {
     /// sample; a km-cell DEM runs hours a second).
     float time_scale = 1.0f;
     SweInit init = SweInit::Dry;
-    /// The map's edges (docs/shallow-water.md, "The map's edges").
-    SweEdges edges = SweEdges::Open;
+    /// The map's edges (docs/shallow-water.md, "The map's edges"): an outfall by default (an
+    /// open edge left rivers over flat floors pooling against it).
+    SweEdges edges = SweEdges::Outfall;
     /// Steady spin-up: stops when |outflow + sunk - inflow| over a window is below this share
     /// of the inflow (and the storage's change too).
     float init_tolerance = 0.005f;

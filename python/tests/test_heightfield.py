@@ -11,7 +11,8 @@ from conftest import valley
 
 def test_a_still_lake_reads_back_as_depth_over_the_bed():
     h = valley(50, 30)
-    toml = {"solver": "swe", "swe": {"initial_level": 4.0}, "terrain": {"condition": "none"}}
+    # open edges: the lake reaches the map's edge, where an outfall (the default) would drain it
+    toml = {"solver": "swe", "swe": {"initial_level": 4.0, "edges": "open"}, "terrain": {"condition": "none"}}
     with metariver.World(heights=h, area_scale=2.0, height_scale=10.0, toml=toml, threads=2) as w:
         w.step(frames=5)
         g = w.heightfield()

@@ -14,7 +14,7 @@ namespace {
 /// A still lake up to 13 m on the default valley.
 mr_world_desc lake_desc() {
     mr_world_desc d = mr_world_desc_default();
-    d.scene_toml = "solver = \"swe\"\n[swe]\ninitial_level = 13.0\n";
+    d.scene_toml = "solver = \"swe\"\n[swe]\ninitial_level = 13.0\nedges = \"open\"\n";  // at rest: the lake reaches the valley's edge
     return d;
 }
 
