@@ -208,8 +208,9 @@ TEST(HeightfieldSurface, TheWetRowsMeshIsTheFullScansOnRandomPatternsAndOddSizes
     HeightfieldScratch reused;
     const std::pair<int, int> sizes[] = {{2, 2}, {2, 9}, {9, 2}, {7, 13}, {31, 17}, {16, 16}, {40, 3}};
     int wet_meshes = 0;
-    for (const auto& [rows, columns] : sizes)
+    for (const auto& size : sizes)
         for (int pattern = 0; pattern < 12; ++pattern) {
+            const int rows = size.first, columns = size.second;  // not a structured binding: clang 14 cannot capture one
             const auto b = bed(rows, columns, [&](int, int) { return 2.0f * next(); });
             const size_t n = b.size();
             std::vector<float> depth(n, 0.0f);
