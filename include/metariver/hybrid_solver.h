@@ -88,6 +88,7 @@ public:
     const HybridDef& def() const { return def_; }
     const HybridStats& stats() const { return stats_; }
     const SweSolver& grid() const { return *grid_; }
+    SweSolver& grid() { return *grid_; }
     const PbfSolver& particles() const { return *pbf_; }
     /// One particle's volume, m^3 (pbf.spacing^3).
     double particle_volume() const { return particle_volume_; }

@@ -33,7 +33,8 @@ extern "C" {
 
 /* The API this header describes; mr_api_version() is the library's (same major: compatible). */
 #define MR_API_VERSION_MAJOR 1
-#define MR_API_VERSION_MINOR 2 /* 1: bodies (mr_world_add_body & co); 2: the shallow-water grid (mr_world_heightfield) */
+#define MR_API_VERSION_MINOR 3 /* 1: bodies (mr_world_add_body & co); 2: the shallow-water grid (mr_world_heightfield);
+                                 3: the grid's rain per cell and volumes (mr_world_set_rain, mr_world_water_balance) */
 #define MR_API_VERSION ((MR_API_VERSION_MAJOR << 16) | MR_API_VERSION_MINOR)
 
 typedef enum mr_status {
@@ -159,6 +160,32 @@ MR_API mr_status mr_world_heightfield(const mr_world* world, mr_heightfield_info
  * MR_ERROR_BUFFER_TOO_SMALL, nothing written). */
 MR_API mr_status mr_world_copy_heightfield(const mr_world* world, float* depth, float* velocity, float* bed,
                                            size_t capacity);
+
+/* Rain per cell on the grid (solver = "swe" or "hybrid"), in mm/h: mm_per_h[row * columns +
+ * column] as mr_world_copy_heightfield, count = rows * columns values, each in [0, 10000]
+ * (NaN refused). It replaces the scene's swe.rain, rain_center, rain_radius and rain_mask
+ * until cleared (mm_per_h NULL, count 0: the scene's rain again) and outlives live edits
+ * (mr_world_apply_toml); it is not part of the scene (mr_world_scene_toml). A 0..1 mask
+ * times a rate is mask[k] * rate; a storm moved every frame is one call a frame. Copied;
+ * O(cells). Refused (nothing
+ * changed): a wrong count (MR_ERROR_INVALID_ARGUMENT naming count and the grid's size), a
+ * bad value (naming mm_per_h[k], its row and column), a particle solver (UNSUPPORTED). */
+MR_API mr_status mr_world_set_rain(mr_world* world, const float* mm_per_h, size_t count);
+/* The grid's volumes, m^3 since frame 0 (after swe.init's spin-up). */
+typedef struct mr_water_balance {
+    double initial;     /* in the grid at frame 0 (a lake, the steady river) */
+    double inflow;      /* the sources' discharge and what mr_world_pour poured */
+    double rain;        /* rained */
+    double outflow;     /* left over the map's edges */
+    double sunk;        /* taken by [[swe.sinks]] and the sea (swe.sea_level) */
+    double exchanged;   /* net volume the hybrid's particles gave the grid (negative: took) */
+    double stored;      /* in the grid now */
+    double error;       /* initial + inflow + rain + exchanged - outflow - sunk - stored: round-off */
+    double simulated_s; /* the grid's simulated seconds since frame 0 (frame_dt x swe.time_scale, summed) */
+    uint64_t substeps;  /* time steps taken under the CFL limit since frame 0 */
+    int32_t rain_set;   /* 1 while mr_world_set_rain's rates replace the scene's rain */
+} mr_water_balance;
+MR_API mr_status mr_world_water_balance(const mr_world* world, mr_water_balance* out);
 
 /* The resolved scene as TOML (what `metariver scene` prints): writes at most capacity
  * bytes including the terminating NUL; *length: the text's length without it

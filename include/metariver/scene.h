@@ -496,6 +496,13 @@ public:
     const Particles& particles() const;
     /// The solver's heightfield water; null for a solver whose water is particles only.
     const HeightfieldWater* heightfield() const;
+    /// The shallow-water grid: the solver itself (solver "swe") or the hybrid's; null for
+    /// a solver whose water is particles only. Its balance() are the grid's volumes.
+    const SweSolver* grid() const;
+    /// Rain per cell over the grid in mm/h (SweSolver::set_rain: rows x columns values in
+    /// [0, 1e4], row-major; empty: the scene's swe.rain keys again). Error naming `solver`
+    /// for a solver without a grid, or `mm_per_h`; nothing changed then.
+    Status set_rain(std::span<const float> mm_per_h);
     /// The registry entry of this scene's solver (a copy, taken at create()).
     const SolverEntry& solver_entry() const;
     /// The solver itself (read-only: a solver's own measurements, e.g. SweSolver::balance()).

@@ -12,6 +12,7 @@
 
 #include <cmath>
 #include <memory>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -174,6 +175,15 @@ public:
     size_t push(const Vec3& center, float radius, const Vec3& velocity) override;
     void terrain_edited(const Terrain& terrain, int i0, int i1, int j0, int j1) override;
 
+    /// Rain per cell set at run time (Simulation::set_rain, the C API's mr_world_set_rain):
+    /// mm/h, row-major like HeightfieldWater (rows x columns values, each finite in
+    /// [0, kMaxRainRate]). It replaces swe.rain, rain_center, rain_radius and rain_mask
+    /// until an empty span clears it (the scene's rain again); live edits keep it. Error
+    /// naming `mm_per_h` (its size or the first bad value; nothing changed). O(cells).
+    static constexpr float kMaxRainRate = 1e4f;  // mm/h, swe.rain's range
+    Status set_rain(std::span<const float> mm_per_h);
+    /// Whether set_rain's rates are in force.
+    bool rain_set() const { return !rain_rates_.empty(); }
     /// Live edit of friction, CFL, dry depth, order, discharge, rain, the time scale, the
     /// sources and sinks (the initial lake and swe.init need a new solver: false, nothing
     /// changed).
@@ -204,6 +214,8 @@ public:
 
 private:
     void apply_def();
+    /// The core's rain from set_rain's rates, else the scene's rain keys.
+    void apply_rain();
     void publish();
     void spin_up();
     /// swe.init = "steady": the depressions the sources' water can reach (every one under
@@ -227,6 +239,7 @@ private:
     std::string mask_path_;           ///< the swe.rain_mask mask_ was read from
     std::vector<double> mask_;        ///< its weight per cell (empty: none, or unreadable)
     std::string mask_error_;          ///< why it could not be read (a warning)
+    std::vector<float> rain_rates_;   ///< set_rain's mm/h per cell (empty: the scene's rain)
 };
 
 }  // namespace mr

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from ._capi import BODY_SHAPES, BODY_STATE_DTYPE, RAY_HIT_DTYPE, WATER_SAMPLE_DTYPE, Error, StaleViewError, library_path
 from ._capi import lib as _lib
-from .world import Heightfield, Particles, ParticlesView, Stats, Surface, TerrainInfo, World
+from .world import Heightfield, Particles, ParticlesView, Stats, Surface, TerrainInfo, WaterBalance, World
 
 try:  # written by setup.py when installed
     from ._version import __version__
@@ -33,7 +33,8 @@ except ImportError:  # the source tree: the project's version from CMakeLists.tx
     _m = _re.search(r"project\(\s*metariver\s+VERSION\s+([0-9.]+)", _cm.read_text()) if _cm.is_file() else None
     __version__ = _m.group(1) if _m else "0+unknown"
 
-__all__ = ["World", "Error", "StaleViewError", "Stats", "TerrainInfo", "Heightfield", "Particles", "ParticlesView", "Surface",
+__all__ = ["World", "Error", "StaleViewError", "Stats", "TerrainInfo", "Heightfield", "WaterBalance", "Particles",
+           "ParticlesView", "Surface",
            "WATER_SAMPLE_DTYPE", "RAY_HIT_DTYPE", "BODY_SHAPES", "BODY_STATE_DTYPE", "api_version", "version_string",
            "library_path", "__version__"]
 

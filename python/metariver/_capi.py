@@ -77,6 +77,12 @@ class mr_heightfield_info(ctypes.Structure):
     _fields_ = [("columns", c_int32), ("rows", c_int32), ("spacing", c_float), ("origin", c_float * 2)]
 
 
+class mr_water_balance(ctypes.Structure):
+    _fields_ = [("initial", c_double), ("inflow", c_double), ("rain", c_double), ("outflow", c_double),
+                ("sunk", c_double), ("exchanged", c_double), ("stored", c_double), ("error", c_double),
+                ("simulated_s", c_double), ("substeps", c_uint64), ("rain_set", c_int32)]
+
+
 class mr_brush(ctypes.Structure):
     _fields_ = [("x", c_float), ("z", c_float), ("radius", c_float), ("strength", c_float), ("mode", c_int),
                 ("target", c_float)]
@@ -122,6 +128,8 @@ _SIGNATURES = {
     "mr_world_copy_terrain_heights": (c_int, [_world_p, _f32p, c_size_t]),
     "mr_world_heightfield": (c_int, [_world_p, POINTER(mr_heightfield_info)]),
     "mr_world_copy_heightfield": (c_int, [_world_p, _f32p, _f32p, _f32p, c_size_t]),
+    "mr_world_set_rain": (c_int, [_world_p, _f32p, c_size_t]),
+    "mr_world_water_balance": (c_int, [_world_p, POINTER(mr_water_balance)]),
     "mr_world_scene_toml": (c_int, [_world_p, c_char_p, c_size_t, POINTER(c_size_t)]),
     "mr_world_apply_toml": (c_int, [_world_p, c_char_p, POINTER(c_int32)]),
     "mr_world_sculpt": (c_int, [_world_p, POINTER(mr_brush)]),

@@ -1,7 +1,8 @@
 """A small TOML writer for scene edits given as dicts (World.apply, World(toml=...)).
 
 Writes what docs/scene-format.md uses: tables, strings, booleans, integers, floats and
-arrays of those. Reading uses the standard library's tomllib.
+arrays of those; a list of dicts is an array of inline tables (a scene list such as
+[[swe.sources]]: {"swe": {"sources": [{"start": [10, 0, 5], "discharge": 2.0}]}}). Reading uses the standard library's tomllib.
 """
 from __future__ import annotations
 
@@ -23,6 +24,11 @@ def _value(key: str, v: Any) -> str:
         return f'"{escaped}"'
     if isinstance(v, (list, tuple)):
         return "[" + ", ".join(_value(key, x) for x in v) + "]"
+    if isinstance(v, Mapping):  # an inline table: an entry of a scene list
+        for k in v:
+            if not isinstance(k, str):
+                raise ValueError(f"scene key {key}: keys must be strings, got {k!r}")
+        return "{" + ", ".join(f"{_key(k)} = {_value(f'{key}.{k}', x)}" for k, x in v.items()) + "}"
     if hasattr(v, "tolist"):  # numpy scalars and arrays
         return _value(key, v.tolist())
     raise ValueError(f"scene key {key}: a {type(v).__name__} is not a TOML value "

@@ -52,6 +52,22 @@ class Heightfield(NamedTuple):
     origin: tuple[float, float]
 
 
+@dataclass(frozen=True)
+class WaterBalance:
+    """The shallow-water grid's volumes in m^3 since frame 0 (mr_water_balance)."""
+    initial: float      #: in the grid at frame 0 (a lake, the steady river)
+    inflow: float       #: the sources' discharge and what pour() poured
+    rain: float         #: rained
+    outflow: float      #: left over the map's edges
+    sunk: float         #: taken by [[swe.sinks]] and the sea (swe.sea_level)
+    exchanged: float    #: net volume the hybrid's particles gave the grid (negative: took)
+    stored: float       #: in the grid now
+    error: float        #: initial + inflow + rain + exchanged - outflow - sunk - stored: round-off
+    simulated_s: float  #: the grid's simulated seconds since frame 0 (dt x swe.time_scale, summed)
+    substeps: int       #: time steps taken under the CFL limit since frame 0
+    rain_set: bool      #: whether set_rain()'s rates replace the scene's rain
+
+
 class Particles(NamedTuple):
     """Copies of the active particles: positions and velocities, (N, 3) float32."""
     positions: np.ndarray
@@ -152,6 +168,21 @@ def check_heights(heights: Any) -> np.ndarray:
     if lo < 0.0 or hi > 1.0:
         raise ValueError(f"heights: values span [{lo:g}, {hi:g}]; every height must be in [0, 1]")
     return np.ascontiguousarray(h, dtype=np.float32)
+
+
+def _rain_rates(mm_per_h: Any, shape: tuple[int, int]) -> np.ndarray:
+    """mm_per_h as C-contiguous float32 of the grid's shape, or ValueError naming it and the ranges."""
+    r = np.asarray(mm_per_h)
+    if r.dtype.kind not in "fiu":
+        raise ValueError(f"mm_per_h: expected an array of real numbers (mm/h), got dtype {r.dtype}")
+    if r.shape != shape:
+        raise ValueError(f"mm_per_h: expected shape {shape} (the grid's rows, columns), got {r.shape}")
+    bad = ~(np.isfinite(r) & (r >= 0) & (r <= 1e4))
+    if bad.any():
+        row, column = (int(x) for x in np.argwhere(bad)[0])
+        raise ValueError(f"mm_per_h[{row}, {column}]: must be finite in [0, 10000] mm/h, got {r[row, column]!r} "
+                         f"({int(bad.sum())} such cells)")
+    return np.ascontiguousarray(r, dtype=np.float32)
 
 
 def _body_id(id: Any) -> None:
@@ -337,6 +368,27 @@ class World:
         bed = np.empty((info.rows, info.columns), np.float32)
         self._check(lib.mr_world_copy_heightfield(h, f32p(depth), f32p(velocity), f32p(bed), depth.size))
         return Heightfield(depth, velocity, bed, info.spacing, (info.origin[0], info.origin[1]))
+
+    def water_balance(self) -> WaterBalance:
+        """The grid's volumes since frame 0 (a WaterBalance); Error for a world whose water is particles."""
+        b = _capi.mr_water_balance()
+        self._check(_capi.lib().mr_world_water_balance(self._h(), ctypes.byref(b)))
+        return WaterBalance(*(getattr(b, name) for name, _ in _capi.mr_water_balance._fields_[:-1]), bool(b.rain_set))
+
+    def set_rain(self, mm_per_h: Any) -> None:
+        """Rain per cell on the grid (solver "swe" or "hybrid"), in mm/h: an array of shape
+        (rows, columns) like heightfield().depth, each finite in [0, 10000]; a 0..1 mask times
+        a rate is `mask * rate`. It replaces the scene's swe.rain, rain_center, rain_radius
+        and rain_mask until set_rain(None) (the scene's rain again), and outlives apply().
+        Copied; costs O(cells). A wrong shape or dtype, NaN, infinity or a value out of range
+        raises ValueError naming `mm_per_h`; a particle world raises metariver.Error."""
+        h, lib = self._h(), _capi.lib()
+        if mm_per_h is None:
+            self._check(lib.mr_world_set_rain(h, None, 0))
+            return
+        info = _capi.mr_heightfield_info()
+        self._check(lib.mr_world_heightfield(h, ctypes.byref(info)))
+        self._check(lib.mr_world_set_rain(h, f32p(_rain_rates(mm_per_h, (info.rows, info.columns))), info.rows * info.columns))
 
     @property
     def scene_toml(self) -> str:

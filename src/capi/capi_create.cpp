@@ -26,6 +26,15 @@ namespace mr::capi {
 
 bool finite3(const float* p) { return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]); }
 
+const mr::HeightfieldWater* heightfield_of(const mr_world* world, const char* function, mr_status& status) {
+    const mr::HeightfieldWater* w = world->sim->heightfield();
+    status = w ? MR_OK
+               : fail(world, MR_ERROR_UNSUPPORTED,
+                      fmt::format("{}: solver = \"{}\" has no water grid (its water is particles; solver = \"swe\" has one)",
+                                  function, world->sim->solver_entry().kind.name));
+    return w;
+}
+
 std::string show3(const float* p) { return fmt::format("{}, {}, {}", p[0], p[1], p[2]); }
 
 namespace {

@@ -1,5 +1,5 @@
 // The C API's interaction (include/metariver/metariver.h): sculpt, pour, push, move the
-// source, replace the box sinks. Each checks its arguments first (nothing changes on a
+// source, replace the box sinks, rain per cell on the grid. Each checks its arguments first (nothing changes on a
 // refusal) and marks the water queries stale.
 #include "capi_internal.h"
 
@@ -142,6 +142,24 @@ mr_status mr_world_set_sink_boxes(mr_world* world, const float* boxes, size_t co
                         fmt::format("mr_world_set_sink_boxes: {}: needs a new world; nothing was changed",
                                     r->rebuild_key));
         world->query_fresh = false;
+        return MR_OK;
+    });
+}
+
+mr_status mr_world_set_rain(mr_world* world, const float* mm_per_h, size_t count) {
+    return guarded(world, "mr_world_set_rain", false, [&] {
+        if (!mm_per_h && count > 0) return null_argument(world, "mr_world_set_rain", "mm_per_h");
+        mr_status status = MR_OK;
+        const mr::HeightfieldWater* grid = mr::capi::heightfield_of(world, "mr_world_set_rain", status);
+        if (!grid) return status;
+        if (count != 0 && count != grid->size())
+            return fail(world, MR_ERROR_INVALID_ARGUMENT,
+                        fmt::format("mr_world_set_rain: count: must be the grid's {} cells ({} rows x {} columns), or 0 "
+                                    "with mm_per_h NULL for the scene's rain (got {})", grid->size(), grid->rows,
+                                    grid->columns, count));
+        if (auto s = world->sim->set_rain({mm_per_h, mm_per_h ? count : 0}); !s)
+            return fail(world, world->sim->grid() ? MR_ERROR_INVALID_ARGUMENT : MR_ERROR_UNSUPPORTED,
+                        "mr_world_set_rain: " + s.error().message);
         return MR_OK;
     });
 }

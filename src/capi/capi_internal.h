@@ -74,5 +74,8 @@ mr_status guarded(const mr_world* w, const char* function, bool in_arena, F&& fn
 bool finite3(const float* p);
 /// "x, y, z" of a 3-float array for messages.
 std::string show3(const float* p);
+/// The world's heightfield water, or null and `status` an MR_ERROR_UNSUPPORTED naming
+/// `function` and the solver (whose water is particles).
+const mr::HeightfieldWater* heightfield_of(const mr_world* world, const char* function, mr_status& status);
 
 }  // namespace mr::capi

@@ -1,6 +1,6 @@
 // The C API's frame and its reads (include/metariver/metariver.h): step, stats, the
 // particles and the surface as borrowed views or copies, the terrain, the scene as TOML
-// and live edits of it.
+// and live edits of it, the water grid and its volumes.
 #include "capi_internal.h"
 
 #include <metariver/scene_keys.h>
@@ -11,6 +11,7 @@
 
 using mr::capi::fail;
 using mr::capi::guarded;
+using mr::capi::heightfield_of;
 using mr::capi::null_argument;
 
 // The views hand out the Simulation's own arrays: glm::vec3 must be three packed floats.
@@ -162,20 +163,6 @@ mr_status mr_world_copy_terrain_heights(const mr_world* world, float* heights, s
     });
 }
 
-namespace {
-
-/// The world's heightfield water, or an MR_ERROR_UNSUPPORTED naming the solver.
-const mr::HeightfieldWater* heightfield_of(const mr_world* world, const char* fn, mr_status& status) {
-    const mr::HeightfieldWater* w = world->sim->heightfield();
-    status = w ? MR_OK
-               : fail(world, MR_ERROR_UNSUPPORTED,
-                      fmt::format("{}: solver = \"{}\" has no water grid (its water is particles; solver = \"swe\" has one)",
-                                  fn, world->sim->solver_entry().kind.name));
-    return w;
-}
-
-}  // namespace
-
 mr_status mr_world_heightfield(const mr_world* world, mr_heightfield_info* out) {
     return guarded(world, "mr_world_heightfield", false, [&] {
         if (!out) return null_argument(world, "mr_world_heightfield", "out");
@@ -207,6 +194,25 @@ mr_status mr_world_copy_heightfield(const mr_world* world, float* depth, float* 
             }
             if (bed) bed[k] = k < ground.size() ? ground[k].y : 0.0f;
         }
+        return MR_OK;
+    });
+}
+
+mr_status mr_world_water_balance(const mr_world* world, mr_water_balance* out) {
+    return guarded(world, "mr_world_water_balance", false, [&] {
+        if (!out) return null_argument(world, "mr_world_water_balance", "out");
+        mr_status status = MR_OK;
+        if (!heightfield_of(world, "mr_world_water_balance", status)) return status;
+        const mr::SweSolver* grid = world->sim->grid();
+        if (!grid)
+            return fail(world, MR_ERROR_UNSUPPORTED,
+                        fmt::format("mr_world_water_balance: solver = \"{}\" keeps no water balance",
+                                    world->sim->solver_entry().kind.name));
+        const mr::SweBalance b = grid->balance();
+        *out = mr_water_balance{.initial = b.initial, .inflow = b.inflow, .rain = b.rain, .outflow = b.outflow,
+                                .sunk = b.sunk, .exchanged = b.exchanged, .stored = b.stored, .error = b.error(),
+                                .simulated_s = grid->simulated_s(), .substeps = grid->counters().substeps,
+                                .rain_set = grid->rain_set() ? 1 : 0};
         return MR_OK;
     });
 }

@@ -1,5 +1,6 @@
 // Simulation's public methods over its state (simulation_impl.h): the work runs inside
 // the Simulation's thread arena (set_threads), the accessors return references into it.
+#include <metariver/hybrid_solver.h>
 #include <metariver/scene.h>
 
 #include "simulation_impl.h"
@@ -58,6 +59,18 @@ const Terrain& Simulation::terrain() const { return impl_->terrain_; }
 const Bvh& Simulation::bvh() const { return impl_->bvh_; }
 const Particles& Simulation::particles() const { return impl_->particles(); }
 const HeightfieldWater* Simulation::heightfield() const { return impl_->solver_->water_heightfield(); }
+const SweSolver* Simulation::grid() const {
+    if (const auto* h = dynamic_cast<const HybridSolver*>(impl_->solver_.get())) return &h->grid();
+    return dynamic_cast<const SweSolver*>(impl_->solver_.get());
+}
+Status Simulation::set_rain(std::span<const float> mm_per_h) {
+    SweSolver* g = dynamic_cast<SweSolver*>(impl_->solver_.get());
+    if (auto* h = dynamic_cast<HybridSolver*>(impl_->solver_.get())) g = &h->grid();
+    if (!g)
+        return Error{fmt::format("solver = \"{}\" has no water grid to rain on (solver = \"swe\" and \"hybrid\" have one)",
+                                 impl_->solver_entry_.kind.name)};
+    return g->set_rain(mm_per_h);
+}
 const SolverEntry& Simulation::solver_entry() const { return impl_->solver_entry_; }
 const Solver& Simulation::solver() const { return *impl_->solver_; }
 const SolverCounters& Simulation::counters() const { return impl_->solver_->counters(); }

@@ -1,9 +1,11 @@
-// The "swe" solver's interaction (include/metariver/swe_solver.h): pour, push and the
-// sculpted bed, on the core's cells (cell (i, j): column i along x, row j along z).
+// The "swe" solver's interaction (include/metariver/swe_solver.h): pour, push, rain set
+// per cell and the sculpted bed, on the core's cells (cell (i, j): column i along x, row j along z).
 #include <metariver/swe_solver.h>
 #include <metariver/terrain.h>
 
 #include "shallow_water.h"
+
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
@@ -59,6 +61,19 @@ size_t SweSolver::push(const Vec3& center, float radius, const Vec3& velocity) {
         }
     if (pushed) publish();
     return pushed;
+}
+
+Status SweSolver::set_rain(std::span<const float> mm_per_h) {
+    if (!mm_per_h.empty() && mm_per_h.size() != water_.size())
+        return Error{fmt::format("mm_per_h: {} values for a grid of {} cells ({} rows x {} columns; none: the scene's "
+                                 "rain)", mm_per_h.size(), water_.size(), water_.rows, water_.columns)};
+    for (size_t k = 0; k < mm_per_h.size(); ++k)
+        if (!(mm_per_h[k] >= 0.0f && mm_per_h[k] <= kMaxRainRate))  // NaN fails too
+            return Error{fmt::format("mm_per_h[{}] (row {}, column {}): must be in [0, {}] mm/h (got {})", k,
+                                     k / size_t(water_.columns), k % size_t(water_.columns), kMaxRainRate, mm_per_h[k])};
+    rain_rates_.assign(mm_per_h.begin(), mm_per_h.end());
+    apply_rain();
+    return Ok{};
 }
 
 void SweSolver::terrain_edited(const Terrain& terrain, int i0, int i1, int j0, int j1) {

@@ -152,6 +152,32 @@ SweSolver::~SweSolver() = default;
 
 void SweSolver::apply_def() {
     core_->set_def(core_def(def_, core_->def().gravity));
+    apply_rain();
+    time_scale_ = def_.time_scale == kSweAuto ? water_.spacing : std::max(def_.time_scale, 1e-6f);
+    // The river rule: uniform Manning flow kSweRiverDepth deep over one cell's width on the
+    // main channel's slope, q = h^(5/3) sqrt(S) / n per metre of width.
+    const bool other_water = std::isfinite(def_.initial_level) || !def_.sources.empty();
+    const double n = std::max(static_cast<double>(def_.manning), kRuleLeastManning);
+    const double rule = water_.spacing * std::pow(double(kSweRiverDepth), 5.0 / 3.0) * std::sqrt(double(channel_slope_)) / n;
+    discharge_ = def_.discharge == kSweAuto ? (other_water ? 0.0f : static_cast<float>(rule)) : std::max(def_.discharge, 0.0f);
+    const Vec3 c = def_.auto_source ? source_ : def_.source_center;
+    source_i_ = static_cast<int>(std::lround((c.x - water_.origin.x) / water_.spacing));
+    source_j_ = static_cast<int>(std::lround((c.z - water_.origin.z) / water_.spacing));
+    const bool inside = source_i_ >= 0 && source_j_ >= 0 && source_i_ < water_.columns && source_j_ < water_.rows;
+    std::vector<swe::PointSource> sources;
+    if (discharge_ > 0.0f && inside) sources.push_back({source_i_, source_j_, discharge_});
+    add_sources(sources);
+    core_->set_sources(std::move(sources));
+}
+
+void SweSolver::apply_rain() {
+    if (!rain_rates_.empty()) {  // set_rain's, over the scene's keys
+        std::vector<double> rate(rain_rates_.size());
+        for (size_t k = 0; k < rate.size(); ++k) rate[k] = double(rain_rates_[k]) * kMmPerHour;
+        core_->set_rain(0.0);
+        core_->set_rain_mask(std::move(rate));
+        return;
+    }
     const double rain = std::max(static_cast<double>(def_.rain), 0.0) * kMmPerHour;
     if (def_.rain_mask != mask_path_) {  // read once per path
         mask_path_ = def_.rain_mask;
@@ -181,23 +207,7 @@ void SweSolver::apply_def() {
         core_->set_rain_mask({});
         core_->set_rain(rain);
     }
-    time_scale_ = def_.time_scale == kSweAuto ? water_.spacing : std::max(def_.time_scale, 1e-6f);
-    // The river rule: uniform Manning flow kSweRiverDepth deep over one cell's width on the
-    // main channel's slope, q = h^(5/3) sqrt(S) / n per metre of width.
-    const bool other_water = std::isfinite(def_.initial_level) || !def_.sources.empty();
-    const double n = std::max(static_cast<double>(def_.manning), kRuleLeastManning);
-    const double rule = water_.spacing * std::pow(double(kSweRiverDepth), 5.0 / 3.0) * std::sqrt(double(channel_slope_)) / n;
-    discharge_ = def_.discharge == kSweAuto ? (other_water ? 0.0f : static_cast<float>(rule)) : std::max(def_.discharge, 0.0f);
-    const Vec3 c = def_.auto_source ? source_ : def_.source_center;
-    source_i_ = static_cast<int>(std::lround((c.x - water_.origin.x) / water_.spacing));
-    source_j_ = static_cast<int>(std::lround((c.z - water_.origin.z) / water_.spacing));
-    const bool inside = source_i_ >= 0 && source_j_ >= 0 && source_i_ < water_.columns && source_j_ < water_.rows;
-    std::vector<swe::PointSource> sources;
-    if (discharge_ > 0.0f && inside) sources.push_back({source_i_, source_j_, discharge_});
-    add_sources(sources);
-    core_->set_sources(std::move(sources));
 }
-
 
 // [[swe.sources]] (each discharge spread evenly over its cells) and [[swe.sinks]] (a negative
 // discharge the core never lets take more than a cell holds).
