@@ -2,6 +2,8 @@
 
 #include "view_drop.h"
 
+#include <metariver/scene_keys.h>
+
 #include <imgui.h>
 
 #include <glm/geometric.hpp>
@@ -18,7 +20,50 @@ constexpr size_t kMostUndo = 200;       ///< drags kept for undo; the oldest go 
 constexpr float kMostPushSpeed = 10.0f;  ///< m/s a push gives the water at most
 constexpr float kMostThrowSpeed = 20.0f;  ///< m/s a throw gives a body at most
 
+/// The scene list `name` ([[particles.source]], [[sink.box]], [[bodies]]).
+const SceneList& scene_list(std::string_view name) {
+    for (const SceneList& l : scene_lists())
+        if (l.name == name) return l;
+    return scene_lists().front();  // (every name asked for is in the table)
+}
+
+constexpr const char* kToolNames[] = {"pour",        "raise",      "lower",      "smooth",
+                                      "flatten",     "push water", "move source", "add source",
+                                      "add sink box", "remove source / sink", "drop / throw body", "remove body"};
+
 }  // namespace
+
+std::string Tools::unavailable(const Simulation& sim) const {
+    const SceneDef& d = sim.def();
+    const std::string_view solver = sim.solver_entry().kind.name;
+    const char* name = kToolNames[tool_];
+    const bool grid = sim.grid() != nullptr;
+    // The grid's solvers read none of the particle lists (the key table's readers say only
+    // that Bullet reads no [[sink.box]] and the hybrid no [[particles.source]]).
+    const auto list = [&](std::string_view list_name, std::string_view instead) -> std::string {
+        const SceneList& l = scene_list(list_name);
+        if (l.readers(d) && !grid) return "";
+        return fmt::format("{}: solver = \"{}\" reads no [[{}]]{}", name, solver, l.name,
+                           grid ? instead : fmt::format(" (read by {})", l.readers.text));
+    };
+    switch (tool_) {
+        case Raise: case Lower: case Smooth: case Flatten:
+            if (!sim.solver_entry().no_sculpt.empty()) return fmt::format("{}: solver = \"{}\" {}", name, solver, sim.solver_entry().no_sculpt);
+            return "";
+        case Push:
+            if (!sim.solver_entry().no_push.empty()) return fmt::format("{}: solver = \"{}\" {}", name, solver, sim.solver_entry().no_push);
+            return "";
+        case MoveSource:
+            if (grid && !d.swe.auto_source)
+                return fmt::format("{}: swe.source_center is set ({:.1f}, {:.1f}); the grid's source stays there (edit "
+                                   "it in the panel's [swe])", name, d.swe.source_center.x, d.swe.source_center.z);
+            return "";
+        case AddSource: return list("particles.source", "; the grid's sources are [[swe.sources]] in the panel's [swe]");
+        case AddSink: case Remove: return list("sink.box", "; the grid's sinks are [[swe.sinks]] in the panel's [swe]");
+        case DropBody: case RemoveBody: return list("bodies", "; bodies do not float on the grid's water yet");
+        default: return "";
+    }
+}
 
 bool Tools::frame(Simulation& sim, SceneDef& def, const std::optional<Vec3>& hit, bool left, double frame_s,
                   std::string& error, std::optional<SceneDef>& edit) {
@@ -33,6 +78,11 @@ bool Tools::frame(Simulation& sim, SceneDef& def, const std::optional<Vec3>& hit
         return false;
     }
     if (!hit) return false;
+    if (const std::string why = unavailable(sim); !why.empty()) {  // said once per press, nothing done
+        if (!dragging_) error = why;
+        dragging_ = true;
+        return false;
+    }
     if (tool_ == DropBody) {
         drag_body(sim, *hit, frame_s, error);
         return false;
@@ -183,10 +233,16 @@ bool Tools::undo(Simulation& sim) {
     return true;
 }
 
-void Tools::ui() {
+void Tools::ui(const Simulation& sim) {
     ImGui::Combo("tool (left button)", &tool_,
                  "pour / orbit\0raise\0lower\0smooth\0flatten\0push water\0move source\0add source\0add sink "
                  "box\0remove source / sink\0drop / throw body\0remove body\0");
+    if (const std::string why = unavailable(sim); !why.empty()) {
+        ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0f, 0.75f, 0.3f, 1.0f));
+        ImGui::TextWrapped("%s", why.c_str());
+        ImGui::PopStyleColor();
+        return;
+    }
     if (!active() || tool_ == MoveSource) return;
     if (tool_ == DropBody) {
         ImGui::Combo("body shape", &body_shape_, "box\0sphere\0capsule\0");

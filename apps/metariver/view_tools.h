@@ -22,6 +22,13 @@ public:
 
     /// True when the left button belongs to a tool (not to pouring and orbiting).
     bool active() const { return tool_ != Pour; }
+    Tool tool() const { return static_cast<Tool>(tool_); }
+    void set_tool(Tool t) { tool_ = t; }
+    /// Why the current tool does nothing on `sim`'s scene, one line naming the solver and
+    /// what it reads instead; "" when it works. The panel shows it under the tool, and a
+    /// press gives it as the error (a grid's water takes no bodies, no [[particles.source]]
+    /// and no [[sink.box]]: it was silent).
+    std::string unavailable(const Simulation& sim) const;
     /// True when the left button drops bodies (its hit is then the water's surface where
     /// the click's ray meets it first: view_drop.h).
     bool drops_bodies() const { return tool_ == DropBody; }
@@ -43,8 +50,8 @@ public:
     size_t undo_steps() const { return undo_.size(); }
     /// Whether the last frame() moved the source (the caller's copies of the scene follow).
     bool source_moved() const { return source_moved_; }
-    /// The panel's controls (Dear ImGui; inside the caller's window).
-    void ui();
+    /// The panel's controls (Dear ImGui; inside the caller's window), with unavailable(sim).
+    void ui(const Simulation& sim);
 
 private:
     /// The scene after a click of AddSource, AddSink or Remove at `hit` (none, and an

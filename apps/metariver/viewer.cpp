@@ -278,7 +278,7 @@ void Viewer::panel(int win_h) {
     ImGui::DragInt("max steps/frame", &max_steps_, 0.1f, 1, 64, "%d", ImGuiSliderFlags_AlwaysClamp);
     ImGui::DragInt("pour count", &pour_count_, 0.5f, 1, 10000, "%d", ImGuiSliderFlags_AlwaysClamp);
     ImGui::DragFloat("pour height (m)", &pour_height_, 0.05f, 0.0f, 50.0f, "%.2f", ImGuiSliderFlags_AlwaysClamp);
-    tools_.ui();
+    tools_.ui(*sim_);
     if (ImGui::Button("Undo stroke (Ctrl+Z)")) undo_stroke();
     ImGui::SameLine();
     if (ImGui::Button("Save terrain")) {

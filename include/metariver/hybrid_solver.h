@@ -84,6 +84,8 @@ public:
     const Particles* water_particles() const override;
     const HeightfieldWater* water_heightfield() const override;
     std::vector<std::string> warnings() const override;
+    /// The grid's main source moves (SweSolver::set_spawn_center).
+    void set_spawn_center(const Vec3& center) override { grid_->set_spawn_center(center); }
 
     const HybridDef& def() const { return def_; }
     const HybridStats& stats() const { return stats_; }

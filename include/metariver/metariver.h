@@ -34,7 +34,8 @@ extern "C" {
 /* The API this header describes; mr_api_version() is the library's (same major: compatible). */
 #define MR_API_VERSION_MAJOR 1
 #define MR_API_VERSION_MINOR 3 /* 1: bodies (mr_world_add_body & co); 2: the shallow-water grid (mr_world_heightfield);
-                                 3: the grid's rain per cell and volumes (mr_world_set_rain, mr_world_water_balance) */
+                                 3: the grid's rain per cell and volumes (mr_world_set_rain, mr_world_water_balance),
+                                 mr_world_warnings */
 #define MR_API_VERSION ((MR_API_VERSION_MAJOR << 16) | MR_API_VERSION_MINOR)
 
 typedef enum mr_status {
@@ -191,6 +192,10 @@ MR_API mr_status mr_world_water_balance(const mr_world* world, mr_water_balance*
  * bytes including the terminating NUL; *length: the text's length without it
  * (MR_ERROR_BUFFER_TOO_SMALL when it does not fit; buffer may then be NULL). */
 MR_API mr_status mr_world_scene_toml(const mr_world* world, char* buffer, size_t capacity, size_t* length);
+/* Non-fatal advice about the running scene, one line each, naming the key (a swe source
+ * off the map, a steady spin-up stopped at its cap, a flow rate capped, ...): the text as
+ * mr_world_scene_toml writes it ("" when there is none). */
+MR_API mr_status mr_world_warnings(const mr_world* world, char* buffer, size_t capacity, size_t* length);
 /* Live edit: TOML keys over the world's scene, applied in place when the solver can take
  * them (*applied = 1); keys that need a new world (terrain, solver, budget, ...) change
  * nothing (MR_OK with *applied = 0; mr_world_last_error names the first such key). A bad
@@ -213,7 +218,8 @@ MR_API mr_status mr_world_pour(mr_world* world, const float center[3], int32_t c
 /* Pushes the water within radius of center with velocity (m/s at the centre). pushed may be NULL. */
 MR_API mr_status mr_world_push(mr_world* world, const float center[3], float radius, const float velocity[3],
                                size_t* pushed);
-/* Moves the source's volume centre to center (xyz). */
+/* Moves the source's volume centre to center (xyz); on a grid (solver = "swe", "hybrid") its
+ * main source moves there while swe.source_center is "auto" (the default). */
 MR_API mr_status mr_world_move_source(mr_world* world, const float center[3]);
 /* Replaces the scene's box sinks (where water leaves) with count boxes, each min xyz then
  * max xyz (6 floats); count 0 removes them. At most 16. The edge sink of a river stays. */

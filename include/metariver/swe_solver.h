@@ -172,6 +172,9 @@ public:
     static constexpr double kPourVolume = 0.125;  // m^3: a particle of the default river (0.5 m)
     static constexpr double kPourRadius = 2.0;
     void pour(const Vec3& center, int count) override;
+    /// The main source follows the particle source's centre (Simulation::move_source, the
+    /// viewer's move source) while swe.source_center is auto; a set centre stays.
+    void set_spawn_center(const Vec3& center) override;
     size_t push(const Vec3& center, float radius, const Vec3& velocity) override;
     void terrain_edited(const Terrain& terrain, int i0, int i1, int j0, int j1) override;
 

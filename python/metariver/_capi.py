@@ -131,6 +131,7 @@ _SIGNATURES = {
     "mr_world_set_rain": (c_int, [_world_p, _f32p, c_size_t]),
     "mr_world_water_balance": (c_int, [_world_p, POINTER(mr_water_balance)]),
     "mr_world_scene_toml": (c_int, [_world_p, c_char_p, c_size_t, POINTER(c_size_t)]),
+    "mr_world_warnings": (c_int, [_world_p, c_char_p, c_size_t, POINTER(c_size_t)]),
     "mr_world_apply_toml": (c_int, [_world_p, c_char_p, POINTER(c_int32)]),
     "mr_world_sculpt": (c_int, [_world_p, POINTER(mr_brush)]),
     "mr_world_pour": (c_int, [_world_p, _f32p, c_int32]),

@@ -177,7 +177,7 @@ def _rain_rates(mm_per_h: Any, shape: tuple[int, int]) -> np.ndarray:
         raise ValueError(f"mm_per_h: expected an array of real numbers (mm/h), got dtype {r.dtype}")
     if r.shape != shape:
         raise ValueError(f"mm_per_h: expected shape {shape} (the grid's rows, columns), got {r.shape}")
-    bad = ~(np.isfinite(r) & (r >= 0) & (r <= 1e4))
+    bad = ~((r >= 0) & (r <= 1e4))  # NaN compares false: caught too
     if bad.any():
         row, column = (int(x) for x in np.argwhere(bad)[0])
         raise ValueError(f"mm_per_h[{row}, {column}]: must be finite in [0, 10000] mm/h, got {r[row, column]!r} "
@@ -390,18 +390,29 @@ class World:
         self._check(lib.mr_world_heightfield(h, ctypes.byref(info)))
         self._check(lib.mr_world_set_rain(h, f32p(_rain_rates(mm_per_h, (info.rows, info.columns))), info.rows * info.columns))
 
+    def _text(self, fn) -> str:
+        """The text a (world, buffer, capacity, length) C function writes."""
+        h = self._h()
+        length = ctypes.c_size_t()
+        buf = ctypes.create_string_buffer(1 << 16)  # one call for a usual scene (~33 KB)
+        status = fn(h, buf, len(buf), ctypes.byref(length))
+        if status == 6:  # MR_ERROR_BUFFER_TOO_SMALL: length says how much
+            buf = ctypes.create_string_buffer(length.value + 1)
+            status = fn(h, buf, len(buf), ctypes.byref(length))
+        self._check(status)
+        return buf.value.decode()
+
     @property
     def scene_toml(self) -> str:
         """The resolved scene as TOML text (what `metariver scene` prints)."""
-        h, lib = self._h(), _capi.lib()
-        length = ctypes.c_size_t()
-        buf = ctypes.create_string_buffer(1 << 16)  # one call for a usual scene (~33 KB)
-        status = lib.mr_world_scene_toml(h, buf, len(buf), ctypes.byref(length))
-        if status == 6:  # MR_ERROR_BUFFER_TOO_SMALL: length says how much
-            buf = ctypes.create_string_buffer(length.value + 1)
-            status = lib.mr_world_scene_toml(h, buf, len(buf), ctypes.byref(length))
-        self._check(status)
-        return buf.value.decode()
+        return self._text(_capi.lib().mr_world_scene_toml)
+
+    @property
+    def warnings(self) -> list[str]:
+        """Non-fatal advice about the running scene, one line each naming the key (a swe source
+        off the map, a steady spin-up stopped at its cap, a flow rate capped, ...)."""
+        text = self._text(_capi.lib().mr_world_warnings)
+        return text.split("\n") if text else []
 
     @property
     def scene(self) -> dict[str, Any]:
@@ -459,7 +470,8 @@ class World:
         return pushed.value
 
     def move_source(self, center: Any) -> None:
-        """Moves the source's volume centre to center (x, y, z)."""
+        """Moves the source's volume centre to center (x, y, z); on a grid (solver "swe", "hybrid")
+        its main source moves there while swe.source_center is "auto"."""
         c = _vec3("center", center)
         h = self._h()
         self._changed()

@@ -109,3 +109,9 @@ def test_sources_given_as_a_list_of_dicts_pour_their_discharge(rainy):
     b = rainy.water_balance()
     assert b.inflow == pytest.approx(2.5 * b.simulated_s, rel=1e-6)  # float32 discharges summed in doubles
     assert b.stored == pytest.approx(b.inflow, rel=1e-9)  # nothing has reached an edge yet
+
+
+def test_warnings_name_a_source_off_the_map(rainy):
+    assert not any("swe.sources" in w for w in rainy.warnings)
+    rainy.apply({"swe": {"sources": [{"start": [-500.0, 0.0, 10.0], "discharge": 1.0}]}})
+    assert any(w.startswith("swe.sources[1]: lies outside the terrain") for w in rainy.warnings), rainy.warnings

@@ -131,6 +131,9 @@ mr_status mr_world_set_sink_boxes(mr_world* world, const float* boxes, size_t co
                                         "with min <= max", i, show3(b), show3(b + 3)));
             next.sink.boxes.push_back({vec3(b), vec3(b + 3)});
         }
+        if (count > 0 && world->sim->grid())  // (the key table counts the grid's solvers as readers)
+            return unsupported(world, "mr_world_set_sink_boxes",
+                               "has no sink boxes: its sinks are [[swe.sinks]] (mr_world_apply_toml)");
         // apply() would take boxes a solver that does not read them ignores.
         if (count > 0 && !sink_box_list().readers(next))
             return unsupported(world, "mr_world_set_sink_boxes",

@@ -31,6 +31,19 @@ void copy_active(const mr::Particles& p, const std::vector<mr::Vec3>& field, flo
     }
 }
 
+/// Writes `text` and its NUL into the caller's buffer of `capacity` bytes; *length: the
+/// text's length (MR_ERROR_BUFFER_TOO_SMALL, nothing written, when it does not fit).
+mr_status copy_text(const mr_world* world, const char* function, const std::string& text, char* buffer, size_t capacity,
+                    size_t* length) {
+    *length = text.size();
+    if (capacity < text.size() + 1)
+        return fail(world, MR_ERROR_BUFFER_TOO_SMALL,
+                    fmt::format("{}: capacity: {} bytes is smaller than the {} the text needs (its length and the NUL)",
+                                function, capacity, text.size() + 1));
+    std::memcpy(buffer, text.c_str(), text.size() + 1);
+    return MR_OK;
+}
+
 }  // namespace
 
 extern "C" {
@@ -225,14 +238,17 @@ mr_status mr_world_scene_toml(const mr_world* world, char* buffer, size_t capaci
         // The text may be saved anywhere: a relative heightmap path would be read relative to it.
         if (!def.source.heightmap.empty())
             def.source.heightmap = std::filesystem::absolute(def.source.heightmap).lexically_normal().string();
-        const std::string text = mr::scene_to_toml(def, world->base);
-        *length = text.size();
-        if (capacity < text.size() + 1)
-            return fail(world, MR_ERROR_BUFFER_TOO_SMALL,
-                        fmt::format("mr_world_scene_toml: capacity: {} bytes is smaller than the {} the text needs "
-                                    "(its length and the NUL)", capacity, text.size() + 1));
-        std::memcpy(buffer, text.c_str(), text.size() + 1);
-        return MR_OK;
+        return copy_text(world, "mr_world_scene_toml", mr::scene_to_toml(def, world->base), buffer, capacity, length);
+    });
+}
+
+mr_status mr_world_warnings(const mr_world* world, char* buffer, size_t capacity, size_t* length) {
+    return guarded(world, "mr_world_warnings", false, [&] {
+        if (!length) return null_argument(world, "mr_world_warnings", "length");
+        if (!buffer && capacity > 0) return null_argument(world, "mr_world_warnings", "buffer");
+        std::string text;
+        for (const std::string& w : world->sim->warnings()) text += (text.empty() ? "" : "\n") + w;
+        return copy_text(world, "mr_world_warnings", text, buffer, capacity, length);
     });
 }
 

@@ -45,6 +45,12 @@ void SweSolver::pour(const Vec3& center, int count) {
     publish();
 }
 
+void SweSolver::set_spawn_center(const Vec3& center) {
+    if (center == source_ || !std::isfinite(center.x + center.z)) return;  // (a sculpt passes the same centre)
+    source_ = center;
+    if (def_.auto_source) apply_def();
+}
+
 size_t SweSolver::push(const Vec3& center, float radius, const Vec3& velocity) {
     if (!(radius > 0.0f) || !std::isfinite(center.x + center.z + velocity.x + velocity.z)) return 0;
     const double s = water_.spacing, r2 = double(radius) * radius, reach = radius / s;

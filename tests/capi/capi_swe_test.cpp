@@ -217,6 +217,58 @@ TEST(CApiSwe, AParticleWorldHasNoRainGridAndSaysSo) {
         << world.last_error();
 }
 
+TEST(CApiSwe, MovingTheSourceMovesTheGridsSource) {
+    mr_world_desc d = mr_world_desc_default();
+    d.scene_toml = "solver = \"swe\"\n";  // the river rule's source at the channel's head
+    World world(d);
+    ASSERT_EQ(world.status, MR_OK) << world.error.message;
+    const mr_heightfield_info g = grid_of(world);
+    const size_t n = size_t(g.rows) * size_t(g.columns), k = size_t(g.rows / 2) * size_t(g.columns) + 4;
+    std::vector<float> depth(n);
+    world.step(30);
+    ASSERT_EQ(mr_world_copy_heightfield(world.w, depth.data(), nullptr, nullptr, n), MR_OK);
+    ASSERT_EQ(depth[k], 0.0f) << "the valley's side is dry";
+    const float to[3] = {g.origin[0] + 4.0f * g.spacing, 20.0f, g.origin[1] + float(g.rows / 2) * g.spacing};
+    ASSERT_EQ(mr_world_move_source(world.w, to), MR_OK) << world.last_error();
+    const double before = balance_of(world).inflow;
+    world.step(1);
+    ASSERT_EQ(mr_world_copy_heightfield(world.w, depth.data(), nullptr, nullptr, n), MR_OK);
+    EXPECT_GT(depth[k], 0.0f) << "the source pours where it was moved";
+    EXPECT_GT(balance_of(world).inflow, before);
+}
+
+TEST(CApiSwe, SinkBoxesAreRefusedOnTheGrid) {
+    World world(rain_desc());
+    ASSERT_EQ(world.status, MR_OK) << world.error.message;
+    const float box[6] = {20.0f, -5.0f, 20.0f, 40.0f, 30.0f, 40.0f};
+    EXPECT_EQ(mr_world_set_sink_boxes(world.w, box, 1), MR_ERROR_UNSUPPORTED);  // it was taken and did nothing
+    EXPECT_TRUE(contains(world.last_error(), "mr_world_set_sink_boxes: solver = \"swe\" has no sink boxes: its sinks "
+                                             "are [[swe.sinks]]"))
+        << world.last_error();
+}
+
+TEST(CApiSwe, WarningsNameASourceOffTheMap) {
+    mr_world_desc d = mr_world_desc_default();
+    d.scene_toml = "solver = \"swe\"\n[[swe.sources]]\nstart = [-500.0, 0.0, 10.0]\ndischarge = 1.0\n";
+    World world(d);
+    ASSERT_EQ(world.status, MR_OK) << world.error.message;
+    size_t length = 0;
+    ASSERT_EQ(mr_world_warnings(world.w, nullptr, 0, &length), MR_ERROR_BUFFER_TOO_SMALL);
+    ASSERT_GT(length, 0u);
+    std::string text(length + 1, '\0');
+    ASSERT_EQ(mr_world_warnings(world.w, text.data(), text.size(), &length), MR_OK) << world.last_error();
+    text.resize(length);
+    EXPECT_TRUE(contains(text, "swe.sources[1]: lies outside the terrain; it pours nothing")) << text;
+    // Moved onto the map (a live edit): no warning left about it.
+    ASSERT_EQ(mr_world_apply_toml(world.w, "[[swe.sources]]\nstart = [30.0, 0.0, 50.0]\n", nullptr), MR_OK)
+        << world.last_error();
+    char buffer[4096];
+    ASSERT_EQ(mr_world_warnings(world.w, buffer, sizeof buffer, &length), MR_OK) << world.last_error();
+    EXPECT_FALSE(contains(buffer, "swe.sources")) << buffer;
+    EXPECT_EQ(mr_world_warnings(world.w, buffer, sizeof buffer, nullptr), MR_ERROR_NULL_ARGUMENT);
+    EXPECT_EQ(mr_world_warnings(world.w, nullptr, 8, &length), MR_ERROR_NULL_ARGUMENT);
+}
+
 TEST(CApiSwe, TheHybridsGridTakesRainToo) {
     mr_world_desc d = mr_world_desc_default();
     d.scene_toml = "solver = \"hybrid\"\n[swe]\ndischarge = 0\n";
