@@ -237,16 +237,16 @@ bool NeighborLists::stale(std::span<const Vec3> positions, float skin) const {
     // Max of squared moves, NaN winning (std::max would drop it): exact in any order,
     // so the answer is thread-count independent.
     const auto top = [](float a, float b) { return b > a || b != b ? b : a; };
-    const float moved2 = tbb::parallel_reduce(
-        tbb::blocked_range<size_t>(0, count_, 4096), 0.0f,
-        [&](const tbb::blocked_range<size_t>& r, float m) {
-            for (size_t i = r.begin(); i != r.end(); ++i) {
-                const Vec3 d = positions[i] - Vec3(rx_[i], ry_[i], rz_[i]);
-                m = top(m, glm::dot(d, d));
-            }
-            return m;
-        },
-        top);
+    const auto block = [&](const tbb::blocked_range<size_t>& r, float m) {
+        for (size_t i = r.begin(); i != r.end(); ++i) {
+            const Vec3 d = positions[i] - Vec3(rx_[i], ry_[i], rz_[i]);
+            m = top(m, glm::dot(d, d));
+        }
+        return m;
+    };
+    constexpr size_t kGrain = 4096;  // one block (the hybrid's few hundred) runs here, without a task
+    const tbb::blocked_range<size_t> all(0, count_, kGrain);
+    const float moved2 = count_ <= kGrain ? block(all, 0.0f) : tbb::parallel_reduce(all, 0.0f, block, top);
     // Two particles that each moved less than 0.45 skin came closer by less than 0.9 skin.
     const float limit = 0.45f * skin;
     return !(moved2 < limit * limit);

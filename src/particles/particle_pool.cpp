@@ -70,13 +70,15 @@ void ParticlePool::record_max_speed() {
     // The largest squared speed, then one square root: the same float as the largest
     // glm::length (sqrt is correctly rounded and never decreasing), for any split.
     const auto& v = particles.velocity;
-    const float v2max = tbb::parallel_reduce(
-        tbb::blocked_range<size_t>(0, next_to_activate, 8192), 0.0f,
-        [&](const tbb::blocked_range<size_t>& r, float m) {
-            for (size_t i = r.begin(); i != r.end(); ++i) m = std::max(m, glm::dot(v[i], v[i]));
-            return m;
-        },
-        [](float a, float b) { return std::max(a, b); });
+    const auto block = [&](const tbb::blocked_range<size_t>& r, float m) {
+        for (size_t i = r.begin(); i != r.end(); ++i) m = std::max(m, glm::dot(v[i], v[i]));
+        return m;
+    };
+    constexpr size_t kGrain = 8192;  // one block (a few thousand particles) runs here, without a task
+    const float v2max = next_to_activate <= kGrain
+                            ? block(tbb::blocked_range<size_t>(0, next_to_activate, kGrain), 0.0f)
+                            : tbb::parallel_reduce(tbb::blocked_range<size_t>(0, next_to_activate, kGrain), 0.0f, block,
+                                                   [](float a, float b) { return std::max(a, b); });
     counters.max_speed = std::sqrt(v2max);
 }
 

@@ -31,9 +31,13 @@ Sinks::Exit Sinks::exit_of(const Vec3& p) const {
 }
 
 void Sinks::flag_exits(const Particles& p, size_t count) {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, std::min(count, p.size()), 1024), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t i = r.begin(); i != r.end(); ++i) flags_[i] = p.active[i] ? exit_of(p.position[i]) : Stay;
-    });
+    const auto flag = [&](size_t b, size_t e) {
+        for (size_t i = b; i != e; ++i) flags_[i] = p.active[i] ? exit_of(p.position[i]) : Stay;
+    };
+    constexpr size_t kGrain = 1024;
+    const size_t n = std::min(count, p.size());
+    if (n <= kGrain) return flag(0, n);  // one block: no task
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain), [&](const tbb::blocked_range<size_t>& r) { flag(r.begin(), r.end()); });
 }
 
 void Sinks::record_sunk(SolverCounters& counters, const Vec3& x, bool over_an_edge) {

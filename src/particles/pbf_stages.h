@@ -79,9 +79,15 @@ void for_each_binned(const NeighborGrid& grid, const NeighborLists* lists, F&& f
     });
 }
 
-/// Every slot i in [0, n), in parallel blocks of `grain`.
+/// Every slot i in [0, n), in parallel blocks of `grain`; one block (the hybrid's few
+/// hundred particles) runs here, without a task: a parallel_for of one block still costs a
+/// task and a wait.
 template <class F>
 void for_each_slot(size_t n, size_t grain, F&& f) {
+    if (n <= grain) {
+        for (size_t i = 0; i < n; ++i) f(i);
+        return;
+    }
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, grain), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t i = r.begin(); i != r.end(); ++i) f(i);
     });
