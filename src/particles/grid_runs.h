@@ -5,6 +5,8 @@
 
 #include <metariver/neighbor_grid.h>
 
+#include "parallel_blocks.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -33,7 +35,7 @@ inline Ranges ranges_of(const NeighborGrid& g, size_t run) {
 /// the cell runs; `ranges` are the neighbour ranges of i's cell run.
 template <class F>
 void for_each_run(const NeighborGrid& g, F&& f) {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, g.run_count(), 8), [&](const tbb::blocked_range<size_t>& range) {
+    parallel_pass(tbb::blocked_range<size_t>(0, g.run_count(), 8), g.order().size(), [&](const tbb::blocked_range<size_t>& range) {
         for (size_t run = range.begin(); run != range.end(); ++run) {
             const Ranges rg = ranges_of(g, run);
             for (uint32_t i = g.run_start(run); i < g.run_start(run + 1); ++i) f(i, rg);

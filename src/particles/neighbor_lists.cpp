@@ -150,7 +150,7 @@ Ranges load_ranges(const uint32_t* in) {
 /// f(run) for every cell run of g, in parallel (for_each_run's split).
 template <class F>
 void for_each_run_index(const NeighborGrid& g, F&& f) {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, g.run_count(), 8), [&](const tbb::blocked_range<size_t>& range) {
+    parallel_pass(tbb::blocked_range<size_t>(0, g.run_count(), 8), g.order().size(), [&](const tbb::blocked_range<size_t>& range) {
         for (size_t run = range.begin(); run != range.end(); ++run) f(run);
     });
 }

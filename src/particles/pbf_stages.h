@@ -5,6 +5,7 @@
 #include <metariver/pbf_solver.h>
 
 #include "grid_runs.h"
+#include "parallel_blocks.h"
 #include "pbf_simd.h"
 
 #include <tbb/blocked_range.h>
@@ -59,7 +60,7 @@ struct PbfSolver::Stage {
 template <class F>
 void for_each_binned(const NeighborGrid& grid, const NeighborLists* lists, F&& f) {
     if (lists) {
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, lists->size(), 64),
+        parallel_pass(tbb::blocked_range<size_t>(0, lists->size(), 64), lists->size(),
                           [&](const tbb::blocked_range<size_t>& r) {
                               const uint32_t* const index = lists->index();
                               for (uint32_t i = uint32_t(r.begin()); i != uint32_t(r.end()); ++i) {
@@ -88,7 +89,7 @@ void for_each_slot(size_t n, size_t grain, F&& f) {
         for (size_t i = 0; i < n; ++i) f(i);
         return;
     }
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, grain), [&](const tbb::blocked_range<size_t>& r) {
+    parallel_pass(tbb::blocked_range<size_t>(0, n, grain), n, [&](const tbb::blocked_range<size_t>& r) {
         for (size_t i = r.begin(); i != r.end(); ++i) f(i);
     });
 }

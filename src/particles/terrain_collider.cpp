@@ -17,6 +17,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "parallel_blocks.h"
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -60,7 +62,8 @@ ContactCounts TerrainCollider::collide_active(Particles& p, float dt, size_t cou
     std::atomic<uint64_t> steps{0}, collisions{0}, guarded{0}, tunneled{0};
     // Blocks of 128: a swept query costs ~0.1 us, so a few hundred particles (the hybrid's)
     // still spread over the threads.
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, std::min(count, p.size()), 128), [&](const tbb::blocked_range<size_t>& range) {
+    const size_t n = std::min(count, p.size());
+    parallel_pass(tbb::blocked_range<size_t>(0, n, 128), n, [&](const tbb::blocked_range<size_t>& range) {
         ContactCounts c;
         for (size_t i = range.begin(); i != range.end(); ++i) {
             if (!p.active[i]) continue;
