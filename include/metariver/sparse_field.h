@@ -138,6 +138,11 @@ public:
     /// edges, and where balls add, it rises smoothly around them (issue 46's seam,
     /// join_heightfield_to_field in surface.h). Updates the blocks' min and max.
     void add_level_term(const LevelAt& level, float amplitude, float width);
+    /// The same term from one level per column of samples, `column_level[i + nx * k]`
+    /// (NaN: no term in that column; at least nx * nz values, else nothing is added): what
+    /// add_level_term(level) adds where level(x, z) gives those values at the columns'
+    /// (x, z). It reads a table instead of calling a function per column and block.
+    void add_level_term(std::span<const float> column_level, float amplitude, float width);
 
     /// Sample (i, j, k), 0 <= i < nx...; 0 where no ball reaches.
     float value(int i, int j, int k) const;
@@ -150,6 +155,9 @@ public:
 
 private:
     void clear_grid();
+    /// add_level_term's loop over the stored blocks; level(i, k, x, z, s) gives column (i, k)'s.
+    template <class Level>
+    void add_level_columns(const Level& level, float amplitude, float width);
     // build()'s stages: the sample grid (around the balls or the fixed box, checked), each
     // ball's sample box and the (ball, block) pair count (checked against the cap), the
     // counting sort of balls by block (returns the non-empty blocks' slot count), and the

@@ -143,11 +143,14 @@ struct HeightfieldSeam {
     /// the grid's term (some ball's field reaches the water's level there); 0 elsewhere.
     std::vector<uint8_t> column;
     size_t columns = 0;         ///< columns with column = 1
+    /// Per column, as `column`: the level s of the term there (metres; NaN where column = 0).
+    std::vector<float> level;
     void clear() {
         cell.clear();
         cells = 0;
         column.clear();
         columns = 0;
+        level.clear();
     }
 };
 

@@ -393,6 +393,22 @@ void SparseField::splat_blocks(std::span<const Vec3> balls, const KernelDef& kde
 }
 
 void SparseField::add_level_term(const LevelAt& level, float amplitude, float width) {
+    add_level_columns([&](int, int, float x, float z, float& s) { return level(x, z, s); }, amplitude, width);
+}
+
+void SparseField::add_level_term(std::span<const float> column_level, float amplitude, float width) {
+    const size_t nx = size_t(std::max(grid_.nx, 0));
+    if (column_level.size() < nx * size_t(std::max(grid_.nz, 0))) return;
+    add_level_columns(
+        [&](int i, int k, float, float, float& s) {
+            s = column_level[size_t(i) + nx * size_t(k)];
+            return !std::isnan(s);
+        },
+        amplitude, width);
+}
+
+template <class Level>
+void SparseField::add_level_columns(const Level& level, float amplitude, float width) {
     if (!(width > 0.0f) || allocated_ == 0) return;
     const float inv_width = 1.0f / width, h = grid_.spacing;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, allocated_), [&](const tbb::blocked_range<size_t>& r) {
@@ -406,7 +422,7 @@ void SparseField::add_level_term(const LevelAt& level, float amplitude, float wi
                 for (int x = 0; x < nx; ++x) {
                     const Vec3 p = grid_.position(bi * B + x, bj * B, bk * B + z);
                     float lv = 0.0f;
-                    if (!level(p.x, p.z, lv)) continue;
+                    if (!level(bi * B + x, bk * B + z, p.x, p.z, lv)) continue;
                     for (int y = 0; y < ny; ++y) {
                         const float sy = grid_.origin.y + h * static_cast<float>(bj * B + y);
                         out[x + B * (y + B * z)] += amplitude * std::clamp(1.0f + (lv - sy) * inv_width, 0.0f, 2.0f);

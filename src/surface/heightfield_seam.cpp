@@ -3,9 +3,13 @@
 // where the field draws it (surface.h, join_heightfield_to_field).
 #include <metariver/surface.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 namespace mr {
 
@@ -82,34 +86,61 @@ private:
     bool ok_ = false;
 };
 
-/// seam.column: the field's columns where some ball's field (> `floor`) reaches within
-/// `reach` of the water's level, in the stored blocks over fully wet cells.
+/// seam.column and seam.level: the field's columns where some ball's field (> `floor`)
+/// reaches within `reach` of the water's level, in the stored blocks over fully wet cells,
+/// and the level there. In parallel over the columns of blocks (each writes its own
+/// columns), each column's level found once for all its blocks: a column's mark is an "or"
+/// over its blocks, the same in any order.
 void mark_columns(const Water& water, const SparseField& f, float reach, float floor, HeightfieldSeam& seam) {
     const SampleGrid& g = f.grid();
     constexpr int B = SparseField::kBlock;
-    seam.column.assign(size_t(g.nx) * size_t(g.nz), 0);
+    const size_t columns = size_t(g.nx) * size_t(g.nz);
+    seam.column.assign(columns, 0);
+    seam.level.assign(columns, std::numeric_limits<float>::quiet_NaN());
     const auto dir = f.directory();
-    for (int bk = 0; bk < f.blocks_z(); ++bk)
-        for (int bj = 0; bj < f.blocks_y(); ++bj)
-            for (int bi = 0; bi < f.blocks_x(); ++bi) {
-                const int32_t slot = dir[f.block_index(bi, bj, bk)];
-                if (slot == SparseField::kNoBlock || !(f.block_max(slot) > floor)) continue;
-                const float* v = f.block_values(slot);
-                const int nx = std::min(B, g.nx - bi * B), ny = std::min(B, g.ny - bj * B), nz = std::min(B, g.nz - bk * B);
-                const float y0 = g.origin.y + g.spacing * float(bj * B);
-                for (int z = 0; z < nz; ++z)
-                    for (int x = 0; x < nx; ++x) {
-                        uint8_t& mark = seam.column[size_t(bi * B + x) + size_t(g.nx) * size_t(bk * B + z)];
-                        if (mark) continue;
-                        const Vec3 p = g.position(bi * B + x, 0, bk * B + z);
-                        float s = 0.0f;
-                        if (!water.at(p.x, p.z, s)) continue;
-                        const int lo = std::max(0, int(std::floor((s - reach - y0) / g.spacing)));
-                        const int hi = std::min(ny - 1, int(std::ceil((s + reach - y0) / g.spacing)));
-                        for (int y = lo; y <= hi && !mark; ++y) mark = v[x + B * (y + B * z)] > floor ? 1 : 0;
-                    }
+    const int bx = f.blocks_x(), by = f.blocks_y();
+    const auto column = [&](int bi, int bk, int x, int z) {
+        float s = 0.0f;
+        bool located = false;
+        for (int bj = 0; bj < by; ++bj) {
+            const int32_t slot = dir[f.block_index(bi, bj, bk)];
+            if (slot == SparseField::kNoBlock || !(f.block_max(slot) > floor)) continue;
+            if (!located) {
+                const Vec3 p = g.position(bi * B + x, 0, bk * B + z);
+                if (!water.at(p.x, p.z, s)) return;
+                located = true;
             }
+            const float* v = f.block_values(slot);
+            const int ny = std::min(B, g.ny - bj * B);
+            const float y0 = g.origin.y + g.spacing * float(bj * B);
+            const int lo = std::max(0, int(std::floor((s - reach - y0) / g.spacing)));
+            const int hi = std::min(ny - 1, int(std::ceil((s + reach - y0) / g.spacing)));
+            for (int y = lo; y <= hi; ++y)
+                if (v[x + B * (y + B * z)] > floor) {
+                    const size_t c = size_t(bi * B + x) + size_t(g.nx) * size_t(bk * B + z);
+                    seam.column[c] = 1;
+                    seam.level[c] = s;
+                    return;
+                }
+        }
+    };
+    tbb::parallel_for(tbb::blocked_range<int>(0, bx * f.blocks_z()), [&](const tbb::blocked_range<int>& r) {
+        for (int b = r.begin(); b != r.end(); ++b) {
+            const int bi = b % bx, bk = b / bx;
+            const int nx = std::min(B, g.nx - bi * B), nz = std::min(B, g.nz - bk * B);
+            for (int z = 0; z < nz; ++z)
+                for (int x = 0; x < nx; ++x) column(bi, bk, x, z);
+        }
+    });
     seam.columns = size_t(std::count(seam.column.begin(), seam.column.end(), uint8_t{1}));
+}
+
+/// f(n) for every vertex n < count, in parallel (each call writes vertex n's entries only).
+template <class F>
+void for_vertices(size_t count, const F& f) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 1024), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t n = r.begin(); n != r.end(); ++n) f(n);
+    });
 }
 
 /// Whether the field stores every sample around the box [lo, hi] (one sample beyond it on
@@ -147,14 +178,7 @@ void join_heightfield_to_field(std::span<const Vec3> bed, std::span<const float>
     // reaches the water's band: there its skirt rises from the water's level, and the term
     // ends where the balls add (almost) 0 near the water, under the heightfield drawn there.
     mark_columns(water, field, width + g.spacing, kReachShare * threshold, seam);
-    const int nx = g.nx, nz = g.nz;
-    field.add_level_term(
-        [&](float x, float z, float& s) {
-            const int i = int(std::lround((x - g.origin.x) / g.spacing)), k = int(std::lround((z - g.origin.z) / g.spacing));
-            if (i < 0 || k < 0 || i >= nx || k >= nz || !seam.column[size_t(i) + size_t(nx) * size_t(k)]) return false;
-            return water.at(x, z, s);
-        },
-        threshold, width);
+    field.add_level_term(std::span<const float>(seam.level), threshold, width);
     // The cells the field draws in full: the heightfield mesh leaves them out.
     const size_t w = size_t(columns);
     seam.cell.assign(size_t(rows - 1) * size_t(columns - 1), 0);
@@ -185,16 +209,16 @@ void drop_under_water(std::span<const Vec3> bed, std::span<const float> depth, i
     constexpr uint32_t kHidden = 1, kNone = ~uint32_t{0};
     std::vector<uint32_t>& map = scratch;
     map.assign(mesh.positions.size(), 0);
-    for (size_t n = 0; n < mesh.positions.size(); ++n) {
+    for_vertices(mesh.positions.size(), [&](size_t n) {
         const Vec3 p = mesh.positions[n];
         float s = 0.0f;
-        if (!water.at(p.x, p.z, s)) continue;
+        if (!water.at(p.x, p.z, s)) return;
         const int j = std::min(int((p.x - water.x0()) / water.dx()), columns - 2);
         const int i = std::min(int((p.z - water.z0()) / water.dz()), rows - 2);
         const bool field_draws = cells && seam.cell[size_t(i) * size_t(columns - 1) + size_t(j)];
         // Under the heightfield's surface (s + kUnder), or the field's own flat water (s).
         if (p.y < s + (field_draws ? -kHiddenDepth : kUnder - kHiddenUnder)) map[n] = kHidden;
-    }
+    });
     size_t t = 0;
     for (size_t k = 0; k + 2 < mesh.indices.size(); k += 3) {
         const uint32_t a = mesh.indices[k], b = mesh.indices[k + 1], c = mesh.indices[k + 2];
@@ -223,15 +247,15 @@ void seam_grid_velocities(std::span<const Vec3> bed, std::span<const float> dept
     out.assign(vertices.size(), glm::vec4(0.0f));
     const Water water(bed, depth, rows, columns);
     if (!water.ok() || velocity.size() != bed.size() || !(width > 0.0f)) return;
-    for (size_t n = 0; n < vertices.size(); ++n) {
+    for_vertices(vertices.size(), [&](size_t n) {
         const Vec3 p = vertices[n];
         size_t k[3];
         float a[3];
-        if (!water.locate(p.x, p.z, k, a)) continue;
+        if (!water.locate(p.x, p.z, k, a)) return;
         const float s = a[0] * water.level(k[0]) + a[1] * water.level(k[1]) + a[2] * water.level(k[2]) - kUnder;
         const Vec3 v = a[0] * velocity[k[0]] + a[1] * velocity[k[1]] + a[2] * velocity[k[2]];
         out[n] = glm::vec4(v, std::clamp(1.0f + (s - p.y) / width, 0.0f, 1.0f));
-    }
+    });
 }
 
 }  // namespace mr

@@ -345,6 +345,47 @@ TEST(SparseField, ALevelTermIsAddedToTheStoredBlocksOnlyLinearInHeight) {
     EXPECT_NEAR(g.value(1, 0, 1) - f.value(1, 0, 1), 1.0f, 1e-6f);  // y = 0 is at the level
 }
 
+TEST(SparseField, ALevelTermFromAColumnTableEqualsTheFunctions) {
+    // 300 balls in a 40 x 24 x 36 box (several blocks, partial ones at the far sides); a level
+    // varying per column, absent (NaN / false) in every third column: the table and the
+    // function give the same bits, and a table too short for the grid adds nothing.
+    const SampleGrid box{.origin = Vec3(-1.0f, 0.5f, 2.0f), .spacing = 0.1f, .nx = 40, .ny = 24, .nz = 36};
+    std::vector<Vec3> balls;
+    for (int n = 0; n < 300; ++n)
+        balls.emplace_back(-0.8f + 3.5f * float((n * 37) % 101) / 101.0f, 0.6f + 2.0f * float((n * 53) % 97) / 97.0f,
+                           2.2f + 3.0f * float((n * 71) % 89) / 89.0f);
+    const SparseFieldDef def{.kernel = poly6_kernel(0.3f, 1.0f), .domain = DomainMode::FixedBox, .box = box};
+    SparseField a, b;
+    ASSERT_TRUE(a.build(balls, def));
+    ASSERT_TRUE(b.build(balls, def));
+    ASSERT_GT(a.allocated_blocks(), 4u);
+    const auto level = [](int i, int k) { return 0.9f + 0.013f * float(i) + 0.007f * float(k * k % 17); };
+    std::vector<float> table(size_t(box.nx) * size_t(box.nz));
+    for (int k = 0; k < box.nz; ++k)
+        for (int i = 0; i < box.nx; ++i)
+            table[size_t(i) + size_t(box.nx) * size_t(k)] = (i + k) % 3 == 0 ? std::nanf("") : level(i, k);
+    a.add_level_term(
+        [&](float x, float z, float& s) {
+            const int i = int(std::lround((x - box.origin.x) / box.spacing)), k = int(std::lround((z - box.origin.z) / box.spacing));
+            s = level(i, k);
+            return (i + k) % 3 != 0;
+        },
+        0.5f, 0.2f);
+    b.add_level_term(std::span<const float>(table), 0.5f, 0.2f);
+    const std::vector<float> va = dense_values(a), vb = dense_values(b);
+    EXPECT_TRUE(bitwise_equal(va, vb));
+    for (size_t s = 0; s < a.allocated_blocks(); ++s) {
+        EXPECT_EQ(a.block_min(int32_t(s)), b.block_min(int32_t(s)));
+        EXPECT_EQ(a.block_max(int32_t(s)), b.block_max(int32_t(s)));
+    }
+    SparseField c;
+    ASSERT_TRUE(c.build(balls, def));
+    const std::vector<float> before = dense_values(c);
+    c.add_level_term(std::span<const float>(table).first(table.size() - 1), 0.5f, 0.2f);
+    EXPECT_TRUE(bitwise_equal(before, dense_values(c)));
+    EXPECT_FALSE(bitwise_equal(before, va));  // the term did add something
+}
+
 TEST(SparseField, SteadyStateBuildsReuseStorage) {
     const std::vector<Vec3> balls = w1_balls(1000);
     const SparseFieldDef def{.kernel = w1_kernel_for(1000), .domain = DomainMode::FixedBox, .box = w1_grid(64)};
