@@ -4,7 +4,8 @@
 // scheduler makes (a task's spawn before its execution, every task before the end of
 // the wait) are invisible to TSan, and every parallel_for would be reported as racing
 // with the code around it. This overload of tbb::parallel_for for a blocked_range of
-// any index type (the only form metariver calls) states exactly the guarantees TBB
+// any index type (with or without a static_partitioner: the forms metariver calls; and
+// parallel_invoke of two functions) states exactly the guarantees TBB
 // gives, as TSan annotations: everything before the call happens before every chunk of
 // the loop, and every chunk happens before the call returns. Chunks are NOT ordered with each other,
 // so a race between two chunks (the bugs TSan is here for) is still reported.
@@ -15,6 +16,8 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
+#include <tbb/partitioner.h>
 
 #include <cstddef>
 
@@ -32,6 +35,43 @@ void parallel_for(const blocked_range<Value>& range, const Body& body) {
         body(r);
         __tsan_release(&after);
     });
+    __tsan_acquire(&after);
+}
+
+/// The same edges for the statically split form (src/particles/parallel_blocks.h).
+template <typename Value, typename Body>
+void parallel_for(const blocked_range<Value>& range, const Body& body, const static_partitioner& part) {
+    char before = 0, after = 0;
+    __tsan_release(&before);
+    detail::d1::parallel_for(
+        range,
+        [&](const blocked_range<Value>& r) {
+            __tsan_acquire(&before);
+            body(r);
+            __tsan_release(&after);
+        },
+        part);
+    __tsan_acquire(&after);
+}
+
+/// And for two functions run side by side (the hybrid's grid and particles): everything
+/// before the call happens before both, both before the return; the two are NOT ordered
+/// with each other, so a race between them is still reported.
+template <typename F0, typename F1>
+void parallel_invoke(F0&& f0, F1&& f1) {
+    char before = 0, after = 0;
+    __tsan_release(&before);
+    detail::d1::parallel_invoke(
+        [&] {
+            __tsan_acquire(&before);
+            f0();
+            __tsan_release(&after);
+        },
+        [&] {
+            __tsan_acquire(&before);
+            f1();
+            __tsan_release(&after);
+        });
     __tsan_acquire(&after);
 }
 
