@@ -6,7 +6,8 @@
 # swe.init = "steady" (frame 0 is the river), swe.time_scale = "auto" and the automatic
 # discharge, and prints one markdown row from the stats' swe block (docs/shallow-water.md,
 # "The river on any map").
-# Usage: bash scripts/swe_table.sh [FRAMES] [OUT_DIR]   (METARIVER=path: another build)
+# Usage: bash scripts/swe_table.sh [FRAMES] [OUT_DIR]   (METARIVER=path: another build;
+# ONLY=regex: only the maps whose name matches, e.g. ONLY='flat|western' )
 set -euo pipefail
 cd "$(dirname "$0")/.."
 B=${METARIVER:-build/default/apps/metariver}
@@ -33,6 +34,7 @@ echo "| map | size | cell m | discharge m^3/s | spin-up (simulated, wall) | cove
 echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 run_map() {  # name, scene lines (after [swe]'s), extra args...
   local name=$1 lines=$2; shift 2
+  [ -n "${ONLY:-}" ] && ! [[ "$name" =~ $ONLY ]] && return
   local file; file=$(echo "$name" | tr '/ ,()' '_____')
   printf "$SWE$lines" > "$OUT/$file.toml"
   local t0; t0=$(date +%s.%N)

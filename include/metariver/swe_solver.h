@@ -32,11 +32,13 @@ inline constexpr float kSweLeastSlope = 1e-3f;
 /// map's diagonal) over 0.5 m/s.
 inline constexpr float kSweInitCrossings = 8.0f;
 /// swe.init_max_time = "auto" is also at least this many residence times: the volume the
-/// map holds over the inflow per second (a lake's level or a sheet settles over it).
-inline constexpr double kSweInitResidences = 12.0;
+/// map holds over the inflow per second (a lake's level or a sheet settles over it: the
+/// procedural flat map's sheet over 14 of them).
+inline constexpr double kSweInitResidences = 20.0;
 /// The steady spin-up stops after this many substeps or cell updates whatever its time cap
-/// (a warning; the cell updates bound its wall time: about a minute on two cores).
-inline constexpr uint64_t kSweInitMaxSubsteps = 400000;
+/// (a warning; the cell updates bound its wall time: about a minute on two cores; the
+/// substeps bound a map of few wet cells: western_usa at real scale needed more than 400,000).
+inline constexpr uint64_t kSweInitMaxSubsteps = 1200000;
 inline constexpr uint64_t kSweInitMaxCellUpdates = 6'000'000'000;
 
 /// How the water starts (swe.init).
@@ -148,6 +150,8 @@ struct SweInitReport {
 namespace swe {
 class ShallowWater;
 struct PointSource;
+struct Lake;
+class LakeLevels;
 }
 
 class SweSolver final : public Solver {
@@ -220,11 +224,11 @@ private:
     /// The core's rain from set_rain's rates, else the scene's rain keys.
     void apply_rain();
     void publish();
-    void spin_up();
+    void spin_up(swe::LakeLevels& lakes);
     /// swe.init = "steady": the depressions the sources' water can reach (every one under
     /// rain over the whole map) start full to their spill level, as a steady river leaves them.
-    /// `starts`: the sources' cells (column, row).
-    void fill_depressions(const std::vector<std::pair<int, int>>& starts);
+    /// `starts`: the sources' cells (column, row). Returns the lakes it filled.
+    std::vector<swe::Lake> fill_depressions(const std::vector<std::pair<int, int>>& starts);
     void add_sources(std::vector<swe::PointSource>& out) const;
 
     SweDef def_;

@@ -520,8 +520,8 @@ const SceneKey kKeys[] = {
     {.name = "swe.init_max_time", .type = K::Float, .unit = "s", .range = closed(1e-3, 1e10), .words = kSweInitTimeWords,
      .readers = kSwe, .edit = E::Rebuild,
      .help = "swe.init = \"steady\": simulated seconds the spin-up runs at most; auto: the larger of 8 times the main channel's "
-             "length (at least half the map's diagonal) over 0.5 m/s and 12 residence times (the volume the map holds over the "
-             "inflow per second, measured as it fills). Whatever it says, the work stops at 400,000 substeps or 6e9 cell updates.",
+             "length (at least half the map's diagonal) over 0.5 m/s and 20 residence times (the volume the map holds over the "
+             "inflow per second, measured as it fills). Whatever it says, the work stops at 1,200,000 substeps or 6e9 cell updates.",
      .field = MR_FIELD(swe.init_max_time)},
     {.name = "swe.initial_level", .type = K::Float, .unit = "m", .range = closed(-1e6, 1e6), .words = kLevelWords, .readers = kSwe,
      .edit = E::Rebuild, .help = "A still lake up to this height at the start (every sample below it wet); none: the map starts dry.",

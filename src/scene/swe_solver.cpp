@@ -4,6 +4,7 @@
 #include <metariver/swe_solver.h>
 #include <metariver/terrain.h>
 
+#include "lake_levels.h"
 #include "shallow_water.h"
 
 #include <fmt/format.h>
@@ -139,9 +140,9 @@ SweSolver::SweSolver(const Terrain& terrain, const SweDef& def, Vec3 resolved_so
         if (discharge_ > 0.0f) starts.emplace_back(sj, si);
         for (const SweSource& s : def_.sources)
             if (const auto c = cell_of(water_, s.start.x, s.start.z); c.first >= 0) starts.push_back(c);
-        fill_depressions(starts);
+        swe::LakeLevels lakes(fill_depressions(starts));
         core_->balance_reset();
-        spin_up();
+        spin_up(lakes);
     }
     start_time_ = core_->time();
     core_->balance_reset();
@@ -234,8 +235,11 @@ void SweSolver::add_sources(std::vector<swe::PointSource>& out) const {
 // the time asked). The automatic time cap is the larger of kSweInitCrossings channel
 // crossings and kSweInitResidences residence times (what the map holds over what comes in
 // a second, measured as it fills): a sheet over a flat map or a lake's level settles over
-// its residence time, not over the time the water takes to cross.
-void SweSolver::spin_up() {
+// its residence time, not over the time the water takes to cross. After each window the
+// filled lakes whose levels approach their steady ones geometrically are moved to where the
+// series ends (swe::LakeLevels): a large lake on the route settles over far more time than
+// the cap.
+void SweSolver::spin_up(swe::LakeLevels& lakes) {
     const auto t0 = std::chrono::steady_clock::now();
     const swe::ShallowWaterDef asked = core_->def();
     swe::ShallowWaterDef fast = asked;
@@ -253,6 +257,7 @@ void SweSolver::spin_up() {
     };
     const auto calm_under = [&](const swe::ShallowWaterDef& scheme) {
         core_->set_def(scheme);
+        lakes.restart();
         int calm = 0;
         swe::MassBalance prev = core_->balance();
         while (core_->time() < cap && work_left()) {
@@ -266,6 +271,10 @@ void SweSolver::spin_up() {
             prev = b;
             if (auto_cap && in > 0.0) cap = std::max(cap, kSweInitResidences * b.stored / (in / window));
             if (calm >= 2) return true;
+            if (lakes.after_window(*core_, tol) > 0) {  // moved: the storage jumped, the next windows decide
+                calm = 0;
+                prev = core_->balance();
+            }
         }
         return false;
     };
@@ -318,6 +327,27 @@ Flood4 flood4(const swe::ShallowWater& core, double sea_level) {
     return f;
 }
 
+/// A 4-neighbour walk over the nx x ny grid from the cells on `stack` (already marked in
+/// `seen`): visit(k) for each cell taken (false: the walk does not go on from it), then
+/// every unmarked neighbour q of k with go(k, q) is marked and taken.
+template <class Visit, class Go>
+void walk4(int nx, int ny, std::vector<int>& stack, std::vector<uint8_t>& seen, Visit&& visit, Go&& go) {
+    while (!stack.empty()) {
+        const int k = stack.back();
+        stack.pop_back();
+        if (!visit(k)) continue;
+        const int i = k % nx, j = k / nx;
+        const int next[4][2] = {{i - 1, j}, {i + 1, j}, {i, j - 1}, {i, j + 1}};
+        for (const auto& [a, b] : next) {
+            if (a < 0 || b < 0 || a >= nx || b >= ny) continue;
+            const int q = b * nx + a;
+            if (seen[size_t(q)] || !go(k, q)) continue;
+            seen[size_t(q)] = 1;
+            stack.push_back(q);
+        }
+    }
+}
+
 /// Every cell the water from `starts` can reach: from a cell, the water runs to each
 /// neighbour whose flooded level is not higher (on the bed, or over a full lake); it stops
 /// at the sea.
@@ -331,25 +361,18 @@ std::vector<int> reachable(const Flood4& f, const swe::ShallowWater& core, const
             reached[size_t(j) * nx + i] = 1;
             stack.push_back(j * nx + i);
         }
-    while (!stack.empty()) {
-        const int k = stack.back();
-        stack.pop_back();
-        cells.push_back(k);
-        const int i = k % nx, j = k / nx;
-        if (core.bed(i, j) < sea_level) continue;
-        const int next[4][2] = {{i - 1, j}, {i + 1, j}, {i, j - 1}, {i, j + 1}};
-        for (const auto& [a, b] : next) {
-            const int q = b * nx + a;
-            if (a < 0 || b < 0 || a >= nx || b >= ny || reached[size_t(q)] || f.level[size_t(q)] > f.level[size_t(k)]) continue;
-            reached[size_t(q)] = 1;
-            stack.push_back(q);
-        }
-    }
+    walk4(
+        nx, ny, stack, reached,
+        [&](int k) {
+            cells.push_back(k);
+            return core.bed(k % nx, k / nx) >= sea_level;
+        },
+        [&](int k, int q) { return f.level[size_t(q)] <= f.level[size_t(k)]; });
     return cells;
 }
 }  // namespace
 
-void SweSolver::fill_depressions(const std::vector<std::pair<int, int>>& starts) {
+std::vector<swe::Lake> SweSolver::fill_depressions(const std::vector<std::pair<int, int>>& starts) {
     const int nx = water_.columns, ny = water_.rows;
     const double sea = std::isfinite(def_.sea_level) ? double(def_.sea_level) : -HUGE_VAL;
     const Flood4 f = flood4(*core_, sea);
@@ -377,32 +400,31 @@ void SweSolver::fill_depressions(const std::vector<std::pair<int, int>>& starts)
     const double head = std::pow(q / (1.705 * water_.spacing), 2.0 / 3.0);
     std::vector<uint8_t> seen(static_cast<size_t>(nx) * ny, 0);
     std::vector<int> stack, lake;
+    std::vector<swe::Lake> lakes;
     for (const int k0 : seeds) {
         if (seen[size_t(k0)] || !low(k0)) continue;
         seen[size_t(k0)] = 1;
         stack.assign(1, k0);
         lake.clear();
         bool on_route = false;
-        while (!stack.empty()) {  // one depression (4-connected)
-            const int k = stack.back();
-            stack.pop_back();
-            lake.push_back(k);
-            on_route = on_route || route[size_t(k)];
-            const int i = k % nx, j = k / nx;
-            const int next[4][2] = {{i - 1, j}, {i + 1, j}, {i, j - 1}, {i, j + 1}};
-            for (const auto& [a, b] : next) {
-                const int n = b * nx + a;
-                if (a < 0 || b < 0 || a >= nx || b >= ny || seen[size_t(n)] || !low(n)) continue;
-                seen[size_t(n)] = 1;
-                stack.push_back(n);
-            }
-        }
+        walk4(  // one depression (4-connected)
+            nx, ny, stack, seen,
+            [&](int k) {
+                lake.push_back(k);
+                on_route = on_route || route[size_t(k)];
+                return true;
+            },
+            [&](int, int n) { return low(n); });
+        double spill_depth = 0.0;
         for (const int k : lake) {  // full to its spill level (plus the head on the route)
             const int i = k % nx, j = k / nx;
             const double h = f.level[size_t(k)] + (on_route ? head : 0.0) - core_->bed(i, j);
             if (h > core_->depth(i, j)) core_->set_state(i, j, h);
+            spill_depth += f.level[size_t(k)] - core_->bed(i, j);
         }
+        lakes.push_back({lake, spill_depth / double(lake.size())});
     }
+    return lakes;
 }
 
 double SweSolver::simulated_s() const { return core_->time() - start_time_; }
