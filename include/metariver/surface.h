@@ -89,14 +89,13 @@ struct SurfaceWorkspace {
 };
 
 /// Scratch of append_heightfield_surface, reused by the caller (no allocation once warm).
-/// vertex and crossing are all none between calls (each call clears what it set), so a
-/// call's cost follows the wet samples, not the grid.
+/// Its slots cover two sample rows (a cell row reads its two and nothing else), so a
+/// call's cost follows the wet samples, not the grid; they are all none between calls.
 struct HeightfieldScratch {
-    std::vector<uint32_t> vertex;    ///< per sample: its vertex, or none
-    std::vector<uint32_t> crossing;  ///< 3 per sample: the shoreline vertex on its +x, +z and diagonal edge
-    std::vector<float> level;        ///< per sample: the water's level (wet) or the ring's (below)
-    std::vector<int> first, last;            ///< per row: its wet columns (first > last: none)
-    std::vector<int> ring_first, ring_last;  ///< per row: the wet columns of it and its neighbours, +-1
+    std::vector<uint32_t> vertex;    ///< 2 x columns: the vertex of each sample of two rows, or none
+    std::vector<uint32_t> crossing;  ///< 4 x columns: the shoreline vertex on two rows' +x edges, one cell row's +z and diagonal edges
+    std::vector<uint32_t> row_base;  ///< per row: the vertex of its first wet sample (vertices of wet samples in sample order)
+    std::vector<int> first, last;    ///< per row: its wet columns (first > last: none)
 };
 
 /// Water given as depths over a heightfield (a solver's HeightfieldWater on the

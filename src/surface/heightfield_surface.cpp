@@ -2,11 +2,17 @@
 // the wet samples' triangles at bed + depth, split as the terrain's mesh is, cut along the
 // line where the water's level meets the bed (marching triangles over level - bed), with
 // area-weighted vertex normals.
+//
+// Cost: one pass over the rows' wet columns for the wet samples' vertices, one over the
+// cells beside them for the triangles. The vertex and cut slots live in two rows of
+// scratch (a cell row reads its two sample rows and nothing else), and a dry sample's level
+// is computed where a cut needs it, so nothing per sample of the grid is written or cleared.
 #include <metariver/surface.h>
 
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -21,9 +27,7 @@ constexpr float kFilm = 0.005f;  // metres: thinner water is drawn as dry (films
 
 /// The rows' wet columns: row i's samples with depth > kFilm lie in [first[i], last[i]]
 /// (first = columns, last = -1: none), narrowed from the caller's spans (a superset of
-/// the wet samples, hint_first/hint_last) or, without them, from a scan of the row. Then
-/// the region each row's work touches: ring_first/ring_last, the wet columns of the row and
-/// its two neighbours widened by one column (the wet samples and the ring around them).
+/// the wet samples, hint_first/hint_last) or, without them, from a scan of the row.
 void wet_rows(std::span<const float> depth, int rows, int columns, std::span<const int> hint_first,
               std::span<const int> hint_last, HeightfieldScratch& s) {
     const bool hinted = hint_first.size() == size_t(rows) && hint_last.size() == size_t(rows);
@@ -37,85 +41,158 @@ void wet_rows(std::span<const float> depth, int rows, int columns, std::span<con
         s.first[size_t(i)] = a <= b ? a : columns;
         s.last[size_t(i)] = a <= b ? b : -1;
     }
-    s.ring_first.resize(size_t(rows));
-    s.ring_last.resize(size_t(rows));
-    for (int i = 0; i < rows; ++i) {
-        int a = columns, b = -1;
-        for (int r = std::max(i - 1, 0); r <= std::min(i + 1, rows - 1); ++r) {
-            a = std::min(a, s.first[size_t(r)]);
-            b = std::max(b, s.last[size_t(r)]);
-        }
-        s.ring_first[size_t(i)] = a <= b ? std::max(a - 1, 0) : columns;
-        s.ring_last[size_t(i)] = a <= b ? std::min(b + 1, columns - 1) : -1;
-    }
 }
 
-/// The water's level per sample: bed + depth where wet; on the ring (dry beside a wet
-/// sample, 8 neighbours) from L, the lowest of the wet neighbours' levels: L where the
-/// sample's bed is above it (the cut is the contour), else as far below the bed as L is
-/// above it (bed - |L - bed|), so level - bed is > 0 exactly on the wet samples and
-/// continuous in L. A dry sample lower than the water beside it (a front, a steep stream's
-/// bank) then ends the water part way to it, not at it (which drew teeth along such banks).
-/// The lowest, not the mean: upstream neighbours would lift the ring over the banks.
-/// Only the rows' ring regions are written (samples beyond the ring are never read).
-void water_levels(std::span<const Vec3> bed, std::span<const float> depth, int rows, int columns, HeightfieldScratch& s) {
-    s.level.resize(bed.size());
-    for (int i = 0; i < rows; ++i)
-        for (int j = s.ring_first[size_t(i)]; j <= s.ring_last[size_t(i)]; ++j) {
-            const size_t k = size_t(i) * size_t(columns) + size_t(j);
-            s.level[k] = bed[k].y + std::max(depth[k], 0.0f);
-            if (depth[k] > kFilm) continue;
-            float lowest = std::numeric_limits<float>::max();
-            for (int di = -1; di <= 1; ++di)
-                for (int dj = -1; dj <= 1; ++dj) {
-                    const int a = i + di, b = j + dj;
-                    if (a < 0 || b < 0 || a >= rows || b >= columns) continue;
-                    const size_t q = size_t(a) * size_t(columns) + size_t(b);
-                    if (depth[q] > kFilm) lowest = std::min(lowest, bed[q].y + depth[q]);
-                }
-            if (lowest < std::numeric_limits<float>::max()) s.level[k] = bed[k].y - std::abs(lowest - bed[k].y);
-        }
+/// A cell row's and a sample row's columns. Cell row i (samples i and i + 1) has triangles
+/// in cells [lo, hi] (cell j: columns j and j + 1), those beside rows i and i + 1's wet
+/// samples; sample row r is read by cell rows r - 1 and r, in columns [lo, hi + 1] of each.
+struct Span {
+    int lo = 0, hi = -1;
+};
+
+Span joined(Span a, Span b) {
+    if (a.lo > a.hi) return b;
+    if (b.lo > b.hi) return a;
+    return {std::min(a.lo, b.lo), std::max(a.hi, b.hi)};
+}
+
+Span cell_span(const HeightfieldScratch& s, int i, int columns) {
+    const size_t a = size_t(i), b = size_t(i) + 1;
+    return {std::max(std::min(s.first[a], s.first[b]) - 1, 0), std::min(std::max(s.last[a], s.last[b]), columns - 2)};
 }
 
 class Builder {
 public:
-    Builder(std::span<const Vec3> bed, std::span<const float> depth, int columns, SurfaceMesh& out,
+    Builder(std::span<const Vec3> bed, std::span<const float> depth, int rows, int columns, SurfaceMesh& out,
             HeightfieldScratch& s, std::span<const Vec3> velocity, std::vector<Vec3>* vertex_velocity)
-        : bed_(bed), depth_(depth), w_(size_t(columns)), out_(out), s_(s), velocity_(velocity), vv_(vertex_velocity) {
+        : bed_(bed), depth_(depth), rows_(rows), columns_(columns), w_(size_t(columns)), out_(out), s_(s),
+          velocity_(velocity), vv_(vertex_velocity) {
         const Vec3 dx = bed[1] - bed[0], dz = bed[w_] - bed[0];
         min_area_ = 1e-6f * std::abs(dx.x * dz.z - dx.z * dz.x);  // of a cell's, seen from above
+        // Rolling slots: two sample rows of vertices and of cuts on their +x edges, one
+        // cell row of cuts on its +z (vertical) and diagonal edges.
+        s_.vertex.assign(2 * w_, kNone);
+        s_.crossing.assign(4 * w_, kNone);
     }
 
     bool wet(size_t k) const { return depth_[k] > kFilm; }
 
-    /// The vertex of sample k at its level (created on first use, with the velocity of
-    /// sample `velocity_of`: k's own, or for a dry k a cut's wet end's).
-    uint32_t sample_vertex(size_t k, size_t velocity_of) {
-        uint32_t& v = s_.vertex[k];
-        if (v == kNone) v = add(Vec3(bed_[k].x, s_.level[k], bed_[k].z), velocity_of);
+    /// The wet samples' vertices, in sample order (row r's first is s.row_base[r]).
+    void wet_vertices() {
+        s_.row_base.resize(size_t(rows_));
+        for (int i = 0; i < rows_; ++i) {
+            s_.row_base[size_t(i)] = uint32_t(out_.positions.size());
+            for (int j = s_.first[size_t(i)]; j <= s_.last[size_t(i)]; ++j)
+                if (const size_t k = size_t(i) * w_ + size_t(j); wet(k)) add(Vec3(bed_[k].x, level(k, i, j), bed_[k].z), k);
+        }
+    }
+
+    /// Cell row i's two triangles per cell, (c, c + w, c + 1) and (c + 1, c + w, c + w + 1)
+    /// as the terrain's, each cut to its wet part. `skip` (empty or the row's cells) leaves
+    /// cells out.
+    void cell_row(int i, std::span<const uint8_t> skip) {
+        const Span cells = cell_span(s_, i, columns_);
+        if (i == 0) start_sample_row(0, cells);
+        start_sample_row(i + 1, i + 2 < rows_ ? joined(cells, cell_span(s_, i + 1, columns_)) : cells);
+        if (cells.lo > cells.hi) return;
+        top_ = (size_t(i) & 1) * w_;
+        bottom_ = w_ - top_;
+        uint32_t* vertical = s_.crossing.data() + 2 * w_;
+        uint32_t* diagonal = vertical + w_;
+        std::fill(vertical + cells.lo, vertical + cells.hi + 2, kNone);
+        std::fill(diagonal + cells.lo, diagonal + cells.hi + 1, kNone);
+        row_ = i;
+        for (int j = cells.lo; j <= cells.hi; ++j) {
+            const size_t c = size_t(i) * w_ + size_t(j);
+            if (!skip.empty() && skip[size_t(j)]) continue;
+            if (!wet(c) && !wet(c + 1) && !wet(c + w_) && !wet(c + w_ + 1)) continue;
+            const size_t jj = size_t(j);
+            uint32_t* up = s_.crossing.data() + top_;
+            uint32_t* down = s_.crossing.data() + bottom_;
+            triangle({c, c + w_, c + 1}, {{{0, j}, {1, j}, {0, j + 1}}}, {vertical + jj, diagonal + jj, up + jj});
+            triangle({c + 1, c + w_, c + w_ + 1}, {{{0, j + 1}, {1, j}, {1, j + 1}}}, {diagonal + jj, down + jj, vertical + jj + 1});
+        }
+    }
+
+    /// Leaves the slots none (a reused scratch is clean between calls).
+    void finish() {
+        std::fill(s_.vertex.begin(), s_.vertex.end(), kNone);
+        std::fill(s_.crossing.begin(), s_.crossing.end(), kNone);
+    }
+
+private:
+    struct Corner {
+        int di, j;  ///< row (0: the cell row's top sample row, 1: its bottom) and column
+    };
+
+    /// Sample row r's slots over `cells` (the cells of the rows beside it that read it):
+    /// its wet samples' vertices (made by wet_vertices, in order) and none elsewhere.
+    void start_sample_row(int r, Span cells) {
+        if (cells.lo > cells.hi) return;
+        const size_t at = (size_t(r) & 1) * w_;
+        uint32_t* v = s_.vertex.data() + at;
+        uint32_t* h = s_.crossing.data() + at;
+        uint32_t next = s_.row_base[size_t(r)];
+        const int first = s_.first[size_t(r)], last = s_.last[size_t(r)];
+        for (int j = cells.lo; j <= cells.hi + 1; ++j) {
+            const bool w = j >= first && j <= last && wet(size_t(r) * w_ + size_t(j));
+            v[j] = w ? next++ : kNone;
+            h[j] = kNone;
+        }
+    }
+
+    /// The water's level at sample k = (i, j): bed + depth where wet. A dry sample (cut
+    /// ends only: beside a wet one, 8 neighbours) from L, the lowest of the wet neighbours'
+    /// levels: L where the sample's bed is above it (the cut is the contour), else as far
+    /// below the bed as L is above it (bed - |L - bed|), so level - bed is > 0 exactly on
+    /// the wet samples and continuous in L. A dry sample lower than the water beside it (a
+    /// front, a steep stream's bank) then ends the water part way to it, not at it (which
+    /// drew teeth along such banks). The lowest, not the mean: upstream neighbours would
+    /// lift the ring over the banks.
+    float level(size_t k, int i, int j) const {
+        const float own = bed_[k].y + std::max(depth_[k], 0.0f);
+        if (wet(k)) return own;
+        float lowest = std::numeric_limits<float>::max();
+        for (int di = -1; di <= 1; ++di)
+            for (int dj = -1; dj <= 1; ++dj) {
+                const int a = i + di, b = j + dj;
+                if (a < 0 || b < 0 || a >= rows_ || b >= columns_) continue;
+                const size_t q = size_t(a) * w_ + size_t(b);
+                if (wet(q)) lowest = std::min(lowest, bed_[q].y + depth_[q]);
+            }
+        return lowest < std::numeric_limits<float>::max() ? bed_[k].y - std::abs(lowest - bed_[k].y) : own;
+    }
+
+    uint32_t& vertex_slot(Corner c) { return s_.vertex[(c.di ? bottom_ : top_) + size_t(c.j)]; }
+
+    /// The vertex of a dry sample (a snapped cut's end) at its level, with the velocity of
+    /// sample `velocity_of` (the cut's wet end), made on first use. Wet samples have theirs.
+    uint32_t sample_vertex(size_t k, Corner c, size_t velocity_of) {
+        uint32_t& v = vertex_slot(c);
+        if (v == kNone) v = add(Vec3(bed_[k].x, level(k, row_ + c.di, c.j), bed_[k].z), velocity_of);
         return v;
     }
 
     /// Triangle (a, b, c), counter-clockwise from above: its part where level > bed.
-    void triangle(size_t a, size_t b, size_t c) {
-        const size_t corner[3] = {a, b, c};
-        const bool in[3] = {wet(a), wet(b), wet(c)};
+    /// `edge[e]` is the cut slot of the edge from corner e to corner e + 1.
+    void triangle(const std::array<size_t, 3>& k, const std::array<Corner, 3>& at, const std::array<uint32_t*, 3>& edge) {
+        const bool in[3] = {wet(k[0]), wet(k[1]), wet(k[2])};
+        if (in[0] && in[1] && in[2]) return emit(vertex_slot(at[0]), vertex_slot(at[1]), vertex_slot(at[2]));
         if (!in[0] && !in[1] && !in[2]) return;
         uint32_t poly[4];
         int n = 0;
         for (int e = 0; e < 3; ++e) {
-            const size_t p = corner[e], q = corner[(e + 1) % 3];
-            if (in[e]) poly[n++] = sample_vertex(p, p);
-            if (in[e] != in[(e + 1) % 3]) poly[n++] = in[e] ? cut(p, q) : cut(q, p);
+            const int f = (e + 1) % 3;
+            if (in[e]) poly[n++] = vertex_slot(at[e]);
+            if (in[e] != in[f]) poly[n++] = in[e] ? cut(k[e], at[e], k[f], at[f], *edge[e]) : cut(k[f], at[f], k[e], at[e], *edge[e]);
         }
         int m = 0;  // snapped cuts may repeat a vertex: drop the repeats
-        for (int k = 0; k < n; ++k)
-            if (m == 0 || poly[m - 1] != poly[k]) poly[m++] = poly[k];
+        for (int q = 0; q < n; ++q)
+            if (m == 0 || poly[m - 1] != poly[q]) poly[m++] = poly[q];
         while (m > 1 && poly[m - 1] == poly[0]) --m;
-        for (int k = 1; k + 1 < m; ++k) emit(poly[0], poly[k], poly[k + 1]);
+        for (int q = 1; q + 1 < m; ++q) emit(poly[0], poly[q], poly[q + 1]);
     }
 
-private:
     uint32_t add(const Vec3& p, size_t velocity_of) {
         out_.positions.push_back(p);
         out_.normals.emplace_back(0.0f);
@@ -123,35 +200,43 @@ private:
         return uint32_t(out_.positions.size() - 1);
     }
 
-    /// The shoreline's vertex on the edge from wet sample p to dry sample q (one per edge).
-    uint32_t cut(size_t p, size_t q) {
-        const size_t lo = std::min(p, q), hi = std::max(p, q);
-        const size_t slot = 3 * lo + (hi == lo + 1 ? 0 : hi == lo + w_ ? 1 : 2);
-        uint32_t& v = s_.crossing[slot];
-        if (v != kNone) return v;
-        const float fp = s_.level[p] - bed_[p].y, fq = s_.level[q] - bed_[q].y;  // > 0, <= 0
+    /// The shoreline's vertex on the edge from wet sample p to dry sample q (one per edge,
+    /// kept in `slot`).
+    uint32_t cut(size_t p, Corner pc, size_t q, Corner qc, uint32_t& slot) {
+        if (slot != kNone) return slot;
+        const float lp = bed_[p].y + depth_[p], lq = level(q, row_ + qc.di, qc.j);
+        const float fp = lp - bed_[p].y, fq = lq - bed_[q].y;  // > 0, <= 0
         const float t = fp / (fp - fq);
-        if (t < kSnap) return v = sample_vertex(p, p);
-        if (t > 1.0f - kSnap) return v = sample_vertex(q, p);
-        const Vec3 a(bed_[p].x, s_.level[p], bed_[p].z), b(bed_[q].x, s_.level[q], bed_[q].z);
-        return v = add(a + t * (b - a), p);
+        if (t < kSnap) return slot = vertex_slot(pc);
+        if (t > 1.0f - kSnap) return slot = sample_vertex(q, qc, p);
+        const Vec3 a(bed_[p].x, lp, bed_[p].z), b(bed_[q].x, lq, bed_[q].z);
+        return slot = add(a + t * (b - a), p);
     }
 
     void emit(uint32_t a, uint32_t b, uint32_t c) {
-        const Vec3 nrm = glm::cross(out_.positions[b] - out_.positions[a], out_.positions[c] - out_.positions[a]);
+        Vec3* n = out_.normals.data();
+        const Vec3* p = out_.positions.data();
+        const Vec3 nrm = glm::cross(p[b] - p[a], p[c] - p[a]);
         if (!(nrm.y > 2.0f * min_area_)) return;  // collinear (or turned over): no triangle
-        out_.indices.insert(out_.indices.end(), {a, b, c});
-        for (const uint32_t v : {a, b, c}) out_.normals[v] += nrm;
+        out_.indices.push_back(a);  // not insert({a, b, c}): that is a range insert's memmove per triangle
+        out_.indices.push_back(b);
+        out_.indices.push_back(c);
+        n[a] += nrm;
+        n[b] += nrm;
+        n[c] += nrm;
     }
 
     std::span<const Vec3> bed_;
     std::span<const float> depth_;
+    int rows_, columns_;
     size_t w_;
     SurfaceMesh& out_;
     HeightfieldScratch& s_;
     std::span<const Vec3> velocity_;
     std::vector<Vec3>* vv_;
     float min_area_ = 0.0f;
+    int row_ = 0;
+    size_t top_ = 0, bottom_ = 0;  ///< offsets of the cell row's sample rows in the rolling slots
 };
 
 }  // namespace
@@ -168,39 +253,17 @@ void append_heightfield_surface(std::span<const Vec3> bed, std::span<const float
     HeightfieldScratch own;
     HeightfieldScratch& s = scratch ? *scratch : own;
     wet_rows(depth, rows, columns, wet_first, wet_last, s);
-    water_levels(bed, depth, rows, columns, s);
-    if (s.vertex.size() != n) s.vertex.assign(n, kNone);  // else all none since the last call
-    if (s.crossing.size() != 3 * n) s.crossing.assign(3 * n, kNone);
     const size_t first = out.positions.size();
     out.normals.resize(first, Vec3(0.0f, 1.0f, 0.0f));
-    Builder build(bed, depth, columns, out, s, velocity, vertex_velocity);
-    for (int i = 0; i < rows; ++i)  // the wet samples' vertices first, in sample order
-        for (int j = s.first[size_t(i)]; j <= s.last[size_t(i)]; ++j)
-            if (const size_t k = size_t(i) * w + size_t(j); build.wet(k)) build.sample_vertex(k, k);
-    // Two triangles per cell, (c, c + w, c + 1) and (c + 1, c + w, c + w + 1) as the
-    // terrain's, each cut to its wet part: the cells of rows i and i + 1's wet columns.
-    for (int i = 0; i + 1 < rows; ++i) {
-        const int lo = std::max(std::min(s.first[size_t(i)], s.first[size_t(i) + 1]) - 1, 0);
-        const int hi = std::min(std::max(s.last[size_t(i)], s.last[size_t(i) + 1]), columns - 2);
-        for (int j = lo; j <= hi; ++j) {
-            const size_t c = size_t(i) * w + size_t(j);
-            if (!skip_cells.empty() && skip_cells[size_t(i) * (w - 1) + size_t(j)]) continue;
-            if (!build.wet(c) && !build.wet(c + 1) && !build.wet(c + w) && !build.wet(c + w + 1)) continue;
-            build.triangle(c, c + w, c + 1);
-            build.triangle(c + 1, c + w, c + w + 1);
-        }
-    }
+    Builder build(bed, depth, rows, columns, out, s, velocity, vertex_velocity);
+    build.wet_vertices();
+    for (int i = 0; i + 1 < rows; ++i)
+        build.cell_row(i, skip_cells.empty() ? skip_cells : skip_cells.subspan(size_t(i) * (w - 1), w - 1));
+    build.finish();
     for (size_t v = first; v < out.normals.size(); ++v) {
         const float len = glm::length(out.normals[v]);
         out.normals[v] = len > 0.0f ? out.normals[v] / len : Vec3(0.0f, 1.0f, 0.0f);
     }
-    // Every vertex and cut lies on a ring region's sample: clear them there for the next call.
-    for (int i = 0; i < rows; ++i)
-        for (int j = s.ring_first[size_t(i)]; j <= s.ring_last[size_t(i)]; ++j) {
-            const size_t k = size_t(i) * w + size_t(j);
-            s.vertex[k] = kNone;
-            std::fill_n(s.crossing.begin() + std::ptrdiff_t(3 * k), 3, kNone);
-        }
 }
 
 }  // namespace mr
