@@ -442,8 +442,10 @@ bool SweSolver::set_params(const SweDef& def, Vec3 resolved_source) {
 void SweSolver::publish() {
     // The float view of the core's doubles (depth and depth-averaged velocity), row by row
     // over the core's wet span and the one shown before (which may have dried): outside
-    // both, the view holds zeros already.
-    float fastest = 0.0f;
+    // both, the view holds zeros already. The fastest speed is the root of the largest
+    // squared speed (the root is monotonic and correctly rounded: the same float as the
+    // largest root), one root a frame instead of one a cell.
+    float fastest2 = 0.0f;
     for (int j = 0; j < water_.rows; ++j) {
         const auto [lo, hi] = core_->wet_span(j);
         const int first = std::min(lo, water_.wet_first[size_t(j)]), last = std::max(hi, water_.wet_last[size_t(j)]);
@@ -455,12 +457,12 @@ void SweSolver::publish() {
             water_.velocity[k] = moving ? Vec3(static_cast<float>(core_->discharge_x(i, j) / h), 0.0f,
                                                static_cast<float>(core_->discharge_y(i, j) / h))
                                         : Vec3(0.0f);
-            fastest = std::max(fastest, glm::length(water_.velocity[k]));
+            fastest2 = std::max(fastest2, glm::dot(water_.velocity[k], water_.velocity[k]));
         }
         water_.wet_first[size_t(j)] = lo <= hi ? lo : water_.columns;
         water_.wet_last[size_t(j)] = lo <= hi ? hi : -1;
     }
-    counters_.max_speed = fastest;
+    counters_.max_speed = std::sqrt(fastest2);
 }
 
 void SweSolver::step_frame(float frame_dt) {
