@@ -426,7 +426,9 @@ private:
     Scratch& s_;
 };
 
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
+// Not under ThreadSanitizer: the clones' ifunc resolvers run while the dynamic loader
+// relocates, before the TSan runtime is up, and crash there (as spring_sum's would).
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && !defined(__SANITIZE_THREAD__)
 #define MR_CLONES [[gnu::flatten, gnu::target_clones("avx512f", "avx2", "default")]]
 #else
 #define MR_CLONES

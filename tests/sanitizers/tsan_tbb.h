@@ -4,7 +4,7 @@
 // scheduler makes (a task's spawn before its execution, every task before the end of
 // the wait) are invisible to TSan, and every parallel_for would be reported as racing
 // with the code around it. This overload of tbb::parallel_for for a blocked_range of
-// any index type (with or without a static_partitioner: the forms metariver calls; and
+// any index type (with or without a static, simple or auto partitioner: the forms metariver calls; and
 // parallel_invoke of two functions) states exactly the guarantees TBB
 // gives, as TSan annotations: everything before the call happens before every chunk of
 // the loop, and every chunk happens before the call returns. Chunks are NOT ordered with each other,
@@ -38,9 +38,11 @@ void parallel_for(const blocked_range<Value>& range, const Body& body) {
     __tsan_acquire(&after);
 }
 
-/// The same edges for the statically split form (src/particles/parallel_blocks.h).
-template <typename Value, typename Body>
-void parallel_for(const blocked_range<Value>& range, const Body& body, const static_partitioner& part) {
+/// The same edges with a partitioner: static (src/particles/parallel_blocks.h), simple (the
+/// shallow-water sweep's rows), or auto. One overload each: a template over the
+/// partitioner would be no more specialised than TBB's own and the call ambiguous.
+template <typename Value, typename Body, typename Partitioner>
+void annotated_parallel_for(const blocked_range<Value>& range, const Body& body, const Partitioner& part) {
     char before = 0, after = 0;
     __tsan_release(&before);
     detail::d1::parallel_for(
@@ -52,6 +54,18 @@ void parallel_for(const blocked_range<Value>& range, const Body& body, const sta
         },
         part);
     __tsan_acquire(&after);
+}
+template <typename Value, typename Body>
+void parallel_for(const blocked_range<Value>& range, const Body& body, const static_partitioner& part) {
+    annotated_parallel_for(range, body, part);
+}
+template <typename Value, typename Body>
+void parallel_for(const blocked_range<Value>& range, const Body& body, const simple_partitioner& part) {
+    annotated_parallel_for(range, body, part);
+}
+template <typename Value, typename Body>
+void parallel_for(const blocked_range<Value>& range, const Body& body, const auto_partitioner& part) {
+    annotated_parallel_for(range, body, part);
 }
 
 /// And for two functions run side by side (the hybrid's grid and particles): everything
