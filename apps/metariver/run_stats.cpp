@@ -256,6 +256,7 @@ json hybrid_json(const Simulation& sim, long long frames, double dt) {
             {"particle_volume_m3", h->particle_volume()},
             {"total_volume_m3", h->total_volume()},
             {"grid_balance_error_m3", h->grid_balance_error()},
+            {"shed_faces", {{"cliff", h->cliff_faces()}, {"launch", h->launch_faces()}}},
             {"momentum_m4_s", {{"cells_out", {st.cell_momentum_out[0], st.cell_momentum_out[1]}},
                                {"particles_in", {st.particle_momentum_in[0], st.particle_momentum_in[1]}},
                                {"particles_out", {st.particle_momentum_out[0], st.particle_momentum_out[1]}},

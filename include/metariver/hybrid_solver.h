@@ -30,7 +30,16 @@ struct IntegratorDef;
 
 /// [hybrid]: when grid water becomes particles and back (solver = "hybrid").
 struct HybridDef {
-    float drop = 1.0f;           ///< metres: a bed drop steeper than this at a wet cell's downstream face sheds particles
+    /// Where the grid sheds (docs/waterfalls.md): a face whose bed drops by more than `drop`
+    /// metres to the neighbour, and either as steep as `min_grade` (drop / cell size: a cliff
+    /// or a weir's edge) or, with `launch` > 0, where the flow over it leaves the ground (a
+    /// body thrown at the cell's speed along the bed it arrives on falls less than the bed
+    /// over the cell: 2 u^2 (drop / dx - upstream grade) >= launch x g dx). On km cells a
+    /// gentle reach drops more than `drop` between neighbours; the grade and the launch
+    /// scale with the cell, so it sheds nothing.
+    float drop = 1.0f;           ///< metres: a smaller bed drop at a wet cell's downstream face sheds nothing
+    float min_grade = 1.0f;      ///< drop / cell size: a face this steep (1: 45 degrees) sheds (a cliff)
+    float launch = 1.0f;         ///< the launch number a gentler face sheds at (1: the thrown water clears the bed; 0: only cliffs)
     float min_depth = 0.02f;     ///< metres: shallower cells shed nothing
     float min_speed = 0.05f;     ///< m/s: slower flow over the edge sheds nothing
     float absorb_age = 0.2f;     ///< seconds: a particle younger than this is not absorbed (it leaves the edge first)
@@ -88,6 +97,10 @@ public:
     void set_spawn_center(const Vec3& center) override { grid_->set_spawn_center(center); }
 
     const HybridDef& def() const { return def_; }
+    /// The faces that can shed (find_edges()): those as steep as hybrid.min_grade (cliffs),
+    /// and the gentler convex ones where a fast enough flow launches.
+    size_t cliff_faces() const { return cliff_faces_; }
+    size_t launch_faces() const { return launch_faces_; }
     const HybridStats& stats() const { return stats_; }
     const SweSolver& grid() const { return *grid_; }
     SweSolver& grid() { return *grid_; }
@@ -107,8 +120,9 @@ public:
     bool set_params(const HybridDef& def, const SweDef& swe, Vec3 resolved_source);
 
 private:
-    /// The cells with a face whose bed drops by more than def_.drop (the only cells that
-    /// can shed), in row-major order, with a bit per face (kDi/kDj's order).
+    /// The cells with a face that can shed (the bed drops by more than def_.drop, as steep
+    /// as def_.min_grade or convex where def_.launch is on), in row-major order, with a bit
+    /// per face (kDi/kDj's order).
     void find_edges();
     void shed(float frame_dt);
     void shed_cell(int i, int j, int dir, double volume, float frame_dt);
@@ -130,12 +144,20 @@ private:
     std::vector<uint8_t> sheds_;     ///< per cell: shed over an edge this frame (absorbs nothing)
     struct EdgeCell {
         int i, j;
-        uint8_t faces;  ///< bit d: the bed drops by more than def_.drop towards face d
+        uint8_t faces;   ///< bit d: the bed drops by more than def_.drop towards face d
+        uint8_t cliffs;  ///< bit d: ... and at least def_.min_grade steeply (sheds at any speed)
+        /// Per face that is not a cliff: drop / dx less the grade the water arrives on
+        /// (> 0: convex); it sheds where 2 u^2 bend >= def_.launch g dx.
+        std::array<float, 4> bend;
     };
+    /// Whether a face of e with the flow `along` (m/s) towards it sheds this frame.
+    bool launches(const EdgeCell& e, int d, double along) const;
     std::vector<EdgeCell> edges_;    ///< from find_edges(): the every-cell scan done once
     std::vector<float> rest_time_;   ///< per particle id: seconds at rest on the ground
     std::vector<Vec3> new_pos_, new_vel_;
     uint64_t shed_count_ = 0;        ///< particles made so far (their placement's sequence)
+    size_t cliff_faces_ = 0, launch_faces_ = 0;
+    float gravity_ = 9.81f;          ///< m/s^2: the launch rule's
 };
 
 }  // namespace mr

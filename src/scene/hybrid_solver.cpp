@@ -34,6 +34,9 @@ SpawnDef no_source(Vec3 at, int budget) {
     return s;
 }
 
+/// Least bend (drop / dx less the grade upstream) of a face that can launch.
+constexpr float kMinBend = 0.01f;
+
 /// The fractional part of x (x >= 0): the quasi-random sequences of the placements.
 double frac(double x) { return x - std::floor(x); }
 
@@ -42,7 +45,7 @@ double frac(double x) { return x - std::floor(x); }
 HybridSolver::HybridSolver(const Terrain& terrain, const Bvh& bvh, const HybridDef& def, const SweDef& swe,
                            Vec3 resolved_source, const PbfDef& pbf, const CollisionDef& collision,
                            const IntegratorDef& integrator)
-    : def_(def) {
+    : def_(def), gravity_(integrator.gravity) {
     grid_ = std::make_unique<SweSolver>(terrain, swe, resolved_source, integrator.gravity);
     pbf_ = std::make_unique<PbfSolver>(terrain, bvh, no_source(resolved_source, def.max_particles), pbf, collision,
                                        integrator, 1u, SinkDef{});
@@ -65,7 +68,7 @@ std::vector<std::string> HybridSolver::warnings() const { return grid_->warnings
 bool HybridSolver::set_params(const HybridDef& def, const SweDef& swe, Vec3 resolved_source) {
     if (def.max_particles != def_.max_particles) return false;
     if (!grid_->set_params(swe, resolved_source)) return false;
-    const bool new_drop = def.drop != def_.drop;
+    const bool new_drop = def.drop != def_.drop || def.min_grade != def_.min_grade || (def.launch > 0.0f) != (def_.launch > 0.0f);
     def_ = def;
     if (new_drop) find_edges();
     return true;
@@ -74,15 +77,31 @@ bool HybridSolver::set_params(const HybridDef& def, const SweDef& swe, Vec3 reso
 void HybridSolver::find_edges() {
     const swe::ShallowWater& core = grid_->core();
     edges_.clear();
+    cliff_faces_ = launch_faces_ = 0;
+    const auto inside = [&](int i, int j) { return i >= 0 && j >= 0 && i < core.nx() && j < core.ny(); };
+    const double dx = core.dx();
     for (int j = 0; j < core.ny(); ++j)
         for (int i = 0; i < core.nx(); ++i) {
-            uint8_t faces = 0;
+            EdgeCell e{i, j, 0, 0, {0.0f, 0.0f, 0.0f, 0.0f}};
             for (int d = 0; d < 4; ++d) {
-                const int ni = i + kDi[d], nj = j + kDj[d];
-                if (ni < 0 || nj < 0 || ni >= core.nx() || nj >= core.ny()) continue;
-                if (core.bed(i, j) - core.bed(ni, nj) > def_.drop) faces |= uint8_t(1u << d);
+                const int ni = i + kDi[d], nj = j + kDj[d], pi = i - kDi[d], pj = j - kDj[d];
+                if (!inside(ni, nj)) continue;
+                const double drop = core.bed(i, j) - core.bed(ni, nj);
+                if (!(drop > def_.drop)) continue;
+                const uint8_t bit = uint8_t(1u << d);
+                if (drop >= double(def_.min_grade) * dx) {
+                    e.faces |= bit, e.cliffs |= bit;
+                    ++cliff_faces_;
+                    continue;
+                }
+                // The grade the water arrives on, from the cell upstream (none at the map's edge).
+                const double arrives = inside(pi, pj) ? (core.bed(pi, pj) - core.bed(i, j)) / dx : 0.0;
+                e.bend[d] = static_cast<float>(drop / dx - arrives);
+                // Convex by 1 % at least (a straight reach's round-off is not a bend; a 1 %
+                // bend launches at 22 m/s on 1 m cells).
+                if (def_.launch > 0.0f && e.bend[d] > kMinBend) e.faces |= bit, ++launch_faces_;
             }
-            if (faces) edges_.push_back({i, j, faces});
+            if (e.faces) edges_.push_back(e);
         }
     // A cell that cannot shed owes nothing and sheds nothing (what the every-cell scan
     // set each frame); one that still can keeps what it owes.
@@ -117,7 +136,7 @@ void HybridSolver::shed(float frame_dt) {
         for (int d = 0; d < 4; ++d) {
             if (!(e.faces & (1u << d))) continue;
             const double along = kDi[d] != 0 ? kDi[d] * vel[0] : kDj[d] * vel[1];
-            if (along < def_.min_speed) continue;
+            if (along < def_.min_speed || !launches(e, d, along)) continue;
             edge = true;
             owed_[c] += along * h * dx * frame_dt;  // what flows over the face this frame
             const double whole = std::floor(std::min(owed_[c], core.depth(i, j) * area) / particle_volume_);
@@ -130,6 +149,14 @@ void HybridSolver::shed(float frame_dt) {
         if (!edge) owed_[c] = 0.0;
         sheds_[c] = edge ? 1 : 0;
     }
+}
+
+bool HybridSolver::launches(const EdgeCell& e, int d, double along) const {
+    if (e.cliffs & (1u << d)) return true;
+    // A body thrown at `along` on the arriving grade falls (arrives dx + g dx^2 / (2 u^2))
+    // over the cell; the bed falls by drop: it leaves the ground where the bed falls more.
+    const double dx = grid_->core().dx();
+    return 2.0 * along * along * double(e.bend[d]) >= double(def_.launch) * double(gravity_) * dx;
 }
 
 void HybridSolver::shed_cell(int i, int j, int dir, double count, float frame_dt) {

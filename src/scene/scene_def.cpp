@@ -256,6 +256,7 @@ SceneDef hybrid_alps() {
     d.swe.auto_source = true;
     d.swe.init = SweInit::Steady;
     d.hybrid.drop = 3.0f;
+    d.hybrid.min_grade = 0.2f;  // its reaches that drop 3 m over a 15 m cell (22 % grades) shed
     d.pbf = PbfDef{.spacing = 0.5f, .kernel_radius = 1.0f};
     d.pbf.auto_spacing = false;
     d.field.radius = 1.75f;  // 3.5 spacings, as the waterfall's

@@ -533,7 +533,16 @@ const SceneKey kKeys[] = {
     // [hybrid]
     {.name = "hybrid.drop", .type = K::Float, .unit = "m", .range = above(0, 1e4), .readers = kHybrid, .edit = E::Solver,
      .help = "A wet cell whose bed lies more than this above its neighbour's, with the flow towards it, sheds the volume "
-             "that flows over that face as particles.", .field = MR_FIELD(hybrid.drop)},
+             "that flows over that face as particles, where the face is as steep as hybrid.min_grade or the flow "
+             "launches (hybrid.launch).", .field = MR_FIELD(hybrid.drop)},
+    {.name = "hybrid.min_grade", .type = K::Float, .range = closed(0, 1000), .readers = kHybrid, .edit = E::Solver,
+     .help = "Drop over cell size: a face that drops more than hybrid.drop at least this steeply (1: 45 degrees) is a "
+             "cliff and sheds at any speed; on km cells a gentle reach drops metres between cells and sheds nothing.",
+     .field = MR_FIELD(hybrid.min_grade)},
+    {.name = "hybrid.launch", .type = K::Float, .range = closed(0, 1000), .readers = kHybrid, .edit = E::Solver,
+     .help = "A gentler face (convex, dropping more than hybrid.drop) sheds where 2 u^2 (grade - the grade upstream) >= "
+             "this x g x cell size: water thrown at the cell's speed u falls less than the bed (1); 0: cliffs only.",
+     .field = MR_FIELD(hybrid.launch)},
     {.name = "hybrid.min_depth", .type = K::Float, .unit = "m", .range = closed(0, 100), .readers = kHybrid, .edit = E::Solver,
      .help = "Shallower cells shed nothing.", .field = MR_FIELD(hybrid.min_depth)},
     {.name = "hybrid.min_speed", .type = K::Float, .unit = "m/s", .range = closed(0, 100), .readers = kHybrid, .edit = E::Solver,
