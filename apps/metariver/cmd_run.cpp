@@ -10,6 +10,7 @@
 #include "run_stats.h"
 
 #include <metariver/io.h>
+#include <metariver/sparse_field.h>
 
 #include <fmt/format.h>
 
@@ -111,6 +112,11 @@ int run(const RunOptions& o) {
     if (sim.field_overflows() > 0)
         fmt::print(stderr, "metariver run: warning: field: no surface on {} of {} frames: {}; lower field.resolution\n",
                    sim.field_overflows(), o.drive.frames, sim.field_overflow_message());
+    if (sim.field_windows() > 0)
+        fmt::print(stderr, "metariver run: warning: field: the particles spread wider than the field's cap ({} samples) "
+                           "on {} of {} frames; it was built around the most of them, up to {} particles not drawn "
+                           "(docs/waterfalls.md)\n",
+                   kMaxSparseFieldSamples, sim.field_windows(), o.drive.frames, sim.field_left_out());
     if (objs.on()) fmt::print("wrote {} OBJ files to {}\n", objs.written(), o.obj_dir);
     d.print_written();
     return kExitOk;

@@ -370,6 +370,7 @@ json run_stats_json(const Simulation& sim, const RiverMeter& meter, const Checkp
                               {"mean_weight", sm.mean_weight},
                               {"volume_change_m3", sm.volume_change}};
     j["field_overflows"] = sim.field_overflows();
+    j["field_windows"] = {{"frames", sim.field_windows()}, {"most_particles_left_out", sim.field_left_out()}};
     j["particle_steps"] = c.particle_steps;
     j["collisions"] = c.collisions;
     j["tunneled"] = c.tunneled;

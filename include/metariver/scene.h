@@ -532,6 +532,11 @@ public:
     uint64_t field_overflows() const;
     /// Why the last such frame's field was refused; empty when none was.
     const std::string& field_overflow_message() const;
+    /// Frames whose particles spread wider than the sparse field's cap: its field was built
+    /// around the most of them (keep_balls_within_cap), the others not drawn that frame.
+    uint64_t field_windows() const;
+    /// The most particles such a frame left out of the field.
+    size_t field_left_out() const;
     /// FNV-1a hash of the particles' positions, velocities and activity, then of the
     /// heightfield's depths and velocities when the solver has one (determinism checks).
     uint64_t state_hash() const;

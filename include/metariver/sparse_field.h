@@ -65,6 +65,15 @@ enum class DomainMode {
 /// it stores a few thousand blocks.
 inline constexpr size_t kMaxSparseFieldSamples = size_t{1} << 32;
 
+/// Keeps the balls whose field fits the cap. When grid_around(balls, resolution, offset)
+/// would have more than max_samples samples (particles spread over kilometres), keeps only
+/// the balls inside the largest cube whose grid fits (0.9 of it), centred on the mean of
+/// the balls in the cell, of a grid of half that side, that holds the most of them; the
+/// others are erased (the rest keep their order). Returns how many were left out: 0 when
+/// all fit, or when not even one ball's grid does (nothing erased).
+size_t keep_balls_within_cap(std::vector<Vec3>& balls, float resolution, float offset,
+                             size_t max_samples = kMaxSparseFieldSamples);
+
 struct SparseFieldDef {
     KernelDef kernel;
     DomainMode domain = DomainMode::BallBounds;

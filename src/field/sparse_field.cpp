@@ -25,6 +25,7 @@
 #include <cstring>
 #include <limits>
 #include <string>
+#include <unordered_map>
 
 namespace mr {
 
@@ -216,6 +217,38 @@ Result<SampleGrid> grid_around(std::span<const Vec3> balls, float resolution, fl
     g.ny = static_cast<int>(ny);
     g.nz = static_cast<int>(nz);
     return g;
+}
+
+size_t keep_balls_within_cap(std::vector<Vec3>& balls, float resolution, float offset, size_t max_samples) {
+    if (grid_around(balls, resolution, offset, max_samples)) return 0;  // fits (or an error build() reports)
+    // The cube's side in metres: (side x resolution + 1)^3 samples at most, less the offsets.
+    const double side = 0.9 * ((std::cbrt(double(max_samples)) - 1.0) / double(resolution) - 2.0 * double(offset));
+    if (!(side > 0.0) || !std::isfinite(resolution)) return 0;
+    // The most balls in a cell of half the side (a 64-bit key of the cell's three indices).
+    const double cell = 0.5 * side;
+    const auto key = [&](const Vec3& b) {
+        const auto q = [&](float v) { return uint64_t(int64_t(std::floor(double(v) / cell)) & 0x1fffff); };
+        return q(b.x) | q(b.y) << 21 | q(b.z) << 42;
+    };
+    std::unordered_map<uint64_t, uint32_t> count;
+    uint64_t best = 0;
+    uint32_t most = 0;
+    for (const Vec3& b : balls) {
+        if (!finite(b)) return 0;  // build() names it
+        const uint32_t n = ++count[key(b)];
+        if (n > most) most = n, best = key(b);
+    }
+    glm::dvec3 mean(0.0);
+    for (const Vec3& b : balls)
+        if (key(b) == best) mean += glm::dvec3(b);
+    const Vec3 centre = Vec3(mean / double(most));
+    const float half = static_cast<float>(0.5 * side);
+    const size_t before = balls.size();
+    std::erase_if(balls, [&](const Vec3& b) {
+        const Vec3 d = glm::abs(b - centre);
+        return d.x > half || d.y > half || d.z > half;
+    });
+    return before - balls.size();
 }
 
 Status SparseField::build(std::span<const Vec3> balls, const SparseFieldDef& def) {

@@ -411,6 +411,13 @@ void Simulation::Impl::build_particle_surface(const Particles& p) {
     auto t0 = Clock::now();
     p.gather_active_positions(balls_);
     if (def_.field.kernel == FieldKernel::Poly6) {
+        // Particles spread over kilometres: the field around the most of them, the rest not drawn.
+        if (sparse_def_.domain == DomainMode::BallBounds) {
+            const size_t left_out = keep_balls_within_cap(balls_, sparse_def_.resolution, sparse_def_.bounds_offset,
+                                                          sparse_def_.max_samples);
+            field_windows_ += left_out > 0;
+            field_left_out_ = std::max(field_left_out_, left_out);
+        }
         if (auto b = sparse_.build(balls_, sparse_def_); !b) {
             ++field_overflows_;
             field_overflow_message_ = b.error().message;

@@ -85,6 +85,8 @@ const FoamSystem* Simulation::foam() const { return impl_->foam_ ? &*impl_->foam
 uint64_t Simulation::frame() const { return impl_->solver_->frame(); }
 uint64_t Simulation::field_overflows() const { return impl_->field_overflows_; }
 const std::string& Simulation::field_overflow_message() const { return impl_->field_overflow_message_; }
+uint64_t Simulation::field_windows() const { return impl_->field_windows_; }
+size_t Simulation::field_left_out() const { return impl_->field_left_out_; }
 uint64_t Simulation::state_hash() const { return impl_->state_hash(); }
 std::span<const Vec3> Simulation::last_exits() const { return impl_->solver_->last_exits(); }
 const std::optional<RiverSize>& Simulation::sizing() const { return impl_->sizing_; }

@@ -45,6 +45,8 @@ struct Simulation::Impl {
     std::vector<Vec3> heightfield_velocity_;  ///< the velocity at the heightfield's vertices (the mesh's last)
     FrameTimings timings_;
     uint64_t field_overflows_ = 0;
+    uint64_t field_windows_ = 0;  ///< frames whose field left particles out (keep_balls_within_cap)
+    size_t field_left_out_ = 0;   ///< the most it left out in a frame
     uint64_t terrain_lifts_ = 0;
     std::string field_overflow_message_;
     // The drainage network and what is measured on it; updated when read after a

@@ -297,6 +297,33 @@ TEST(SparseField, RefusesAbsurdGridsWithoutAllocating) {
     EXPECT_FALSE(f.build(balls, {.kernel = poly6_kernel(1.0f, 1.0f), .domain = DomainMode::FixedBox, .box = bad}));
 }
 
+TEST(SparseField, BallsSpreadOverKilometresKeepTheFieldAroundTheMostOfThem) {
+    // A fall's 300 balls in a 4 m cluster, 40 drops spread over 9 km, 20 in a second cluster
+    // 5 km away: their box at 3 samples per metre would hold ~1e13 samples.
+    std::vector<Vec3> balls;
+    for (int n = 0; n < 300; ++n) balls.emplace_back(100.0f + float(n % 7) * 0.5f, 50.0f + float(n / 49) * 0.5f, 2000.0f + float((n / 7) % 7) * 0.5f);
+    for (int n = 0; n < 40; ++n) balls.emplace_back(float(n) * 230.0f, 10.0f, float(n % 5) * 1800.0f);
+    for (int n = 0; n < 20; ++n) balls.emplace_back(5000.0f + float(n) * 0.4f, 30.0f, 5000.0f);
+    const SparseFieldDef def{.kernel = poly6_kernel(1.75f, 1.0f), .resolution = 3.0f, .bounds_offset = 1.75f};
+    SparseField f;
+    ASSERT_FALSE(f.build(balls, def));  // what the field did before: no surface at all
+    std::vector<Vec3> kept = balls;
+    const size_t left_out = keep_balls_within_cap(kept, def.resolution, def.bounds_offset);
+    EXPECT_EQ(left_out + kept.size(), balls.size());
+    // The cluster is kept whole, in its order, the far ones are left out.
+    ASSERT_GE(kept.size(), 300u);
+    EXPECT_LE(kept.size(), 302u);  // and the drops that happen to lie within the window
+    EXPECT_EQ(kept[0], balls[0]);
+    for (const Vec3& b : kept) EXPECT_LT(glm::distance(b, Vec3(101.5f, 52.0f, 2001.5f)), 1000.0f);
+    ASSERT_TRUE(f.build(kept, def));
+    EXPECT_LE(f.grid().samples(), kMaxSparseFieldSamples);
+    EXPECT_GT(f.allocated_blocks(), 0u);
+    // Balls that fit are all kept.
+    std::vector<Vec3> near(balls.begin(), balls.begin() + 300);
+    EXPECT_EQ(keep_balls_within_cap(near, def.resolution, def.bounds_offset), 0u);
+    EXPECT_EQ(near.size(), 300u);
+}
+
 TEST(SparseField, NoBallsGiveAnEmptyOrZeroField) {
     SparseField f;
     ASSERT_TRUE(f.build({}, {.kernel = poly6_kernel(1.0f, 1.0f)}));
