@@ -37,6 +37,7 @@
 #include <metariver/terrain.h>
 
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -85,6 +86,7 @@ struct FoamStats {
     size_t generated = 0;        ///< made in the latest step
     size_t expired = 0;          ///< removed in the latest step: life ended
     size_t left = 0;             ///< removed in the latest step: left the terrain or hit the ground (spray)
+    size_t handed_over = 0;      ///< taken out after the latest step by hand_over() (the hybrid: onto its grid's water)
     uint64_t generated_total = 0;
     uint64_t capped_total = 0;   ///< emissions dropped because the cap was reached
     size_t total() const { return spray + foam + bubbles; }
@@ -109,6 +111,10 @@ public:
     std::span<const float> kinetic_energy() const { return ek_; }
     /// FNV-1a of the diffuse particles' positions, velocities, lives and kinds.
     uint64_t state_hash() const;
+    /// Removes the diffuse particles for which `leave(position)` is true (the others keep
+    /// their order) and appends them, every array, to `out`; returns how many. The hybrid
+    /// hands the spray that fell into its grid's water to the grid's foam this way.
+    size_t hand_over(const std::function<bool(const Vec3&)>& leave, DiffuseParticles& out);
 
     /// Classification rule (exposed for tests).
     static DiffuseKind classify(int neighbours, const FoamDef& def);

@@ -111,7 +111,7 @@ DiffuseKind FoamSystem::classify(int neighbours, const FoamDef& def) {
 }
 
 void FoamSystem::step(const Particles& fluid, const Terrain& terrain, float dt, uint64_t frame) {
-    stats_.generated = stats_.expired = stats_.left = 0;
+    stats_.generated = stats_.expired = stats_.left = stats_.handed_over = 0;
     grid_.build(fluid.position, fluid.active, h_);
     advect(terrain, dt);
     potentials(fluid);
@@ -176,6 +176,28 @@ void FoamSystem::advect(const Terrain& terrain, float dt) {
         ++out;
     }
     resize(out);
+}
+
+size_t FoamSystem::hand_over(const std::function<bool(const Vec3&)>& leave, DiffuseParticles& out) {
+    size_t kept = 0;
+    const size_t n = p_.size();
+    for (size_t i = 0; i < n; ++i) {
+        const bool go = leave(p_.position[i]);
+        DiffuseParticles& to = go ? out : p_;
+        const size_t at = go ? out.size() : kept++;
+        const auto put = [&](auto& into, const auto& from) {
+            if (go) into.push_back(from[i]);
+            else into[at] = from[i];
+        };
+        put(to.position, p_.position), put(to.velocity, p_.velocity), put(to.life, p_.life);
+        put(to.kind, p_.kind), put(to.neighbours, p_.neighbours), put(to.fluid_velocity, p_.fluid_velocity);
+        if (!go) continue;
+        const DiffuseKind k = DiffuseKind(p_.kind[i]);
+        (k == DiffuseKind::Spray ? stats_.spray : k == DiffuseKind::Foam ? stats_.foam : stats_.bubbles) -= 1;
+    }
+    resize(kept);
+    stats_.handed_over = n - kept;
+    return n - kept;
 }
 
 void FoamSystem::resize(size_t n) {

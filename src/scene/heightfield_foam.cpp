@@ -116,7 +116,25 @@ void HeightfieldFoam::push(const Vec3& position, const Vec3& velocity, float lif
     p_.life.push_back(life);
     p_.kind.push_back(uint8_t(DiffuseKind::Foam));
     p_.neighbours.push_back(0);
-    ++generated_total_;
+}
+
+size_t HeightfieldFoam::take_landed(FoamSystem& from, const HeightfieldWater& w, std::span<const Vec3> bed) {
+    if (w.rows < 2 || w.columns < 2 || bed.size() != w.size() || w.depth.size() != w.size()) return 0;
+    landed_ = DiffuseParticles{};
+    const size_t n = from.hand_over(
+        [&](const Vec3& p) {
+            const Sample s = sample(w, bed, p.x, p.z);
+            return s.inside && s.depth >= kWetDepth && p.y < s.level;
+        },
+        landed_);
+    const size_t cap = size_t(std::max(def_.max_particles, 0));
+    for (size_t i = 0; i < n && p_.size() < cap; ++i) {
+        const Vec3 p = landed_.position[i];
+        const Sample s = sample(w, bed, p.x, p.z);
+        push(Vec3(p.x, s.level + kLift, p.z), s.velocity, landed_.life[i]);
+        ++landed_total_;
+    }
+    return n;
 }
 
 void HeightfieldFoam::emit(const HeightfieldWater& w, std::span<const Vec3> bed, float dt, uint64_t frame) {
@@ -136,6 +154,7 @@ void HeightfieldFoam::emit(const HeightfieldWater& w, std::span<const Vec3> bed,
                 if (!s.inside || s.depth < kWetDepth) continue;
                 const float life = def_.lifetime_min + (def_.lifetime_max - def_.lifetime_min) * draw01(frame, cell, 3 * q + 3);
                 push(Vec3(x, s.level + kLift, z), s.velocity, life);
+                ++generated_total_;
             }
         }
     }

@@ -29,6 +29,12 @@ public:
     /// `bed`: the terrain's vertices (w.rows x w.columns).
     void step(const HeightfieldWater& w, std::span<const Vec3> bed, float dt, uint64_t frame);
 
+    /// The hybrid: the particles' diffuse particles (`from`) under this water's surface,
+    /// over water at least 5 cm deep (spray that fell into the pool), become foam on it at
+    /// that place, with their life left (up to [foam] max_particles); returns how many.
+    size_t take_landed(FoamSystem& from, const HeightfieldWater& w, std::span<const Vec3> bed);
+    uint64_t landed_total() const { return landed_total_; }
+
     const DiffuseParticles& particles() const { return p_; }
     uint64_t generated_total() const { return generated_total_; }
     /// Particles per second that a wet sample emits now (before the random draw).
@@ -41,7 +47,8 @@ private:
 
     FoamDef def_;
     DiffuseParticles p_;
-    uint64_t generated_total_ = 0;
+    uint64_t generated_total_ = 0, landed_total_ = 0;
+    DiffuseParticles landed_;  ///< take_landed's
 };
 
 }  // namespace mr

@@ -403,6 +403,8 @@ void Simulation::Impl::step_foam(float frame_dt) {
     if (foam_ && p) {
         const float dt = def_.integrator.fixed_dt > 0.0f ? def_.integrator.fixed_dt : frame_dt;
         foam_->step(*p, terrain_, dt, solver_->frame());
+        // The hybrid: spray that fell into the grid's water floats on it as the grid's foam.
+        if (heightfield_foam_ && w) heightfield_foam_->take_landed(*foam_, *w, terrain_.vertices());
     }
     if (foam_ || heightfield_foam_) timings_.foam_ms = ms_since(t0);
 }

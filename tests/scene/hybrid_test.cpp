@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+#include <utility>
 
 namespace mr {
 namespace {
@@ -222,6 +223,50 @@ TEST(Hybrid, TheWaterfallMakesSprayFromItsParticlesAndFoamFromItsGrid) {
     EXPECT_GT(s.foam()->stats().generated_total, 0u);
     EXPECT_GT(at_foot, 0u);
     EXPECT_GT(v.foam->size(), spray.size());
+}
+
+TEST(Hybrid, SprayThatFallsIntoThePoolFloatsOnItAsTheGridsFoam) {
+    // The particles' spray does not know the grid's water: it fell through the pool to its
+    // bed (317 particle-frames under the pool's surface in 10 s). Now what is under the
+    // surface of water 5 cm deep or more after a frame is the grid's foam, on the surface.
+    SceneDef d = preset("waterfall").value();
+    d.foam.enabled = true;
+    d.surface = false;
+    auto sim = Simulation::create(d);
+    ASSERT_TRUE(sim.ok()) << sim.error().message;
+    Simulation& s = *sim.value();
+    size_t under = 0, handed = 0, on_pool = 0;
+    for (int f = 0; f < 600; ++f) {
+        s.step(kFrame);
+        handed += s.foam()->stats().handed_over;
+        const DiffuseParticles& spray = s.foam()->particles();
+        const HeightfieldWater& w = *s.heightfield();
+        const auto bed = s.terrain().vertices();
+        for (size_t i = 0; i < spray.size(); ++i) {
+            // The water's level there, bilinear between the four samples around.
+            const Vec3 p = spray.position[i];
+            const float u = (p.x - w.origin.x) / w.spacing, t = (p.z - w.origin.z) / w.spacing;
+            if (!(u >= 0.0f && t >= 0.0f && u < float(w.columns - 1) && t < float(w.rows - 1))) continue;
+            const size_t c = size_t(u), r = size_t(t), k = r * size_t(w.columns) + c;
+            const float fu = u - float(c), ft = t - float(r);
+            float level = 0.0f, shallowest = 1e9f;
+            for (const auto& [n, wt] : {std::pair{k, (1 - fu) * (1 - ft)}, std::pair{k + 1, fu * (1 - ft)},
+                                        std::pair{k + size_t(w.columns), (1 - fu) * ft}, std::pair{k + size_t(w.columns) + 1, fu * ft}}) {
+                level += wt * (bed[n].y + w.depth[n]);
+                shallowest = std::min(shallowest, w.depth[n]);
+            }
+            under += shallowest >= 0.05f && p.y < level - 0.01f;  // well in the water, 1 cm under
+        }
+    }
+    // The grid's foam holds the spray that landed: on the water, in the pool below the lip.
+    const SceneView v = s.view();
+    for (size_t i = s.foam()->particles().size(); i < v.foam->size(); ++i)
+        on_pool += v.foam->position[i].z > 30.0f && v.foam->position[i].z < 56.0f;
+    std::printf("waterfall with foam, 10 s: %zu spray handed to the grid's foam, %zu particle-frames under the pool's "
+                "surface, %zu of the grid's foam on the pool now\n", handed, under, on_pool);
+    EXPECT_GT(handed, 10u);
+    EXPECT_EQ(under, 0u);
+    EXPECT_GT(on_pool, 0u);
 }
 
 TEST(Hybrid, TheAlpsPresetRunsOnItsBuiltInDem) {
