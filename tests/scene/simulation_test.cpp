@@ -146,9 +146,11 @@ TEST(Simulation, SurfaceCanBeTurnedOff) {
     EXPECT_EQ(sim.value()->surface().triangle_count(), 0u);
 }
 
-// A field over the sparse field's cap (kMaxSparseFieldSamples) is counted and said, not
-// silently dropped: water spread over 600 m at 64 samples per metre (the springs
-// solver, whose source places particles at random in its box).
+// Water spread wider than the sparse field's cap (kMaxSparseFieldSamples) gets a field
+// around the most of it, counted and said (field_windows); a field that cannot fit even
+// around one particle is counted and said, not silently dropped: water spread over 600 m
+// at 64 samples per metre (the springs solver, whose source places particles at random in
+// its box).
 TEST(Simulation, AFieldOverTheCapIsCountedWithItsReason) {
     SceneDef d = default_scene();
     d.solver = SolverKind::Springs;
@@ -168,7 +170,18 @@ TEST(Simulation, AFieldOverTheCapIsCountedWithItsReason) {
     EXPECT_EQ(sim.value()->field_overflows(), 0u);
     EXPECT_TRUE(sim.value()->field_overflow_message().empty());
     sim.value()->step(1.0f / 60.0f);
+    // A cube about 20 m wide fits the cap at 64 samples per metre: the particles in it are drawn.
+    EXPECT_EQ(sim.value()->field_overflows(), 0u);
+    EXPECT_EQ(sim.value()->field_windows(), 1u);
+    EXPECT_GT(sim.value()->field_left_out(), 40u);
+    EXPECT_GT(sim.value()->surface().triangle_count(), 0u);
+    // 13 m around each particle: not even one particle's grid fits.
+    d.field.bounds_offset = 13.0f;
+    sim = Simulation::create(d);
+    ASSERT_TRUE(sim.ok()) << sim.error().message;
+    sim.value()->step(1.0f / 60.0f);
     EXPECT_EQ(sim.value()->field_overflows(), 1u);
+    EXPECT_EQ(sim.value()->field_windows(), 0u);
     EXPECT_NE(sim.value()->field_overflow_message().find("cap"), std::string::npos)
         << sim.value()->field_overflow_message();
     EXPECT_EQ(sim.value()->surface().triangle_count(), 0u);
