@@ -60,7 +60,8 @@ std::string Tools::unavailable(const Simulation& sim) const {
             return "";
         case AddSource: return list("particles.source", "; the grid's sources are [[swe.sources]] in the panel's [swe]");
         case AddSink: case Remove: return list("sink.box", "; the grid's sinks are [[swe.sinks]] in the panel's [swe]");
-        case DropBody: case RemoveBody: return list("bodies", "; bodies do not float on the grid's water yet");
+        case DropBody: case RemoveBody:  // the grid's water floats them too (swe, hybrid)
+            return scene_list("bodies").readers(d) ? "" : list("bodies", "");
         default: return "";
     }
 }

@@ -1,5 +1,5 @@
 // The C API's bodies (include/metariver/metariver.h; bodies.h): add, remove, move and read
-// the rigid bodies of a PBF world. Each checks its arguments first (nothing changes on a
+// the rigid bodies of a PBF, swe or hybrid world. Each checks its arguments first (nothing changes on a
 // refusal) and marks the water queries stale when the water's neighbours changed.
 #include "capi_internal.h"
 
@@ -17,11 +17,11 @@ namespace {
 mr::Vec3 vec3(const float* p) { return {p[0], p[1], p[2]}; }
 void put3(const mr::Vec3& v, float* out) { std::memcpy(out, &v.x, 3 * sizeof(float)); }
 
-/// MR_ERROR_UNSUPPORTED when the world's solver has no bodies (all but PBF).
+/// MR_ERROR_UNSUPPORTED when the world's solver has no bodies (all but PBF, swe and hybrid).
 bool no_bodies(const mr_world* w, const char* function, mr_status& status) {
-    if (w->sim->solver_entry().kind == mr::SolverKind::Pbf) return false;
+    if (mr::moves_bodies(w->sim->solver_entry().kind)) return false;
     status = fail(w, MR_ERROR_UNSUPPORTED,
-                  fmt::format("{}: solver = \"{}\" has no bodies (use solver = \"pbf\")", function,
+                  fmt::format("{}: solver = \"{}\" has no bodies (use solver = \"pbf\", \"swe\" or \"hybrid\")", function,
                               w->sim->solver_entry().kind.name));
     return true;
 }

@@ -117,10 +117,11 @@ constexpr ReadIf kSinkSolver{.holds = [](S d) { return d.solver != SolverKind::B
                              .agrees = [](S d) { return d.sink.kind == SinkKind::None; }};
 constexpr ReadIf kSinkBoxSolver{.holds = [](S d) { return d.solver != SolverKind::Bullet; }, .refusal = [](F) { return not_bullet(); },
                              .scope = ReadScope::Solver};
-// Bodies are coupled with PBF's particles (their density constraint); the others have none.
-constexpr ReadIf kBodiesSolver{.holds = [](S d) { return d.solver == SolverKind::Pbf; }, .refusal = [](F f) {
-                                   return fmt::format("only solver = \"pbf\" moves bodies (their coupling with the water is "
-                                                      "PBF's; {} has none): remove [[bodies]]",
+// Bodies are coupled with PBF's particles (their density constraint) or pushed by the grid's
+// water (swe, hybrid: rigid_bodies_grid.h); the others have none.
+constexpr ReadIf kBodiesSolver{.holds = [](S d) { return moves_bodies(d.solver); }, .refusal = [](F f) {
+                                   return fmt::format("only solver = \"pbf\", \"swe\" or \"hybrid\" moves bodies (the "
+                                                      "water's coupling with them; {} has none): remove [[bodies]]",
                                                       solver_is(f.def));
                                },
                                .scope = ReadScope::Solver};
@@ -321,7 +322,7 @@ constexpr ReadIf kSleepNoSprings{.holds = [](S d) { return !d.bullet.springs; },
 constexpr KeyReaders kAll{"every scene"};
 MR_READERS(kSeed, "solver = springs, bullet", kSeedSolver);
 MR_READERS(kNotBullet, "solver = springs, pbf", kSinkBoxSolver);  // [[sink.box]]
-MR_READERS(kBodies, "solver = pbf", kBodiesSolver);                // [[bodies]]
+MR_READERS(kBodies, "solver = pbf, swe, hybrid", kBodiesSolver);    // [[bodies]]
 MR_READERS(kPbf, "solver = pbf", kPbfSection, kPbfOnly);
 MR_READERS(kBullet, "solver = bullet", kBulletSection);
 MR_READERS(kSwe, "solver = swe, hybrid", kSweSection);

@@ -180,9 +180,9 @@ const SceneList& bodies_list() {
 
 std::string bodies_error(const SceneDef& d) {
     if (d.bodies.empty()) return {};
-    if (d.solver != SolverKind::Pbf)
-        return fmt::format("bodies: only solver = \"pbf\" moves bodies (their coupling with the water is PBF's; solver = "
-                           "\"{}\" has none): remove [[bodies]]",
+    if (!moves_bodies(d.solver))
+        return fmt::format("bodies: only solver = \"pbf\", \"swe\" or \"hybrid\" moves bodies (the water's coupling with "
+                           "them; solver = \"{}\" has none): remove [[bodies]]",
                            to_string(d.solver));
     for (size_t i = 0; i < d.bodies.size(); ++i)
         if (std::string e = body_shape_error(d.bodies[i], fmt::format("bodies[{}]", i + 1)); !e.empty()) return e;

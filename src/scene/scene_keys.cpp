@@ -710,8 +710,9 @@ const SceneList kLists[] = {
      .keys = kSinkBoxKeys},
     {.name = "bodies",
      .help = "Rigid bodies in the water (logs, boats, crates, debris; docs/bodies.md), each `[[bodies]]` one body, "
-             "two-way coupled with the PBF water: the water carries and lifts it, it pushes the water aside, and it "
-             "collides with the terrain and the other bodies.",
+             "two-way coupled with the PBF water (the water carries and lifts it, it pushes the water aside) or, on the "
+             "grid's water (swe, hybrid), floated and carried by it one way; it collides with the terrain and the other "
+             "bodies.",
      .readers = kBodies,
      .max = kMaxBodies,
      .size = [](S d) { return d.bodies.size(); },

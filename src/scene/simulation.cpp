@@ -374,6 +374,7 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SceneDef& def, cons
 void Simulation::Impl::step(float frame_dt) {
     const auto t0 = Clock::now();
     solver_->step_frame(frame_dt);
+    step_grid_bodies(frame_dt);
     timings_.simulate_ms = ms_since(t0);
     step_foam(frame_dt);
     if (!def_.surface) {

@@ -61,8 +61,9 @@ Result<ApplyResult> Simulation::Impl::apply(const SceneDef& next) {
     // asks for a rebuild above, so a refusal is not reached).
     const bool bodies_changed = requested_.bodies != next.bodies;
     if (bodies_changed) {  // checked before anything changes (replace_bodies checks again)
-        if (!next.bodies.empty() && !dynamic_cast<const PbfSolver*>(solver_.get()))
-            return Error{fmt::format("bodies: solver = \"{}\" has no bodies (use solver = \"pbf\")", solver_entry_.kind.name)};
+        if (!next.bodies.empty() && !body_host())
+            return Error{fmt::format("bodies: solver = \"{}\" has no bodies (use solver = \"pbf\", \"swe\" or \"hybrid\")",
+                                     solver_entry_.kind.name)};
         for (const BodyDef& b : next.bodies)
             if (auto v = validate_body(b); !v) return v.error();
     }

@@ -19,6 +19,13 @@
 
 namespace mr {
 
+class GridBodies;  // rigid_bodies_grid.h
+class PbfSolver;   // pbf_solver.h
+/// Deletes the grid's bodies (simulation_bodies.cpp, where GridBodies is complete).
+struct GridBodiesDelete {
+    void operator()(GridBodies* b) const;
+};
+
 struct Simulation::Impl {
     /// Builds the source, the field's settings, the solver, the foam and the prefill
     /// (the solver is null when the entry's factory built none: create() reports it).
@@ -99,6 +106,22 @@ struct Simulation::Impl {
     Status add_scene_bodies(const std::vector<BodyDef>& bodies);
     Status replace_bodies(const std::vector<BodyDef>& bodies);
     std::span<const BodyState> bodies() const;
+    /// Who holds the bodies: PBF's solver (two-way coupled), else, for a solver whose water
+    /// is a heightfield (swe, hybrid), grid_bodies_ (made here when first asked); null and
+    /// null: this solver has none.
+    struct BodyHost {
+        PbfSolver* pbf = nullptr;
+        GridBodies* grid = nullptr;
+        explicit operator bool() const { return pbf || grid; }
+        Result<uint32_t> add(const BodyDef& def) const;
+        Status remove(uint32_t id) const;
+        Status set_motion(uint32_t id, const Vec3& position, const glm::quat& orientation, const Vec3& velocity,
+                          const Vec3& angular_velocity) const;
+    };
+    BodyHost body_host();
+    /// The bodies on the grid's water, one frame (after the solver's step).
+    void step_grid_bodies(float frame_dt);
+    std::unique_ptr<GridBodies, GridBodiesDelete> grid_bodies_;
     /// The ids of the bodies made from def_.bodies, in the list's order (replace_bodies).
     std::vector<uint32_t> scene_body_ids_;
 

@@ -116,15 +116,15 @@ TEST(SceneBodies, BadValuesNameTheKeyAndTheRange) {
     std::string many;
     for (size_t i = 0; i <= kMaxBodies; ++i) many += "[[bodies]]\n";
     EXPECT_EQ(error(many), "bad.toml: bodies: at most 1024 entries (got 1025)");
-    // Bodies are PBF's: another solver names the list.
+    // Bodies are PBF's, swe's and hybrid's: another solver names the list.
     EXPECT_EQ(error("solver = \"springs\"\n[particles]\nflow_rate = 0.0\n[[bodies]]\n"),
-              "bad.toml: bodies: ignored: only solver = pbf reads it; remove it");
+              "bad.toml: bodies: ignored: only solver = pbf, swe, hybrid reads it; remove it");
     SceneDef springs = default_scene();
     springs.solver = SolverKind::Springs;
     springs.bodies.resize(1);
     auto v = validate(springs);
     ASSERT_FALSE(v.ok());
-    EXPECT_EQ(v.error().message.rfind("bodies: only solver = \"pbf\" moves bodies", 0), 0u) << v.error().message;
+    EXPECT_EQ(v.error().message.rfind("bodies: only solver = \"pbf\", \"swe\" or \"hybrid\" moves bodies", 0), 0u) << v.error().message;
 }
 
 }  // namespace
