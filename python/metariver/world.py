@@ -492,7 +492,7 @@ class World:
         self._changed()
         self._check(_capi.lib().mr_world_set_sink_boxes(h, f32p(b), b.shape[0]))
 
-    # -- bodies (solver "pbf"; docs/bodies.md) ---------------------------------------------
+    # -- bodies (solver "pbf", "swe", "hybrid"; docs/bodies.md) ----------------------------
     def add_body(self, shape: str = "box", size: Any = (2.0, 0.5, 0.5), *, mesh: str | os.PathLike | None = None,
                  density: float = 500.0, position: Any = (0.0, 0.0, 0.0), rotation: Any = (0.0, 0.0, 0.0),
                  velocity: Any = (0.0, 0.0, 0.0), angular_velocity: Any = (0.0, 0.0, 0.0),

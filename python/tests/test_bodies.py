@@ -69,3 +69,22 @@ def test_a_solver_without_bodies_refuses_them():
             w.add_body(position=(1.0, 30.0, 1.0))
         assert e.value.status == "MR_ERROR_UNSUPPORTED"
         assert len(w.bodies()) == 0
+
+
+def test_a_box_floats_on_the_grids_lake():
+    """solver = "swe": the grid's water floats the body one way (docs/bodies.md)."""
+    toml = 'solver = "swe"\n[swe]\ninitial_level = 13.0\nedges = "open"\n'
+    with metariver.World(toml=toml, threads=2) as w:
+        w.step()
+        g = w.heightfield()
+        row, col = np.unravel_index(int(np.argmax(g.depth)), g.depth.shape)
+        assert g.depth[row, col] > 2.0
+        p = (g.origin[0] + col * g.spacing, 13.5, g.origin[1] + row * g.spacing)
+        box = w.add_body("box", (1.0, 1.0, 1.0), density=500.0, position=p)
+        w.step(frames=300)
+        b = w.bodies()
+        assert len(b) == 1 and b["id"][0] == box
+        assert b["submerged_fraction"][0] == pytest.approx(0.5, abs=0.02)
+        assert b["position"][0][1] == pytest.approx(13.0, abs=0.02), "half of it under the level"
+        w.remove_body(box)
+        assert len(w.bodies()) == 0

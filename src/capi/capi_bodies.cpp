@@ -4,6 +4,7 @@
 #include "capi_internal.h"
 
 #include <metariver/bodies.h>
+#include <metariver/scene_keys.h>
 
 #include <cstring>
 #include <filesystem>
@@ -19,7 +20,8 @@ void put3(const mr::Vec3& v, float* out) { std::memcpy(out, &v.x, 3 * sizeof(flo
 
 /// MR_ERROR_UNSUPPORTED when the world's solver has no bodies (all but PBF, swe and hybrid).
 bool no_bodies(const mr_world* w, const char* function, mr_status& status) {
-    if (mr::moves_bodies(w->sim->solver_entry().kind)) return false;
+    for (const mr::SceneList& l : mr::scene_lists())  // the key table says which solvers move bodies
+        if (l.name == "bodies" && l.readers(w->sim->def())) return false;
     status = fail(w, MR_ERROR_UNSUPPORTED,
                   fmt::format("{}: solver = \"{}\" has no bodies (use solver = \"pbf\", \"swe\" or \"hybrid\")", function,
                               w->sim->solver_entry().kind.name));

@@ -119,7 +119,10 @@ constexpr ReadIf kSinkBoxSolver{.holds = [](S d) { return d.solver != SolverKind
                              .scope = ReadScope::Solver};
 // Bodies are coupled with PBF's particles (their density constraint) or pushed by the grid's
 // water (swe, hybrid: rigid_bodies_grid.h); the others have none.
-constexpr ReadIf kBodiesSolver{.holds = [](S d) { return moves_bodies(d.solver); }, .refusal = [](F f) {
+constexpr ReadIf kBodiesSolver{.holds = [](S d) {
+                                   return d.solver == SolverKind::Pbf || d.solver == SolverKind::Swe ||
+                                          d.solver == SolverKind::Hybrid;
+                               }, .refusal = [](F f) {
                                    return fmt::format("only solver = \"pbf\", \"swe\" or \"hybrid\" moves bodies (the "
                                                       "water's coupling with them; {} has none): remove [[bodies]]",
                                                       solver_is(f.def));

@@ -180,7 +180,7 @@ const SceneList& bodies_list() {
 
 std::string bodies_error(const SceneDef& d) {
     if (d.bodies.empty()) return {};
-    if (!moves_bodies(d.solver))
+    if (!bodies_list().readers(d))
         return fmt::format("bodies: only solver = \"pbf\", \"swe\" or \"hybrid\" moves bodies (the water's coupling with "
                            "them; solver = \"{}\" has none): remove [[bodies]]",
                            to_string(d.solver));

@@ -8,7 +8,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 #include <string>
 
 namespace {
@@ -161,6 +163,40 @@ TEST(CApiBodies, ASolverWithoutBodiesRefusesThem) {
     uint32_t id = 0;
     EXPECT_EQ(mr_world_add_body(world.w, &d, &id), MR_ERROR_UNSUPPORTED);
     EXPECT_TRUE(contains(world.last_error(), "solver = \"springs\" has no bodies")) << world.last_error();
+    EXPECT_EQ(body_count(world), 0u);
+}
+
+TEST(CApiBodies, ABoxFloatsOnAGridsLake) {
+    // solver = "swe": the grid's water floats the body (docs/bodies.md, "On the grid's water").
+    mr_world_desc desc = mr_world_desc_default();
+    desc.scene_toml = "solver = \"swe\"\n[swe]\ninitial_level = 13.0\nedges = \"open\"\n";
+    World world(desc);
+    ASSERT_EQ(world.status, MR_OK) << world.error.message;
+    world.step(1);
+    mr_heightfield_info info{};
+    ASSERT_EQ(mr_world_heightfield(world.w, &info), MR_OK) << world.last_error();
+    const size_t n = size_t(info.rows) * size_t(info.columns);
+    std::vector<float> depth(n);
+    ASSERT_EQ(mr_world_copy_heightfield(world.w, depth.data(), nullptr, nullptr, n), MR_OK);
+    const size_t deepest = size_t(std::max_element(depth.begin(), depth.end()) - depth.begin());
+    ASSERT_GT(depth[deepest], 2.0f);
+    mr_body_desc d = mr_body_desc_default();
+    d.size[0] = d.size[1] = d.size[2] = 1.0f;
+    d.density = 500.0f;
+    d.position[0] = info.origin[0] + float(deepest % size_t(info.columns)) * info.spacing;
+    d.position[1] = 13.5f;
+    d.position[2] = info.origin[1] + float(deepest / size_t(info.columns)) * info.spacing;
+    uint32_t id = 0;
+    ASSERT_EQ(mr_world_add_body(world.w, &d, &id), MR_OK) << world.last_error();
+    world.step(300);
+    mr_body_state s{};
+    size_t count = 0;
+    ASSERT_EQ(mr_world_bodies(world.w, &s, 1, &count), MR_OK);
+    ASSERT_EQ(count, 1u);
+    EXPECT_NEAR(s.submerged_fraction, 0.5f, 0.02f);
+    EXPECT_NEAR(s.position[1], 13.0f, 0.02f) << "half of it under the level";
+    EXPECT_LT(std::hypot(s.velocity[0], s.velocity[1], s.velocity[2]), 0.05f);
+    EXPECT_EQ(mr_world_remove_body(world.w, id), MR_OK);
     EXPECT_EQ(body_count(world), 0u);
 }
 
