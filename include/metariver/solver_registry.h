@@ -48,10 +48,6 @@ inline constexpr SolverKind SolverKind::Pbf{kBuiltinSolverNames[2]};
 inline constexpr SolverKind SolverKind::Swe{kBuiltinSolverNames[3]};
 inline constexpr SolverKind SolverKind::Hybrid{kBuiltinSolverNames[4]};
 
-/// Whether a built-in solver moves [[bodies]] (bodies.h): PBF couples them with its
-/// particles both ways, swe and hybrid float them on the grid's water (one way).
-constexpr bool moves_bodies(SolverKind k) { return k == SolverKind::Pbf || k == SolverKind::Swe || k == SolverKind::Hybrid; }
-
 constexpr std::string_view to_string(SolverKind s) { return s.name; }
 /// The index of `s` in kBuiltinSolverNames, -1 for a solver that is not built in.
 constexpr int builtin_solver_index(SolverKind s) {
