@@ -26,21 +26,11 @@ extern "C" void __tsan_release(void* addr);
 
 namespace tbb {
 
-template <typename Value, typename Body>
-void parallel_for(const blocked_range<Value>& range, const Body& body) {
-    char before = 0, after = 0;
-    __tsan_release(&before);
-    detail::d1::parallel_for(range, [&](const blocked_range<Value>& r) {
-        __tsan_acquire(&before);
-        body(r);
-        __tsan_release(&after);
-    });
-    __tsan_acquire(&after);
-}
-
-/// The same edges with a partitioner: static (src/particles/parallel_blocks.h), simple (the
-/// shallow-water sweep's rows), or auto. One overload each: a template over the
-/// partitioner would be no more specialised than TBB's own and the call ambiguous.
+/// The loop with its edges. One overload per form metariver calls follows: without a
+/// partitioner (TBB's default, __TBB_DEFAULT_PARTITIONER), and with a static
+/// (src/particles/parallel_blocks.h), simple (the shallow-water sweep's rows) or auto one;
+/// a template over the partitioner would be no more specialised than TBB's own overloads
+/// and the call ambiguous.
 template <typename Value, typename Body, typename Partitioner>
 void annotated_parallel_for(const blocked_range<Value>& range, const Body& body, const Partitioner& part) {
     char before = 0, after = 0;
@@ -54,6 +44,10 @@ void annotated_parallel_for(const blocked_range<Value>& range, const Body& body,
         },
         part);
     __tsan_acquire(&after);
+}
+template <typename Value, typename Body>
+void parallel_for(const blocked_range<Value>& range, const Body& body) {
+    annotated_parallel_for(range, body, __TBB_DEFAULT_PARTITIONER());
 }
 template <typename Value, typename Body>
 void parallel_for(const blocked_range<Value>& range, const Body& body, const static_partitioner& part) {
