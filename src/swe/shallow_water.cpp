@@ -289,16 +289,10 @@ FinishRow ShallowWater::finish_template(double dt) const {
     return row;
 }
 
-void ShallowWater::finish_step(double dt, const std::vector<double>* from) {
+void ShallowWater::finish_step(double dt) {
     const FinishRow base = finish_template(dt);
     for_rows(ny_, [&](int j) {
         const size_t k0 = at(0, j);
-        if (from && hi_[j] >= lo_[j]) {
-            const size_t a = k0 + lo_[j], b = k0 + hi_[j] + 1;
-            std::copy(from[0].begin() + a, from[0].begin() + b, h_.begin() + a);
-            std::copy(from[1].begin() + a, from[1].begin() + b, hu_.begin() + a);
-            std::copy(from[2].begin() + a, from[2].begin() + b, hv_.begin() + a);
-        }
         FinishRow row = base;
         row.h = h_.data() + k0;
         row.hu = hu_.data() + k0;
@@ -359,8 +353,17 @@ double ShallowWater::step(double max_dt) {
     std::vector<double>* const state[3] = {&h_, &hu_, &hv_};
     std::vector<double>* const scratch[3] = {&t_[0], &t_[1], &t_[2]};
     if (!def_.second_order) {
-        stage(static_cast<int>(StageKind::Euler), state, scratch, dt, 1.0);
-        finish_step(dt, t_);
+        const FinishRow finish = finish_template(dt);  // rain and friction on each row as it is written
+        stage(static_cast<int>(StageKind::Euler), state, scratch, dt, 1.0, &finish);
+        // The new state is the scratch: inside each row's span the stage wrote it, outside
+        // it both buffers hold zeros (the span covers every wet cell and its neighbours, and
+        // the stage cleared what the scratch held there), so swapping replaces a copy of
+        // the span. The old state, now the scratch, is non-zero only inside the spans the
+        // stage just marked dirty.
+        h_.swap(t_[0]);
+        hu_.swap(t_[1]);
+        hv_.swap(t_[2]);
+        finish_tail(dt);
     } else {
         // Heun (SSP-RK2): U1 = U + dt L(U), U2 = U1 + dt L(U1), U = (U + U2) / 2.
         stage(static_cast<int>(StageKind::HeunFirst), state, scratch, dt, 0.5);

@@ -151,9 +151,8 @@ private:
     /// volumes in the balance.
     void stage(int kind, std::vector<double>* const* in, std::vector<double>* const* out, double dt, double w,
                const FinishRow* finish = nullptr);
-    /// Rain, friction and the wet spans over the active spans, the state taken from `from`
-    /// (nullptr: the state itself); then finish_tail().
-    void finish_step(double dt, const std::vector<double>* from = nullptr);
+    /// Rain, friction and the wet spans over the state's active spans; then finish_tail().
+    void finish_step(double dt);
     /// The rain's and the clipped depths' sums, then the sources.
     void finish_tail(double dt);
     FinishRow finish_template(double dt) const;

@@ -341,7 +341,7 @@ private:
         if (empty(j)) {
             if (scratch) clear_stale(j, 0, -1);
             out_.row_out[j] = out_.row_in[j] = 0.0;
-            if (!scratch && out_.finish) finish(j, 0, -1);
+            if (out_.finish) finish(j, 0, -1);
             return;
         }
         const int lo = in_.lo[j], hi = in_.hi[j];
@@ -402,10 +402,10 @@ private:
         uint64_t clip = 0;
         for (int i = lo; i <= hi; ++i) clip += neg[i] != 0.0;
         out_.row_clip[j] += clip;
-        if (!scratch && out_.finish) finish(j, lo, hi);
+        if (out_.finish) finish(j, lo, hi);
     }
 
-    /// The end of the step on row j while it is in the cache (HeunSecond).
+    /// The end of the step on row j while it is in the cache (Euler, HeunSecond).
     void finish(int j, int lo, int hi) {
         const size_t k0 = at(0, j);
         FinishRow f = *out_.finish;

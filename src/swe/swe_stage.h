@@ -52,7 +52,7 @@ struct StageOut {
     int *dirty_lo = nullptr, *dirty_hi = nullptr;
     double *row_out = nullptr, *row_in = nullptr;  ///< per row: volume out of / into the edges
     uint64_t* row_clip = nullptr;                  ///< per row: negative depths clipped (added)
-    /// HeunSecond: the end of the step done on each row as soon as it is written (its
+    /// Euler and HeunSecond: the end of the step done on each row as soon as it is written (its
     /// state, columns and rain rows filled in per row; rain_rate indexed like the state),
     /// with the rain added and the wet columns per row; nullptr: not done.
     const FinishRow* finish = nullptr;
