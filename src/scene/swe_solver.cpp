@@ -4,6 +4,7 @@
 #include <metariver/swe_solver.h>
 #include <metariver/terrain.h>
 
+#include "lake_crest.h"
 #include "lake_levels.h"
 #include "shallow_water.h"
 
@@ -388,8 +389,9 @@ std::vector<swe::Lake> SweSolver::fill_depressions(const std::vector<std::pair<i
     else
         seeds = reachable(f, *core_, starts, sea);
     // Those on each source's route to the edge (through the spill points) pass its whole
-    // discharge: they start at the head over a spill point that passes it (a broad-crested
-    // weir one cell wide, q = 1.705 h^(3/2) m^2/s), so they spill at once instead of
+    // discharge: they start at the head over their spill level that passes it over their
+    // crest (swe::crest_head: critical flow over a broad crest or Manning's flow on the slope
+    // after it, over every cell the water leaves by), so they spill at once instead of
     // approaching the rate over weeks at km cells; the others take a share and start at
     // their spill level (with the whole head, a noisy map's many side pits drained for hours).
     std::vector<uint8_t> route(static_cast<size_t>(nx) * ny, rain_everywhere ? 1 : 0);
@@ -397,7 +399,9 @@ std::vector<swe::Lake> SweSolver::fill_depressions(const std::vector<std::pair<i
         for (int k = j * nx + i; k >= 0; k = f.from[size_t(k)]) route[size_t(k)] = 1;
     double q = discharge_;
     for (const SweSource& s : def_.sources) q += s.discharge;
-    const double head = std::pow(q / (1.705 * water_.spacing), 2.0 / 3.0);
+    // Where a lake has no crest (none found within reach): the weir one cell wide.
+    const double one_cell = std::pow(q / (1.705 * water_.spacing), 2.0 / 3.0);
+    std::vector<double> bed;  // row-major, for the crest's search (only with a lake on the route)
     std::vector<uint8_t> seen(static_cast<size_t>(nx) * ny, 0);
     std::vector<int> stack, lake;
     std::vector<swe::Lake> lakes;
@@ -415,10 +419,21 @@ std::vector<swe::Lake> SweSolver::fill_depressions(const std::vector<std::pair<i
                 return true;
             },
             [&](int, int n) { return low(n); });
+        double head = 0.0;
+        if (on_route) {
+            if (bed.empty()) {
+                bed.resize(static_cast<size_t>(nx) * ny);
+                for (int k = 0; k < nx * ny; ++k) bed[size_t(k)] = core_->bed(k % nx, k / nx);
+            }
+            const swe::CrestGrid grid{.nx = nx, .ny = ny, .dx = water_.spacing, .bed = bed, .level = f.level,
+                                      .manning = core_->def().manning, .gravity = core_->def().gravity};
+            head = swe::crest_head(grid, lake, f.level[size_t(lake.front())], q);
+            if (!std::isfinite(head)) head = one_cell;
+        }
         double spill_depth = 0.0;
         for (const int k : lake) {  // full to its spill level (plus the head on the route)
             const int i = k % nx, j = k / nx;
-            const double h = f.level[size_t(k)] + (on_route ? head : 0.0) - core_->bed(i, j);
+            const double h = f.level[size_t(k)] + head - core_->bed(i, j);
             if (h > core_->depth(i, j)) core_->set_state(i, j, h);
             spill_depth += f.level[size_t(k)] - core_->bed(i, j);
         }
