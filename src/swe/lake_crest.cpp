@@ -3,12 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <queue>
+#include <unordered_map>
 
 namespace mr::swe {
 
 namespace {
-/// A flat crest (cells at the spill level) is followed this many cells from the lake at most.
-constexpr size_t kFlatReach = 64;
 
 /// The four neighbours of k inside the grid; fewer on the edges.
 template <class Visit>
@@ -25,59 +25,43 @@ bool on_edge(const CrestGrid& g, int k) {
     return i == 0 || j == 0 || i == g.nx - 1 || j == g.ny - 1;
 }
 
-/// The largest drop from `from_bed` to a neighbour of k whose level is below `spill` (its
-/// water runs on towards the edge without the lake); negative: none.
-double drop_out(const CrestGrid& g, int k, double spill, double from_bed) {
-    double drop = -1.0;
+/// The neighbour of k with the lowest level below `spill` (its water runs on towards the
+/// edge without the lake); -1: none.
+int lowest_out(const CrestGrid& g, int k, double spill) {
+    int best = -1;
     each_neighbour(g, k, [&](int q) {
-        if (g.level[size_t(q)] < spill) drop = std::max(drop, std::max(from_bed - g.level[size_t(q)], 0.0));
+        if (g.level[size_t(q)] < spill && (best < 0 || g.level[size_t(q)] < g.level[size_t(best)])) best = q;
     });
-    return drop;
+    return best;
 }
 
-/// A rim cell at the spill level: the flat of such cells (outside every lake) from it, walked
-/// breadth first up to kFlatReach cells; the slope from the rim cell to the nearest drop out
-/// of the flat (infinite where the flat reaches the map's edge); negative: the flat leads
-/// nowhere lower (a shore).
-double flat_slope(const CrestGrid& g, int rim, double spill) {
-    std::vector<int> cells{rim}, steps{0};
-    for (size_t at = 0; at < cells.size() && cells.size() <= kFlatReach; ++at) {
-        const int c = cells[at];
-        if (on_edge(g, c)) return std::numeric_limits<double>::infinity();
-        if (const double drop = drop_out(g, c, spill, g.bed[size_t(rim)]); drop >= 0.0)
-            return drop / (double(steps[at] + 1) * g.dx);
-        each_neighbour(g, c, [&](int q) {
-            const bool flat = g.level[size_t(q)] <= spill + g.lake_depth && g.level[size_t(q)] - g.bed[size_t(q)] <= g.lake_depth;
-            if (flat && std::find(cells.begin(), cells.end(), q) == cells.end()) {
-                cells.push_back(q);
-                steps.push_back(steps[at] + 1);
-            }
-        });
-    }
-    return -1.0;
-}
 }  // namespace
 
-std::vector<Crest> find_crests(const CrestGrid& g, std::span<const int> lake, double spill) {
-    // The rim: the cells next to the lake not in it. A lake cell's neighbour is in the lake
-    // where it stands in water at the flood (neighbouring depression cells share a level).
-    std::vector<int> rim;
-    for (const int k : lake)
-        each_neighbour(g, k, [&](int q) {
-            if (g.level[size_t(q)] - g.bed[size_t(q)] <= g.lake_depth) rim.push_back(q);
-        });
-    std::sort(rim.begin(), rim.end());
-    rim.erase(std::unique(rim.begin(), rim.end()), rim.end());
+std::vector<Crest> find_crests(const CrestGrid& g, std::span<const int> lake, double spill, double most_head) {
+    // The water the lake holds at spill + most_head: a priority flood from the lake over
+    // every cell not below the spill level (the lake's own cells, its shores, a flat crest,
+    // a perched lake under that level) up to grid.most_steps cells from it, each reached at
+    // the lowest water level that gets there (the highest level on the lowest way).
+    using Item = std::pair<double, int>;  // the level the water reaches the cell at, the cell
+    std::priority_queue<Item, std::vector<Item>, std::greater<>> open;
+    std::unordered_map<int, int> seen;  // cell, cells from the lake
+    for (const int k : lake) seen.emplace(k, 0);
+    for (const int k : lake) open.emplace(spill, k);
+    const double top = spill + most_head;
     std::vector<Crest> crests;
-    for (const int r : rim) {
-        const double bed = g.bed[size_t(r)];
-        if (on_edge(g, r)) {  // the water falls off the map
-            crests.push_back({r, bed, std::numeric_limits<double>::infinity()});
-        } else if (const double drop = drop_out(g, r, spill, bed); drop >= 0.0) {
-            crests.push_back({r, bed, drop / g.dx});
-        } else if (g.level[size_t(r)] <= spill + g.lake_depth) {  // a flat crest, or a flat shore
-            if (const double slope = flat_slope(g, r, spill); slope >= 0.0) crests.push_back({r, bed, slope});
-        }
+    while (!open.empty()) {
+        const auto [at, k] = open.top();
+        open.pop();
+        // A cell of that water next to lower ground (or on the map's edge, where it falls
+        // off) is a crest: the water leaves over it.
+        if (on_edge(g, k)) crests.push_back({k, at, std::numeric_limits<double>::infinity()});
+        else if (const int down = lowest_out(g, k, spill); down >= 0) crests.push_back({k, at, std::max(at - g.level[size_t(down)], 0.0) / g.dx});
+        each_neighbour(g, k, [&](int q) {
+            const double lv = g.level[size_t(q)];
+            const int steps = seen[k] + 1;
+            if (lv < spill || lv >= top || steps > g.most_steps || !seen.emplace(q, steps).second) return;
+            open.emplace(std::max(at, lv), q);
+        });
     }
     return crests;
 }
@@ -99,13 +83,15 @@ double crest_flow(double head, double slope, double manning, double gravity) {
 
 double crest_discharge(std::span<const Crest> crests, const CrestGrid& grid, double level) {
     double q = 0.0;
-    for (const Crest& c : crests) q += crest_flow(level - c.bed, c.slope, grid.manning, grid.gravity);
+    for (const Crest& c : crests) q += crest_flow(level - c.sill, c.slope, grid.manning, grid.gravity);
     return q * grid.dx;
 }
 
 double crest_head(const CrestGrid& g, std::span<const int> lake, double spill, double discharge) {
     if (!(discharge > 0.0)) return 0.0;
-    const std::vector<Crest> crests = find_crests(g, lake, spill);
+    // The water reaches crests up to twice the head one cell's crest needs (Ritter's flux).
+    const double one_cell = std::cbrt(std::pow(discharge / (8.0 / 27.0 * std::sqrt(g.gravity) * g.dx), 2.0));
+    const std::vector<Crest> crests = find_crests(g, lake, spill, 2.0 * one_cell);
     const auto passes = [&](double h) { return crest_discharge(crests, g, spill + h) >= discharge; };
     double hi = 1e-3;
     while (!passes(hi) && hi < 1e6) hi *= 2.0;

@@ -69,7 +69,7 @@ TEST(LakeCrest, TheCrestIsTheCellsTheWaterLeavesByNotTheShore) {
     Basin b(5, 0.1);
     for (const int j : {b.first - 1, b.first + b.width})  // the rim beside the crest, as low as the far shore
         b.bed[b.at(23, j)] = b.level[b.at(23, j)] = kSpill + 0.02;
-    const std::vector<Crest> crests = find_crests(b.grid(kManning), b.lake, kSpill);
+    const std::vector<Crest> crests = find_crests(b.grid(kManning), b.lake, kSpill, 1.0);
     ASSERT_EQ(crests.size(), 5u);  // the crest's cells, not the 25 + 2 shore cells under the head
     for (const Crest& c : crests) {
         EXPECT_EQ(c.cell % b.nx, 23);
@@ -87,16 +87,24 @@ TEST(LakeCrest, AFlatCrestSeveralCellsLongLeadsOutAndAFlatShoreDoesNot) {
     for (int j = b.first; j < b.first + b.width; ++j)  // the crest 4 cells long, then the chute
         for (int i = 23; i < b.nx; ++i) b.bed[b.at(i, j)] = b.level[b.at(i, j)] = i < 27 ? kSpill : kSpill - 0.1 * (i - 26);
     for (int j = 3; j <= 27; ++j) b.bed[b.at(2, j)] = b.level[b.at(2, j)] = kSpill;  // a flat shore at the spill level
-    const std::vector<Crest> crests = find_crests(b.grid(kManning), b.lake, kSpill);
-    ASSERT_EQ(crests.size(), 3u);
-    for (const Crest& c : crests) EXPECT_NEAR(c.slope, 0.1 / 4.0, 1e-12);  // 0.1 m down over 4 cells
+    const std::vector<Crest> crests = find_crests(b.grid(kManning), b.lake, kSpill, 1.0);
+    ASSERT_EQ(crests.size(), 3u);  // the brink of the flat, not the flat shore
+    for (const Crest& c : crests) {
+        EXPECT_EQ(c.cell % b.nx, 26);
+        EXPECT_NEAR(c.slope, 0.1, 1e-12);
+    }
+    CrestGrid near = b.grid(kManning);  // the brink lies 4 cells from the lake
+    near.most_steps = 3;
+    EXPECT_TRUE(find_crests(near, b.lake, kSpill, 1.0).empty());
+    near.most_steps = 4;
+    EXPECT_EQ(find_crests(near, b.lake, kSpill, 1.0).size(), 3u);
 }
 
 TEST(LakeCrest, NoCrestIsNaNAndNoDischargeNoHead) {
     Basin b(5, 0.1);
     for (int j = b.first; j < b.first + b.width; ++j)  // sealed: the crest and the channel as high as the walls
         for (int i = 23; i < b.nx; ++i) b.bed[b.at(i, j)] = b.level[b.at(i, j)] = kWall;
-    EXPECT_TRUE(find_crests(b.grid(kManning), b.lake, kSpill).empty());
+    EXPECT_TRUE(find_crests(b.grid(kManning), b.lake, kSpill, 1.0).empty());
     EXPECT_TRUE(std::isnan(crest_head(b.grid(kManning), b.lake, kSpill, kInflow)));
     EXPECT_EQ(crest_head(b.grid(kManning), b.lake, kSpill, 0.0), 0.0);
 }
