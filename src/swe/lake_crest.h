@@ -29,7 +29,8 @@ struct CrestGrid {
     double manning = 0.0;           ///< Manning's n, s/m^(1/3); 0: no friction (the weir law alone)
     double gravity = 9.81;          ///< m/s^2
     double lake_depth = 1e-3;       ///< a cell is in a lake where its level stands this much over its bed, metres
-    /// The lake's water reaches crests at most this many cells from it (4-neighbour steps).
+    /// The lake's water reaches crests at most this many cells from it (4-neighbour steps
+    /// along the way the flood reached them).
     /// Measured on random_1000x700 (1 m cells, flats of equal 16-bit heights at most spill
     /// points) against the levels four of its route's lakes settled to from above and from
     /// below in the spin-up: 8 cells gave 1.6-2.0 times their settled heads, no bound 0.5-0.6
