@@ -197,6 +197,7 @@ json swe_json(const Simulation& sim, const RiverMeter& m, long long frames) {
             {"balance_error_relative_per_min", in > 0.0 && minutes > 0.0 ? std::abs(b.error()) / in / minutes : 0.0},
             {"init", {{"mode", std::string(to_string(swe->def().init))}, {"converged", init.converged},
                       {"simulated_s", init.simulated_s}, {"wall_ms", init.wall_ms}, {"substeps", init.substeps},
+                      {"cell_updates", init.cell_updates}, {"work_capped", init.work_capped},
                       {"outflow_over_inflow", init.outflow_over_inflow}}},
             {"wet_cells", wet},
             {"wet_fraction", w.size() ? double(wet) / double(w.size()) : 0.0},

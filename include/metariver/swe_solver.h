@@ -35,11 +35,14 @@ inline constexpr float kSweInitCrossings = 8.0f;
 /// map holds over the inflow per second (a lake's level or a sheet settles over it: the
 /// procedural flat map's sheet over 14 of them).
 inline constexpr double kSweInitResidences = 20.0;
-/// The steady spin-up stops after this many substeps or cell updates whatever its time cap
-/// (a warning; the cell updates bound its wall time: about a minute on two cores; the
-/// substeps bound a map of few wet cells: western_usa at real scale needed more than 400,000).
-inline constexpr uint64_t kSweInitMaxSubsteps = 1200000;
+/// swe.init_max_work's default: the steady spin-up stops after this many cell updates
+/// whatever its time cap (a warning; about a minute on two cores), and after one substep per
+/// kSweInitCellUpdatesPerSubstep of them (1,200,000 by default: they bound a map of few wet
+/// cells, whose substeps cost more than their cells; western_usa at real scale needed more
+/// than 400,000).
 inline constexpr uint64_t kSweInitMaxCellUpdates = 6'000'000'000;
+inline constexpr uint64_t kSweInitCellUpdatesPerSubstep = 5000;
+inline constexpr uint64_t kSweInitMaxSubsteps = kSweInitMaxCellUpdates / kSweInitCellUpdatesPerSubstep;
 
 /// How the water starts (swe.init).
 enum class SweInit {
@@ -110,6 +113,9 @@ struct SweDef {
     /// Steady spin-up: simulated seconds at most; kSweAuto: kSweInitCrossings x the main
     /// channel's length over 0.5 m/s.
     float init_max_time = kSweAuto;
+    /// Steady spin-up: cell updates it spends at most (its wall time), and one substep per
+    /// kSweInitCellUpdatesPerSubstep of them, whatever init_max_time says.
+    float init_max_work = float(kSweInitMaxCellUpdates);
     /// Metres (terrain height): cells whose bed lies below it are the sea, a sink that takes
     /// every drop reaching it (counted as sunk); NaN: none. On a DEM at --real-scale the sea
     /// is at -metres_min of its sidecar.
@@ -144,6 +150,8 @@ struct SweInitReport {
     double simulated_s = 0.0;     ///< simulated seconds spun up
     double wall_ms = 0.0;         ///< what it cost
     uint64_t substeps = 0;
+    uint64_t cell_updates = 0;
+    bool work_capped = false;          ///< stopped by swe.init_max_work, not by the time cap
     double outflow_over_inflow = 0.0;  ///< (outflow + sunk) / (inflow + rain) over the last window
 };
 

@@ -521,8 +521,13 @@ const SceneKey kKeys[] = {
      .readers = kSwe, .edit = E::Rebuild,
      .help = "swe.init = \"steady\": simulated seconds the spin-up runs at most; auto: the larger of 8 times the main channel's "
              "length (at least half the map's diagonal) over 0.5 m/s and 20 residence times (the volume the map holds over the "
-             "inflow per second, measured as it fills). Whatever it says, the work stops at 1,200,000 substeps or 6e9 cell updates.",
+             "inflow per second, measured as it fills). Whatever it says, the work stops at swe.init_max_work.",
      .field = MR_FIELD(swe.init_max_time)},
+    {.name = "swe.init_max_work", .type = K::Float, .unit = "cell updates", .range = closed(1e3, 1e13), .readers = kSwe,
+     .edit = E::Rebuild,
+     .help = "swe.init = \"steady\": cell updates the spin-up spends at most (its wall time: 6e9 is about a minute on two "
+             "cores), and one substep per 5000 of them, whatever swe.init_max_time says.",
+     .field = MR_FIELD(swe.init_max_work)},
     {.name = "swe.initial_level", .type = K::Float, .unit = "m", .range = closed(-1e6, 1e6), .words = kLevelWords, .readers = kSwe,
      .edit = E::Rebuild, .help = "A still lake up to this height at the start (every sample below it wet); none: the map starts dry.",
      .field = MR_FIELD(swe.initial_level)},

@@ -232,7 +232,7 @@ void SweSolver::add_sources(std::vector<swe::PointSource>& out) const {
 // edges and the sinks) is what comes in (sources and rain) within init_tolerance over two
 // windows running; then the scheme asked for (second order holds less water than the first
 // order's diffusion) until it is calm again; or the cap: the time cap, and at most
-// kSweInitMaxSubsteps substeps and kSweInitMaxCellUpdates cell updates (the work, whatever
+// swe.init_max_work cell updates and one substep per 5000 of them (the work, whatever
 // the time asked). The automatic time cap is the larger of kSweInitCrossings channel
 // crossings and kSweInitResidences residence times (what the map holds over what comes in
 // a second, measured as it fills): a sheet over a flat map or a lake's level settles over
@@ -253,8 +253,10 @@ void SweSolver::spin_up(swe::LakeLevels& lakes) {
     const double window = std::max(crossings / 40.0, 1e-3);
     const uint64_t steps0 = core_->stats().substeps, updates0 = core_->stats().cell_updates;
     double cap = crossings;
+    const double work = def_.init_max_work, substeps = work / double(kSweInitCellUpdatesPerSubstep);
     const auto work_left = [&] {
-        return core_->stats().substeps - steps0 < kSweInitMaxSubsteps && core_->stats().cell_updates - updates0 < kSweInitMaxCellUpdates;
+        init_.work_capped = double(core_->stats().substeps - steps0) >= substeps || double(core_->stats().cell_updates - updates0) >= work;
+        return !init_.work_capped;
     };
     const auto calm_under = [&](const swe::ShallowWaterDef& scheme) {
         core_->set_def(scheme);
@@ -284,6 +286,7 @@ void SweSolver::spin_up(swe::LakeLevels& lakes) {
     init_.ran = true;
     init_.simulated_s = core_->time();
     init_.substeps = init_substeps_ = core_->stats().substeps - steps0;
+    init_.cell_updates = core_->stats().cell_updates - updates0;
     init_.wall_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
@@ -516,11 +519,12 @@ std::vector<std::string> SweSolver::warnings() const {
             w.push_back(fmt::format("swe.sinks[{}]: lies outside the terrain; it takes nothing", k + 1));
     if (!mask_error_.empty()) w.push_back(mask_error_ + "; no rain falls");
     if (init_.ran && !init_.converged)
-        w.push_back(fmt::format("swe.init: the steady spin-up stopped at its cap ({:.4g} s simulated, {} substeps) with "
-                                "outflow {:.3f} of inflow; raise swe.init_max_time (the work is capped at {} substeps "
-                                "and {:.3g} cell updates)",
-                                init_.simulated_s, init_.substeps, init_.outflow_over_inflow, kSweInitMaxSubsteps,
-                                double(kSweInitMaxCellUpdates)));
+        w.push_back(fmt::format("swe.init: the steady spin-up stopped at its {} cap ({:.4g} s simulated, {} substeps, "
+                                "{:.3g} cell updates) with outflow {:.3f} of inflow; raise {}",
+                                init_.work_capped ? "work" : "time", init_.simulated_s, init_.substeps, double(init_.cell_updates),
+                                init_.outflow_over_inflow,
+                                init_.work_capped ? "swe.init_max_work (cell updates; one substep per 5000 of them)"
+                                                  : "swe.init_max_time"));
     return w;
 }
 

@@ -166,6 +166,37 @@ TEST(SweRiver, SteadyInitStartsWithOutflowEqualToInflow) {
     EXPECT_LT(std::abs(b.stored - b.initial), 0.05 * b.inflow);
 }
 
+// swe.init_max_work caps the spin-up's cell updates and its substeps (one per 5000 of them),
+// checked after each window: the valley's converged spin-up takes more than 10 times the work
+// of 2e6, so at 2e6 it stops at the work cap (reached, and far below the converged run's work)
+// and says which key to raise; the time cap's warning names swe.init_max_time instead.
+TEST(SweRiver, SteadyInitStopsAtItsWorkCapAndNamesTheKey) {
+    auto full = valley("init = \"steady\"\n");
+    ASSERT_TRUE(full);
+    const SweInitReport& f = swe_of(*full).init_report();
+    ASSERT_TRUE(f.converged);
+    ASSERT_FALSE(f.work_capped);
+    ASSERT_GT(f.substeps, 4000u);
+    auto s = valley("init = \"steady\"\ninit_max_work = 2e6\n");
+    ASSERT_TRUE(s);
+    const SweInitReport& r = swe_of(*s).init_report();
+    EXPECT_TRUE(r.ran);
+    EXPECT_FALSE(r.converged);
+    EXPECT_TRUE(r.work_capped);
+    EXPECT_TRUE(r.substeps >= 400u || r.cell_updates >= 2000000u) << r.substeps << " " << r.cell_updates;
+    EXPECT_LT(r.substeps, f.substeps / 4);
+    auto w = s->solver().warnings();
+    EXPECT_TRUE(std::any_of(w.begin(), w.end(), [](const std::string& m) { return m.find("swe.init_max_work") != std::string::npos; }));
+    auto t = valley("init = \"steady\"\ninit_max_time = 5\n");
+    ASSERT_TRUE(t);
+    EXPECT_FALSE(swe_of(*t).init_report().work_capped);
+    w = t->solver().warnings();
+    EXPECT_TRUE(std::any_of(w.begin(), w.end(), [](const std::string& m) { return m.find("raise swe.init_max_time") != std::string::npos; }));
+    auto d = parse_scene_toml("solver = \"swe\"\n[swe]\ninit_max_work = 10\n", "bad.toml", default_scene());
+    ASSERT_FALSE(d.ok());
+    EXPECT_NE(d.error().message.find("swe.init_max_work: must be in [1000, 10000000000000]"), std::string::npos) << d.error().message;
+}
+
 // The alps crop at its real scale (the sidecar's 9.3 km and 6.4 km of relief), a source, a
 // line source, rain, a sink, the sea and the open edges, at both orders: the balance at
 // round-off (the target is 1e-5 per minute). At second order, before Heun's stages each applied
