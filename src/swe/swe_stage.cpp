@@ -34,8 +34,8 @@ struct Scratch {
     size_t width = 0;
     std::vector<double> mem;
     double* prim[3][3];  // ring by row: u, v, eta
-    double* sx[4];       // this row's x slopes: h, eta, u, v
-    double* sy[2][4];    // ring by row: y slopes
+    double* sx[4];       // this row's x half slopes (half the limited slope): h, eta, u, v
+    double* sy[2][4];    // ring by row: y half slopes
     double* fx[4];       // this row's x faces: mass, momentum minus / plus, transverse
     double* fy[2][4];    // ring by face row
     double* neg;         // this row's clipped depths
@@ -117,6 +117,17 @@ inline double manning_divisor(double h, double qx, double qy, double c, double f
 /// cell (one neighbour wet and below) keeps its slopes.
 inline double smooth_bed(double zm, double zc, double zp, double h) {
     return std::min(zm, zp) - zc > 0.5 * h ? 0.0 : 1.0;
+}
+
+/// Half of minmod(a, b) (swe_flux.h), which the faces take (c +/- s/2): the same bits as
+/// 0.5 * minmod(a, b) for finite a and b (a sign select and an exact halving instead of the
+/// sum of two signs and two products).
+inline double half_minmod(double a, double b) {
+    const double m = std::copysign(0.5 * std::min(std::abs(a), std::abs(b)), a);
+    uint64_t ba, bb;  // the sign bits compared as integers (vectorises, signbit does not)
+    std::memcpy(&ba, &a, sizeof ba);
+    std::memcpy(&bb, &b, sizeof bb);
+    return static_cast<int64_t>(ba ^ bb) < 0 ? 0.0 : m;
 }
 
 /// A reflective wall's outside state: the same depth and bed, the normal velocity reversed.
@@ -201,10 +212,10 @@ private:
         MR_IVDEP
         for (int i = a; i <= b; ++i) {
             const double keep = smooth_bed(zs[i], zc[i], zn[i], hc[i]);
-            o0[i] = keep * minmod(hc[i] - hs[i], hn[i] - hc[i]);
-            o1[i] = keep * minmod(pc.eta[i] - ps.eta[i], pn.eta[i] - pc.eta[i]);
-            o2[i] = keep * minmod(pc.u[i] - ps.u[i], pn.u[i] - pc.u[i]);
-            o3[i] = keep * minmod(pc.v[i] - ps.v[i], pn.v[i] - pc.v[i]);
+            o0[i] = keep * half_minmod(hc[i] - hs[i], hn[i] - hc[i]);
+            o1[i] = keep * half_minmod(pc.eta[i] - ps.eta[i], pn.eta[i] - pc.eta[i]);
+            o2[i] = keep * half_minmod(pc.u[i] - ps.u[i], pn.u[i] - pc.u[i]);
+            o3[i] = keep * half_minmod(pc.v[i] - ps.v[i], pn.v[i] - pc.v[i]);
         }
     }
 
@@ -253,10 +264,10 @@ private:
             FaceState a{hs[i], ps.v[i], ps.u[i], 0.0}, b{hn[i], pn.v[i], pn.u[i], 0.0};
             double ea = hs[i] + zs[i], eb = hn[i] + zn[i];
             if (Second) {
-                a = {hs[i] + 0.5 * ss.h[i], ps.v[i] + 0.5 * ss.v[i], ps.u[i] + 0.5 * ss.u[i], 0.0};
-                b = {hn[i] - 0.5 * sn.h[i], pn.v[i] - 0.5 * sn.v[i], pn.u[i] - 0.5 * sn.u[i], 0.0};
-                ea += 0.5 * ss.eta[i];
-                eb -= 0.5 * sn.eta[i];
+                a = {hs[i] + ss.h[i], ps.v[i] + ss.v[i], ps.u[i] + ss.u[i], 0.0};
+                b = {hn[i] - sn.h[i], pn.v[i] - sn.v[i], pn.u[i] - sn.u[i], 0.0};
+                ea += ss.eta[i];
+                eb -= sn.eta[i];
             }
             a.z = ea - a.h;
             b.z = eb - b.h;
@@ -271,9 +282,9 @@ private:
         const Slopes& sr = south ? sn : ss;
         const double side = south ? -1.0 : 1.0;
         for (int i = ylo; i <= yhi; ++i) {
-            const double hf = hr[i] + 0.5 * side * sr.h[i];
-            const double etaf = hr[i] + zr[i] + 0.5 * side * sr.eta[i];
-            const FaceState in{hf, pr.v[i] + 0.5 * side * sr.v[i], pr.u[i] + 0.5 * side * sr.u[i], etaf - hf};
+            const double hf = hr[i] + side * sr.h[i];
+            const double etaf = hr[i] + zr[i] + side * sr.eta[i];
+            const FaceState in{hf, pr.v[i] + side * sr.v[i], pr.u[i] + side * sr.u[i], etaf - hf};
             o.put(i, south ? hydrostatic_flux(mirror(in), in, g) : hydrostatic_flux(in, mirror(in), g));
         }
     }
@@ -284,10 +295,10 @@ private:
         MR_IVDEP
         for (int i = a; i <= b; ++i) {
             const double keep = smooth_bed(z[i - 1], z[i], z[i + 1], h[i]);
-            o0[i] = keep * minmod(h[i] - h[i - 1], h[i + 1] - h[i]);
-            o1[i] = keep * minmod(p.eta[i] - p.eta[i - 1], p.eta[i + 1] - p.eta[i]);
-            o2[i] = keep * minmod(p.u[i] - p.u[i - 1], p.u[i + 1] - p.u[i]);
-            o3[i] = keep * minmod(p.v[i] - p.v[i - 1], p.v[i + 1] - p.v[i]);
+            o0[i] = keep * half_minmod(h[i] - h[i - 1], h[i + 1] - h[i]);
+            o1[i] = keep * half_minmod(p.eta[i] - p.eta[i - 1], p.eta[i + 1] - p.eta[i]);
+            o2[i] = keep * half_minmod(p.u[i] - p.u[i - 1], p.u[i + 1] - p.u[i]);
+            o3[i] = keep * half_minmod(p.v[i] - p.v[i - 1], p.v[i + 1] - p.v[i]);
         }
     }
 
@@ -301,10 +312,10 @@ private:
             FaceState a{h[i - 1], p.u[i - 1], p.v[i - 1], 0.0}, b{h[i], p.u[i], p.v[i], 0.0};
             double ea = h[i - 1] + z[i - 1], eb = h[i] + z[i];
             if (Second) {
-                a = {h[i - 1] + 0.5 * sx.h[i - 1], p.u[i - 1] + 0.5 * sx.u[i - 1], p.v[i - 1] + 0.5 * sx.v[i - 1], 0.0};
-                b = {h[i] - 0.5 * sx.h[i], p.u[i] - 0.5 * sx.u[i], p.v[i] - 0.5 * sx.v[i], 0.0};
-                ea += 0.5 * sx.eta[i - 1];
-                eb -= 0.5 * sx.eta[i];
+                a = {h[i - 1] + sx.h[i - 1], p.u[i - 1] + sx.u[i - 1], p.v[i - 1] + sx.v[i - 1], 0.0};
+                b = {h[i] - sx.h[i], p.u[i] - sx.u[i], p.v[i] - sx.v[i], 0.0};
+                ea += sx.eta[i - 1];
+                eb -= sx.eta[i];
             }
             a.z = ea - a.h;
             b.z = eb - b.h;
@@ -313,9 +324,9 @@ private:
         if (!Second) return;  // first order: the ghosts are the mirrors already
         // Column i's state at its face on `side` (+1: towards +x).
         auto state = [&](int i, double side) {
-            const double hf = h[i] + 0.5 * side * sx.h[i];
-            const double etaf = h[i] + z[i] + 0.5 * side * sx.eta[i];
-            return FaceState{hf, p.u[i] + 0.5 * side * sx.u[i], p.v[i] + 0.5 * side * sx.v[i], etaf - hf};
+            const double hf = h[i] + side * sx.h[i];
+            const double etaf = h[i] + z[i] + side * sx.eta[i];
+            return FaceState{hf, p.u[i] + side * sx.u[i], p.v[i] + side * sx.v[i], etaf - hf};
         };
         if (in_.wall_west && a0 == 0) {
             const FaceState b = state(0, -1.0);
@@ -374,7 +385,7 @@ private:
         const Faces fx(s_.fx), fs(fs_rows), fn(fn_rows);
         const Slopes sx(s_.sx), sy(s_.sy[ring2(j)]);
         double *MR_RESTRICT oh = out_.h + k0, *MR_RESTRICT ou = out_.hu + k0, *MR_RESTRICT ov = out_.hv + k0;
-        const double r = in_.r, g = in_.g, dry = in_.dry, c = in_.friction, floor = std::max(dry, 1e-12);
+        const double r = in_.r, g2 = 2.0 * in_.g, dry = in_.dry, c = in_.friction, floor = std::max(dry, 1e-12);
         double* MR_RESTRICT neg = s_.neg;  // 1 where a depth was clipped (counted after)
         MR_IVDEP
         for (int i = lo; i <= hi; ++i) {
@@ -383,8 +394,9 @@ private:
             double qy = hv[i] - r * (fn.minus[i] - fs.plus[i] + fx.trans[i + 1] - fx.trans[i]);
             if (Second) {
                 // Audusse's centred bed-slope term of the second order.
-                qx += r * (-g * h[i] * (sx.eta[i] - sx.h[i]));
-                qy += r * (-g * h[i] * (sy.eta[i] - sy.h[i]));
+                // (The slopes are stored halved: -2g h is 2 (-g h) exactly, the same bits.)
+                qx += r * (-g2 * h[i] * (sx.eta[i] - sx.h[i]));
+                qy += r * (-g2 * h[i] * (sy.eta[i] - sy.h[i]));
             }
             if (Kind != StageKind::Euler) {
                 // Each of Heun's stages is an Euler step of the fluxes and the friction, so
