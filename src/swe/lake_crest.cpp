@@ -104,4 +104,46 @@ double crest_head(const CrestGrid& g, std::span<const int> lake, double spill, d
     return hi;
 }
 
+std::vector<LakeFlow> route_lakes(const CrestGrid& g, std::span<const std::vector<int>> lakes, std::span<const int> from,
+                                  std::span<const int> starts, double discharge) {
+    std::vector<LakeFlow> flow(lakes.size());
+    std::unordered_map<int, int> lake_of;  // cell, lake
+    for (size_t l = 0; l < lakes.size(); ++l)
+        for (const int k : lakes[l]) lake_of.emplace(k, int(l));
+    const auto pour = [&](int k, int own, double q) {  // down the flood path from k into the first other lake
+        for (int steps = 0; k >= 0 && steps <= g.nx * g.ny; k = from[size_t(k)], ++steps)
+            if (const auto it = lake_of.find(k); it != lake_of.end() && it->second != own) {
+                flow[size_t(it->second)].inflow += q;
+                return;
+            }
+    };
+    for (const int k : starts) pour(k, -1, discharge);
+    std::vector<size_t> order;  // the highest spill level first: a lake's water only goes lower
+    for (size_t l = 0; l < lakes.size(); ++l)
+        if (!lakes[l].empty()) order.push_back(l);
+    const auto spill = [&](size_t l) { return g.level[size_t(lakes[l].front())]; };
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return spill(a) > spill(b); });
+    std::vector<Crest> crests;
+    for (const size_t l : order) {
+        const double q = flow[l].inflow;
+        if (!(q > 0.0)) continue;
+        flow[l].head = crest_head(g, lakes[l], spill(l), q);
+        if (std::isfinite(flow[l].head)) {  // every outlet under that head, further than the head's own search
+            CrestGrid wide = g;
+            wide.most_steps = g.route_steps;
+            crests = find_crests(wide, lakes[l], spill(l), flow[l].head);
+        }
+        double total = 0.0;
+        if (std::isfinite(flow[l].head))
+            for (const Crest& c : crests) total += crest_flow(spill(l) + flow[l].head - c.sill, c.slope, g.manning, g.gravity);
+        if (!(total > 0.0)) {  // no crest: all of it over the spill point, down the flood path
+            pour(lakes[l].front(), int(l), q);
+            continue;
+        }
+        for (const Crest& c : crests)
+            pour(c.cell, int(l), q * crest_flow(spill(l) + flow[l].head - c.sill, c.slope, g.manning, g.gravity) / total);
+    }
+    return flow;
+}
+
 }  // namespace mr::swe

@@ -154,5 +154,52 @@ TEST(LakeCrest, TheLakeSettlesAtTheHeadOfItsCrestFreeFallOrFriction) {
     }
 }
 
+/// A lake (bed 0, spill 1 m) with two outlets at its spill level: a crest 3 cells wide east
+/// and one cell wide west, each down a channel into its own lower lake (bed -3 m, spill -2 m)
+/// that drains off the map's edge; a side pit beside the channels that no crest feeds.
+TEST(LakeCrest, TheRouteSplitsALakesOutflowBetweenItsCrestsIntoTheLakesBelow) {
+    constexpr int nx = 41, ny = 11;
+    std::vector<double> bed(size_t(nx) * ny, 5.0);
+    std::vector<int> from(size_t(nx) * ny, -1);
+    std::vector<std::vector<int>> lakes(4);  // upper, east, west, side
+    const auto at = [&](int i, int j) { return j * nx + i; };
+    for (int j = 3; j <= 5; ++j) {
+        for (int i = 16; i <= 24; ++i) lakes[0].push_back(at(i, j)), bed[size_t(at(i, j))] = 0.0;
+        bed[size_t(at(25, j))] = 1.0;  // the east crest
+        for (int i = 26; i <= 28; ++i) bed[size_t(at(i, j))] = 1.0 - 0.1 * (i - 25);
+        for (int i = 29; i <= 33; ++i) lakes[1].push_back(at(i, j)), bed[size_t(at(i, j))] = -3.0;
+    }
+    bed[size_t(at(15, 4))] = 1.0;  // the west crest
+    for (int i = 12; i <= 14; ++i) bed[size_t(at(i, 4))] = 1.0 - 0.1 * (15 - i);
+    for (int j = 3; j <= 5; ++j)
+        for (int i = 5; i <= 11; ++i) lakes[2].push_back(at(i, j)), bed[size_t(at(i, j))] = -3.0;
+    for (int i = 34; i < nx; ++i) bed[size_t(at(i, 4))] = -2.0 - 0.01 * (i - 33);  // out east
+    for (int i = 0; i <= 4; ++i) bed[size_t(at(i, 4))] = -2.0 - 0.01 * (5 - i);    // out west
+    for (int i = 16; i <= 24; ++i) lakes[3].push_back(at(i, 8)), bed[size_t(at(i, 8))] = -1.0;  // the side pit
+    std::vector<double> level = bed;
+    for (const int k : lakes[0]) level[size_t(k)] = 1.0;
+    for (const int l : {1, 2})
+        for (const int k : lakes[size_t(l)]) level[size_t(k)] = -2.0;
+    for (const int k : lakes[3]) level[size_t(k)] = 5.0;  // walled in: its spill is the wall's
+    // The flood's paths: along row 4 towards each edge from the middle, rows 3 and 5 into row 4.
+    for (int j = 3; j <= 5; ++j)
+        for (int i = 1; i < nx - 1; ++i) from[size_t(at(i, j))] = j != 4 ? at(i, 4) : i >= 20 ? at(i + 1, 4) : at(i - 1, 4);
+    for (int i = 16; i <= 24; ++i) from[size_t(at(i, 8))] = at(i, 9);
+    const CrestGrid grid{.nx = nx, .ny = ny, .dx = 1.0, .bed = bed, .level = level, .manning = kManning};
+    const std::vector<int> starts{at(20, 1)};
+    from[size_t(at(20, 1))] = at(20, 2);
+    from[size_t(at(20, 2))] = at(20, 3);
+    const std::vector<LakeFlow> flow = route_lakes(grid, lakes, from, starts, kInflow);
+    ASSERT_EQ(flow.size(), 4u);
+    EXPECT_DOUBLE_EQ(flow[0].inflow, kInflow);
+    EXPECT_NEAR(flow[0].head, crest_head(grid, lakes[0], 1.0, kInflow), 1e-12);
+    EXPECT_NEAR(flow[1].inflow + flow[2].inflow, kInflow, 1e-9);  // nothing lost between the lakes
+    EXPECT_NEAR(flow[1].inflow / flow[2].inflow, 3.0, 1e-6);     // three crest cells east, one west
+    EXPECT_GT(flow[1].head, flow[2].head);
+    EXPECT_NEAR(flow[1].head, crest_head(grid, lakes[1], -2.0, flow[1].inflow), 1e-12);
+    EXPECT_EQ(flow[3].inflow, 0.0);  // no crest feeds the side pit
+    EXPECT_EQ(flow[3].head, 0.0);
+}
+
 }  // namespace
 }  // namespace mr::swe
