@@ -50,7 +50,8 @@ std::vector<Crest> find_crests(const CrestGrid& g, std::span<const int> lake, do
     const double top = spill + most_head;
     std::vector<Crest> crests;
     while (!open.empty()) {
-        const auto [at, k] = open.top();
+        const double at = open.top().first;  // not a structured binding: the lambda below
+        const int k = open.top().second;      // captures them (clang before 16 refuses that)
         open.pop();
         // A cell of that water next to lower ground (or on the map's edge, where it falls
         // off) is a crest: the water leaves over it.
